@@ -1,0 +1,51 @@
+# Small helpers so every folder's CMakeLists.txt reads the same.
+
+set(OPENVCU_WARNINGS -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion
+    -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Woverloaded-virtual -Wimplicit-fallthrough)
+
+# openvcu_library(<concern> SOURCES ... [DEPS ...] [PUBLIC_DEPS ...])
+# builds openvcu_<concern> with alias openvcu::<concern>, public headers in include/.
+function(openvcu_library concern)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;PUBLIC_DEPS" ${ARGN})
+  set(target openvcu_${concern})
+  if(ARG_SOURCES)
+    add_library(${target} STATIC ${ARG_SOURCES})
+    target_include_directories(${target} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include
+                                         PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
+    target_compile_options(${target} PRIVATE ${OPENVCU_WARNINGS})
+    target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_DEPS})
+  else()
+    add_library(${target} INTERFACE)
+    target_include_directories(${target} INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/include)
+    target_link_libraries(${target} INTERFACE ${ARG_PUBLIC_DEPS})
+  endif()
+  add_library(openvcu::${concern} ALIAS ${target})
+endfunction()
+
+# openvcu_test(<name> SOURCES ... DEPS ... [LABELS ...]): one doctest executable,
+# every TEST_CASE registered with ctest.
+function(openvcu_test name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES} ${PROJECT_SOURCE_DIR}/tests/doctest_main.cpp)
+  target_compile_options(${name} PRIVATE ${OPENVCU_WARNINGS} -Wno-old-style-cast)
+  target_link_libraries(${name} PRIVATE doctest::doctest ${ARG_DEPS})
+  target_compile_definitions(${name} PRIVATE
+    OPENVCU_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    OPENVCU_TEAM_KIT="${OPENVCU_TEAM_KIT}"
+    OPENVCU_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  set(labels unit)
+  if(ARG_LABELS)
+    set(labels ${ARG_LABELS})
+  endif()
+  doctest_discover_tests(${name} PROPERTIES LABELS "${labels}")
+endfunction()
+
+# openvcu_executable(<installed name> SOURCES ... DEPS ...)
+function(openvcu_executable name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_compile_options(${name} PRIVATE ${OPENVCU_WARNINGS})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/bin)
+  install(TARGETS ${name} RUNTIME DESTINATION bin)
+endfunction()

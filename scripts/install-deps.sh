@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages openvcu needs, and nothing else.
+# Idempotent: packages already present are not touched and apt is not called at all
+# when nothing is missing. Runs as root, or through sudo when it is available.
+#
+#   scripts/install-deps.sh            # build + test dependencies
+#   scripts/install-deps.sh --quiet    # no output when nothing is missing
+set -euo pipefail
+
+quiet=0
+[ "${1:-}" = "--quiet" ] && quiet=1
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git
+  clang libclang-rt-14-dev            # libFuzzer and the sanitizer runtime
+  # libraries
+  doctest-dev nlohmann-json3-dev libcli11-dev libbenchmark-dev
+  iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev
+  liblcm-dev liblcm-bin libglib2.0-dev
+  # test peers: the canmatrix/python-can decoding oracle, namespaces for isolated tests
+  python3 python3-canmatrix python3-can util-linux iproute2
+)
+
+missing=()
+for pkg in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$pkg")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  [ $quiet -eq 1 ] || echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "install-deps: missing ${missing[*]} and not root (no sudo available)" >&2
+    exit 1
+  fi
+fi
+
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get -o DPkg::Lock::Timeout=600 update -q
+$SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -q --no-install-recommends "${missing[@]}"

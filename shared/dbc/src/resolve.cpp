@@ -1,0 +1,339 @@
+// Applies the references collected while parsing (CM_, BA_, VAL_, SIG_VALTYPE_,
+// SG_MUL_VAL_, BO_TX_BU_), classifies IDs and resolves multiplexing.
+#include "openvcu/j1939/id.hpp"
+#include "parser_state.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <unordered_map>
+
+namespace openvcu::dbc::detail {
+namespace {
+
+std::string hexId(std::uint32_t id) {
+  char buffer[16];
+  std::snprintf(buffer, sizeof buffer, "0x%X", id);
+  return buffer;
+}
+
+class Resolver {
+ public:
+  Resolver(Database& db, PendingState& pending, std::string_view file, std::vector<Error>& diagnostics)
+      : m_db(db), m_pending(pending), m_file(file), m_diagnostics(diagnostics) {}
+
+  void run() {
+    classifyIds();
+    indexMessages();
+    checkNodes();
+    for (auto& item : m_pending.transmitters) applyTransmitters(item);
+    for (auto& item : m_pending.comments) applyComment(item);
+    for (auto& item : m_pending.values) applyValues(item);
+    for (auto& item : m_pending.valueTypes) applyValueType(item);
+    for (auto& item : m_pending.attributes) applyAttribute(item);
+    for (auto& item : m_pending.muxes) applyMux(item);
+    for (std::size_t i = 0; i < m_db.messages.size(); ++i) resolveMultiplexing(i);
+    for (std::size_t i = 0; i < m_db.messages.size(); ++i) checkLayout(i);
+    m_db.reindex();
+  }
+
+ private:
+  void report(Where where, std::string message, Severity severity) {
+    m_diagnostics.push_back(Error{std::move(message), Location{std::string(m_file), where.line, where.column, {}}, severity});
+  }
+  void error(Where where, std::string message) { report(where, std::move(message), Severity::Error); }
+  void warning(Where where, std::string message) { report(where, std::move(message), Severity::Warning); }
+
+  /// BO_ IDs: bit 31 flags a 29-bit ID; a number above 0x7FF without it is a 29-bit ID
+  /// written without the flag (opendbc does this); bits 29/30 make it no CAN ID at all.
+  void classifyIds() {
+    for (std::size_t i = 0; i < m_db.messages.size(); ++i) {
+      Message& msg = m_db.messages[i];
+      const std::uint32_t declared = msg.declaredId;
+      const bool flagged = (declared & 0x80000000u) != 0;
+      const std::uint32_t withoutFlag = declared & 0x7FFFFFFFu;
+      if (msg.name == INDEPENDENT_SIGNALS || (withoutFlag & 0x60000000u) != 0) {
+        msg.pseudo = true;
+        msg.extended = flagged;
+        msg.id = withoutFlag & 0x1FFFFFFFu;
+        if (msg.name != INDEPENDENT_SIGNALS) {
+          warning(m_pending.messageLines[i], "message '" + msg.name + "' has ID " + hexId(declared) +
+                                                 " with bit 29 or 30 set: not a CAN identifier; kept but never matched");
+        }
+        continue;
+      }
+      msg.extended = flagged || withoutFlag > 0x7FFu;
+      msg.id = withoutFlag;
+    }
+  }
+
+  void indexMessages() {
+    for (std::size_t i = 0; i < m_db.messages.size(); ++i) {
+      const Message& msg = m_db.messages[i];
+      const auto [it, inserted] = m_byDeclared.emplace(msg.declaredId, i);
+      if (!inserted) {
+        warning(m_pending.messageLines[i], "message '" + msg.name + "' repeats ID " + hexId(msg.declaredId) +
+                                               " of '" + m_db.messages[it->second].name +
+                                               "'; references by ID resolve to the first");
+      }
+      // 29-bit IDs written without the flag are referenced either way by CM_/BA_/VAL_.
+      if (msg.extended) m_byDeclared.emplace(msg.id | 0x80000000u, i);
+      if (msg.extended) m_byDeclared.emplace(msg.id, i);
+      std::unordered_map<std::string, std::size_t> names;
+      for (std::size_t s = 0; s < msg.signals.size(); ++s) {
+        if (!names.emplace(msg.signals[s].name, s).second) {
+          warning(m_pending.signalWhere[i][s], "signal '" + msg.signals[s].name + "' defined twice in message '" + msg.name +
+                                                   "'; references by name (CM_, BA_, VAL_) resolve to the first");
+        }
+      }
+    }
+  }
+
+  void checkNodes() {
+    std::unordered_map<std::string, std::size_t> seen;
+    for (const Node& node : m_db.nodes) {
+      if (!seen.emplace(node.name, 0).second) {
+        warning(Where{}, "node '" + node.name + "' listed twice in BU_");
+      }
+    }
+  }
+
+  Message* findMessage(std::uint32_t declaredId, Where where, std::string_view statement) {
+    const auto it = m_byDeclared.find(declaredId);
+    if (it == m_byDeclared.end()) {
+      warning(where, std::string(statement) + " refers to undefined message ID " + std::to_string(declaredId) + "; ignored");
+      return nullptr;
+    }
+    return &m_db.messages[it->second];
+  }
+
+  Signal* findSignal(std::uint32_t declaredId, const std::string& name, Where where, std::string_view statement) {
+    Message* msg = findMessage(declaredId, where, statement);
+    if (!msg) return nullptr;
+    for (Signal& sig : msg->signals) {
+      if (sig.name == name) return &sig;
+    }
+    warning(where, std::string(statement) + " refers to undefined signal '" + name + "' of message '" + msg->name + "'; ignored");
+    return nullptr;
+  }
+
+  Node* findNode(const std::string& name, Where where, std::string_view statement) {
+    for (Node& node : m_db.nodes) {
+      if (node.name == name) return &node;
+    }
+    warning(where, std::string(statement) + " refers to undefined node '" + name + "'; ignored");
+    return nullptr;
+  }
+
+  EnvironmentVariable* findEnv(const std::string& name, Where where, std::string_view statement) {
+    for (EnvironmentVariable& env : m_db.environmentVariables) {
+      if (env.name == name) return &env;
+    }
+    warning(where, std::string(statement) + " refers to undefined environment variable '" + name + "'; ignored");
+    return nullptr;
+  }
+
+  void applyTransmitters(const PendingTransmitters& item) {
+    Message* msg = findMessage(item.messageId, item.where, "BO_TX_BU_");
+    if (!msg) return;
+    for (const auto& node : item.nodes) msg->extraTransmitters.push_back(node);
+  }
+
+  void applyComment(const PendingComment& item) {
+    const Target& t = item.target;
+    switch (t.object) {
+      case ObjectType::Network:
+        m_db.comment = item.text;  // several network comments: the last wins, as in Vector tools
+        break;
+      case ObjectType::Node:
+        if (Node* node = findNode(t.name, item.where, "CM_")) node->comment = item.text;
+        break;
+      case ObjectType::Message:
+        if (Message* msg = findMessage(t.messageId, item.where, "CM_")) msg->comment = item.text;
+        break;
+      case ObjectType::Signal:
+        if (Signal* sig = findSignal(t.messageId, t.signal, item.where, "CM_")) sig->comment = item.text;
+        break;
+      case ObjectType::EnvironmentVariable:
+        if (EnvironmentVariable* env = findEnv(t.name, item.where, "CM_")) env->comment = item.text;
+        break;
+      default:
+        break;
+    }
+  }
+
+  void applyValues(PendingValues& item) {
+    if (item.target.object == ObjectType::Signal) {
+      if (Signal* sig = findSignal(item.target.messageId, item.target.signal, item.where, "VAL_")) {
+        sig->valueDescriptions = std::move(item.values);
+      }
+    } else if (EnvironmentVariable* env = findEnv(item.target.name, item.where, "VAL_")) {
+      env->valueDescriptions = std::move(item.values);
+    }
+  }
+
+  void applyValueType(const PendingValueType& item) {
+    Signal* sig = findSignal(item.messageId, item.signal, item.where, "SIG_VALTYPE_");
+    if (!sig) return;
+    sig->valueType = item.type == 1 ? ValueType::Float32 : item.type == 2 ? ValueType::Float64 : ValueType::Integer;
+    const std::uint32_t needed = item.type == 1 ? 32 : item.type == 2 ? 64 : 0;
+    if (needed != 0 && sig->size != needed) {
+      warning(item.where, "signal '" + sig->name + "' is " + std::to_string(sig->size) + " bits but SIG_VALTYPE_ " +
+                              std::to_string(item.type) + " needs " + std::to_string(needed) + "; not decodable");
+    }
+  }
+
+  void applyAttribute(PendingAttribute& item) {
+    const Target& t = item.target;
+    const AttributeDefinition* def = m_db.findAttributeDefinition(item.name, t.object);
+    if (!def) {
+      warning(item.where, "value for undefined attribute '" + item.name + "' (" + std::string(toString(t.object)) + ")");
+    } else {
+      checkAttributeValue(*def, item.value, item.where);
+    }
+    Attributes* into = nullptr;
+    switch (t.object) {
+      case ObjectType::Network: into = &m_db.networkAttributes; break;
+      case ObjectType::Node:
+        if (Node* node = findNode(t.name, item.where, "BA_")) into = &node->attributes;
+        break;
+      case ObjectType::Message:
+        if (Message* msg = findMessage(t.messageId, item.where, "BA_")) into = &msg->attributes;
+        break;
+      case ObjectType::Signal:
+        if (Signal* sig = findSignal(t.messageId, t.signal, item.where, "BA_")) into = &sig->attributes;
+        break;
+      case ObjectType::EnvironmentVariable:
+        if (EnvironmentVariable* env = findEnv(t.name, item.where, "BA_")) into = &env->attributes;
+        break;
+      default: break;
+    }
+    if (into) (*into)[item.name] = std::move(item.value);
+  }
+
+  void checkAttributeValue(const AttributeDefinition& def, const AttributeValue& value, Where where) {
+    const bool wantsString = def.type == AttributeType::String;
+    if (def.type == AttributeType::Enum) {
+      if (value.kind == AttributeValue::Kind::Number &&
+          (value.number < 0 || value.number >= static_cast<double>(def.enumValues.size()))) {
+        warning(where, "attribute '" + def.name + "' value " + std::to_string(static_cast<long long>(value.number)) +
+                           " is not an index of its ENUM list");
+      }
+      return;
+    }
+    if (wantsString != (value.kind == AttributeValue::Kind::String)) {
+      warning(where, "attribute '" + def.name + "' expects " + (wantsString ? "a string" : "a number"));
+    }
+  }
+
+  void applyMux(const PendingMux& item) {
+    Signal* sig = findSignal(item.messageId, item.signal, item.where, "SG_MUL_VAL_");
+    if (!sig) return;
+    const Message* msg = findMessage(item.messageId, item.where, "SG_MUL_VAL_");
+    if (!msg->findSignal(item.switchName)) {
+      error(item.where, "SG_MUL_VAL_ names multiplexor '" + item.switchName + "' that message '" + msg->name + "' does not have");
+      return;
+    }
+    sig->muxSwitch = item.switchName;
+    sig->muxRanges = item.ranges;
+    sig->extendedMux = true;
+  }
+
+  void resolveMultiplexing(std::size_t messageIndex) {
+    Message& msg = m_db.messages[messageIndex];
+    std::vector<const Signal*> roots;
+    for (const Signal& sig : msg.signals) {
+      if (sig.muxRole == MuxRole::Multiplexor) roots.push_back(&sig);
+    }
+    for (std::size_t s = 0; s < msg.signals.size(); ++s) {
+      Signal& sig = msg.signals[s];
+      const Where where = m_pending.signalWhere[messageIndex][s];
+      const bool multiplexed = sig.muxRole == MuxRole::Multiplexed || sig.muxRole == MuxRole::MultiplexedMultiplexor;
+      if (!multiplexed) {
+        if (sig.extendedMux) {
+          warning(where, "SG_MUL_VAL_ for '" + sig.name + "', which is not multiplexed (no mN); ignored");
+          sig.extendedMux = false;
+          sig.muxSwitch.clear();
+          sig.muxRanges.clear();
+        }
+        continue;
+      }
+      if (sig.muxSwitch.empty()) {
+        if (roots.empty()) {
+          warning(where, "multiplexed signal '" + sig.name + "' but message '" + msg.name + "' has no multiplexor (M); not decodable");
+          continue;
+        }
+        if (roots.size() > 1) {
+          warning(where, "message '" + msg.name + "' has several multiplexors and no SG_MUL_VAL_ for '" + sig.name +
+                             "'; using '" + roots.front()->name + "'");
+        }
+        sig.muxSwitch = roots.front()->name;
+      }
+      const Signal* sw = msg.findSignal(sig.muxSwitch);
+      if (sw && sw->muxRole != MuxRole::Multiplexor && sw->muxRole != MuxRole::MultiplexedMultiplexor) {
+        warning(where, "'" + sig.name + "' is selected by '" + sw->name + "', which is not marked as multiplexor (M)");
+      }
+    }
+    // A selection chain must end at a root: a cycle would select nothing ever.
+    for (std::size_t s = 0; s < msg.signals.size(); ++s) {
+      const Signal* cursor = &msg.signals[s];
+      std::size_t steps = 0;
+      while (cursor && !cursor->muxSwitch.empty() && steps <= msg.signals.size()) {
+        cursor = msg.findSignal(cursor->muxSwitch);
+        ++steps;
+      }
+      if (steps > msg.signals.size()) {
+        error(m_pending.signalWhere[messageIndex][s], "multiplexor chain of '" + msg.signals[s].name + "' loops");
+        msg.signals[s].muxSwitch.clear();
+      }
+    }
+  }
+
+  /// Layout checks: sizes, bits outside the frame.
+  void checkLayout(std::size_t messageIndex) {
+    Message& msg = m_db.messages[messageIndex];
+    if (msg.pseudo) return;
+    const std::uint64_t frameBits = static_cast<std::uint64_t>(msg.length) * 8;
+    for (std::size_t s = 0; s < msg.signals.size(); ++s) {
+      const Signal& sig = msg.signals[s];
+      const Where where = m_pending.signalWhere[messageIndex][s];
+      if (sig.size == 0) {
+        error(where, "signal '" + sig.name + "' has size 0");
+        continue;
+      }
+      if (sig.size > 64) {
+        warning(where, "signal '" + sig.name + "' is " + std::to_string(sig.size) + " bits: loaded, not decodable (limit 64)");
+      }
+      // Highest bit index the signal touches in LSB0 numbering.
+      std::uint64_t lowestByte = 0;
+      std::uint64_t highestByte = 0;
+      if (sig.byteOrder == ByteOrder::LittleEndian) {
+        lowestByte = sig.startBit / 8;
+        highestByte = (static_cast<std::uint64_t>(sig.startBit) + sig.size - 1) / 8;
+      } else {
+        lowestByte = sig.startBit / 8;
+        const std::uint64_t msbLinear = (sig.startBit / 8) * 8 + (7 - sig.startBit % 8);
+        highestByte = (msbLinear + sig.size - 1) / 8;
+      }
+      if ((highestByte + 1) * 8 > frameBits) {
+        warning(where, "signal '" + sig.name + "' (bytes " + std::to_string(lowestByte) + ".." + std::to_string(highestByte) +
+                           ") lies outside the " + std::to_string(msg.length) + "-byte message '" + msg.name +
+                           "'; decoded only from longer frames");
+      }
+      if (sig.factor == 0.0) warning(where, "signal '" + sig.name + "' has factor 0");
+    }
+  }
+
+  Database& m_db;
+  PendingState& m_pending;
+  std::string_view m_file;
+  std::vector<Error>& m_diagnostics;
+  std::unordered_map<std::uint32_t, std::size_t> m_byDeclared;
+};
+
+}  // namespace
+
+void resolve(Database& database, PendingState& pending, std::string_view fileName, std::vector<Error>& diagnostics) {
+  Resolver(database, pending, fileName, diagnostics).run();
+}
+
+}  // namespace openvcu::dbc::detail
