@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The second command: installs what is missing, builds, runs every test.
+#   ./test.sh            Release build + all tests, then an ASan+UBSan build + the unit tests
+#   ./test.sh --fast     Release build + all tests only
+# Exits non-zero if anything fails; prints ctest's summary.
+set -euo pipefail
+cd "$(dirname "$(readlink -f "$0")")"
+
+fast=0
+for arg in "$@"; do
+  case "$arg" in
+    --fast) fast=1 ;;
+    -h|--help) sed -n '2,5p' "$0"; exit 0 ;;
+    *) echo "test.sh: unknown option '$arg'" >&2; exit 2 ;;
+  esac
+done
+
+jobs=$(nproc 2>/dev/null || echo 2)
+scripts/install-deps.sh
+
+echo "== Release build (build/)"
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j "$jobs"
+echo "== Tests (Release)"
+status=0
+ctest --test-dir build --output-on-failure -j "$jobs" || status=1
+
+if [ $fast -eq 0 ]; then
+  echo "== ASan+UBSan build (build-asan/)"
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Asan -DOPENVCU_BUILD_BENCH=OFF >/dev/null
+  cmake --build build-asan -j "$jobs"
+  echo "== Unit tests under ASan+UBSan"
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --test-dir build-asan -L unit --output-on-failure -j "$jobs" || status=1
+fi
+
+if [ $status -ne 0 ]; then echo "test.sh: FAILED" >&2; else echo "test.sh: all tests passed"; fi
+exit $status
