@@ -17,7 +17,9 @@ PACKAGES=(
   # libraries
   doctest-dev nlohmann-json3-dev libcli11-dev libbenchmark-dev
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev
-  liblcm-dev liblcm-bin libglib2.0-dev
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
+  # lcm-spy with the project's generated Java types (and its headless test)
+  default-jdk-headless libjchart2d-java xvfb xauth
   # test peers: the canmatrix/python-can decoding oracle, namespaces for isolated tests
   python3 python3-canmatrix python3-can util-linux iproute2
 )

@@ -34,8 +34,8 @@ bool parseAscDate(Scanner& s, std::int64_t& ns) noexcept {
   std::uint64_t day = 0, hour = 0, minute = 0, second = 0, year = 0;
   if (month == 0 || !parseUnsigned(s.token(), 10, 31, day)) return false;
   Scanner clock(s.token());
-  if (clock.digits(hour, 23) <= 0 || !clock.consume(':') || clock.digits(minute, 59) <= 0 ||
-      !clock.consume(':') || clock.digits(second, 60) <= 0) {
+  if (clock.digits(hour, 23) <= 0 || !clock.consume(':') || clock.digits(minute, 59) <= 0 || !clock.consume(':') ||
+      clock.digits(second, 60) <= 0) {
     return false;
   }
   std::int64_t fractionNs = clock.consume('.') ? fractionToNs(clock) : 0;
@@ -48,9 +48,8 @@ bool parseAscDate(Scanner& s, std::int64_t& ns) noexcept {
   }
   std::int64_t seconds = 0;
   if (!parseUnsigned(next, 10, 9999, year) ||
-      !civilToEpochSeconds(static_cast<int>(year), month, static_cast<unsigned>(day),
-                           static_cast<unsigned>(hour), static_cast<unsigned>(minute),
-                           static_cast<unsigned>(second), seconds) ||
+      !civilToEpochSeconds(static_cast<int>(year), month, static_cast<unsigned>(day), static_cast<unsigned>(hour),
+                           static_cast<unsigned>(minute), static_cast<unsigned>(second), seconds) ||
       seconds < 0 || static_cast<std::uint64_t>(seconds) > MAX_SECONDS) {
     return false;
   }
@@ -149,8 +148,7 @@ LineResult AscParser::parseHeader(Scanner& s, LineError& error) noexcept {
 }
 
 /// "<channel> <id>[x] Rx|Tx d <dlc> <bytes>..." / "... r [<dlc>]" / "<channel> ErrorFrame ..."
-LineResult AscParser::parseClassic(Scanner& s, std::string_view channel, LogRecord& record,
-                                   LineError& error) noexcept {
+LineResult AscParser::parseClassic(Scanner& s, std::string_view channel, LogRecord& record, LineError& error) noexcept {
   Frame& frame = record.frame;
   record.channel = channel;
   const std::string_view idToken = s.token();
@@ -178,7 +176,8 @@ LineResult AscParser::parseClassic(Scanner& s, std::string_view channel, LogReco
   const std::uint32_t dlcColumn = s.column() + 1;
   const std::string_view dlcToken = s.token();
   if (!parseUnsigned(dlcToken, m_base, 0xFF, dlc)) return fail(error, dlcColumn, "expected a DLC after 'd'");
-  if (dlc > 15) return fail(error, dlcColumn, "data length %u exceeds 8 for a classic frame", static_cast<unsigned>(dlc));
+  if (dlc > 15)
+    return fail(error, dlcColumn, "data length %u exceeds 8 for a classic frame", static_cast<unsigned>(dlc));
   // A classic DLC of 9-15 still carries 8 bytes (ISO 11898-1).
   return parseBytes(s, dlc < CLASSIC_DATA_LENGTH ? dlc : CLASSIC_DATA_LENGTH, frame, error);
 }
@@ -242,7 +241,8 @@ LineResult AscParser::parseLine(std::string_view line, LogRecord& record, LineEr
   }
   m_previousNs = offsetNs;
   std::int64_t timestampNs = 0;
-  if (__builtin_add_overflow(m_startNs, offsetNs, &timestampNs)) return fail(error, timeColumn, "timestamp out of range");
+  if (__builtin_add_overflow(m_startNs, offsetNs, &timestampNs))
+    return fail(error, timeColumn, "timestamp out of range");
   record.frame.timestampNs = timestampNs;
   record.timeSeconds = static_cast<double>(offsetNs) * 1e-9;
   record.hasTime = true;

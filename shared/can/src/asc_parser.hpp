@@ -24,11 +24,11 @@ class AscParser {
   LineResult parseCanFd(Scanner& s, LogRecord& record, LineError& error) noexcept;
   LineResult parseBytes(Scanner& s, std::size_t count, Frame& frame, LineError& error) const noexcept;
 
-  unsigned m_base{16};            ///< "base hex" (default) or "base dec"
-  bool m_relative{false};         ///< "timestamps relative": each time is a delta to the previous event
-  bool m_startFromTrigger{false}; ///< the Begin Triggerblock date wins over the "date" header
-  std::int64_t m_startNs{0};      ///< measurement start, ns since 1970 (0 when unknown)
-  std::int64_t m_previousNs{0};   ///< time of the previous event since the start
+  unsigned m_base{16};             ///< "base hex" (default) or "base dec"
+  bool m_relative{false};          ///< "timestamps relative": each time is a delta to the previous event
+  bool m_startFromTrigger{false};  ///< the Begin Triggerblock date wins over the "date" header
+  std::int64_t m_startNs{0};       ///< measurement start, ns since 1970 (0 when unknown)
+  std::int64_t m_previousNs{0};    ///< time of the previous event since the start
 };
 
 }  // namespace openvcu::can::detail

@@ -28,16 +28,17 @@ LineResult parseTimestamp(Scanner& s, LogRecord& record, LineError& error) noexc
   std::int64_t seconds = 0;
   if (s.peek() == '-' && wholeDigits == 4 && !negative) {  // candump -tA: local date, read as UTC
     std::uint64_t month = 0, day = 0, hour = 0, minute = 0, second = 0;
-    const bool shapeOk = s.consume('-') && s.digits(month, 99) > 0 && s.consume('-') &&
-                         s.digits(day, 99) > 0 && s.consume(' ') && s.digits(hour, 99) > 0 &&
-                         s.consume(':') && s.digits(minute, 99) > 0 && s.consume(':') &&
-                         s.digits(second, 99) > 0;
+    const bool shapeOk = s.consume('-') && s.digits(month, 99) > 0 && s.consume('-') && s.digits(day, 99) > 0 &&
+                         s.consume(' ') && s.digits(hour, 99) > 0 && s.consume(':') && s.digits(minute, 99) > 0 &&
+                         s.consume(':') && s.digits(second, 99) > 0;
     if (!shapeOk) return fail(error, s.column(), "expected 'YYYY-MM-DD HH:MM:SS.ffffff' in the timestamp");
-    if (!civilToEpochSeconds(static_cast<int>(whole), static_cast<unsigned>(month),
-                             static_cast<unsigned>(day), static_cast<unsigned>(hour),
-                             static_cast<unsigned>(minute), static_cast<unsigned>(second), seconds)) {
+    if (!civilToEpochSeconds(static_cast<int>(whole), static_cast<unsigned>(month), static_cast<unsigned>(day),
+                             static_cast<unsigned>(hour), static_cast<unsigned>(minute), static_cast<unsigned>(second),
+                             seconds)) {
       return fail(error, openColumn + 1, "invalid date or time in the timestamp");
     }
+    const auto magnitude = static_cast<std::uint64_t>(seconds < 0 ? -seconds : seconds);  // civil years 0-9999
+    if (magnitude > MAX_SECONDS) return fail(error, openColumn + 1, "timestamp out of range");
   } else {
     if (whole > MAX_SECONDS) return fail(error, openColumn + 1, "timestamp out of range");
     seconds = static_cast<std::int64_t>(whole);
@@ -48,8 +49,8 @@ LineResult parseTimestamp(Scanner& s, LogRecord& record, LineError& error) noexc
   const std::int64_t sign = negative ? -1 : 1;
   record.hasTime = true;
   record.frame.timestampNs = sign * (seconds * NS_PER_SECOND + fractionNs);
-  record.timeSeconds = static_cast<double>(sign) *
-                       (static_cast<double>(seconds) + static_cast<double>(fractionNs) * 1e-9);
+  record.timeSeconds =
+      static_cast<double>(sign) * (static_cast<double>(seconds) + static_cast<double>(fractionNs) * 1e-9);
   return LineResult::Frame;
 }
 
@@ -231,8 +232,8 @@ LineResult parseConsole(std::string_view token, Scanner& s, LogRecord& record, L
     const int low = byte.size() == 2 ? hexValue(byte[1]) : -1;
     if (high < 0 || low < 0) {
       const Excerpt text = excerpt(byte);
-      return fail(error, s.columnOf(byte.data()), "invalid data byte '%.*s' (expected 2 hex digits)",
-                  text.length, text.data);
+      return fail(error, s.columnOf(byte.data()), "invalid data byte '%.*s' (expected 2 hex digits)", text.length,
+                  text.data);
     }
     frame.data[i] = static_cast<std::uint8_t>((high << 4) | low);
   }

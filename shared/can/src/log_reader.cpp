@@ -1,13 +1,13 @@
 #include "openvcu/can/log_reader.hpp"
 
-#include "asc_parser.hpp"
-#include "candump_parser.hpp"
-
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <istream>
 #include <limits>
+
+#include "asc_parser.hpp"
+#include "candump_parser.hpp"
 
 namespace openvcu::can {
 namespace {
@@ -50,11 +50,11 @@ struct LogReader::Impl {
   bool afterErrorFrame{};  // candump -e continues an error frame on lines starting with a TAB
 
   std::unique_ptr<char[]> buffer{new char[BUFFER_SIZE]};
-  std::size_t begin{};     // first unread byte
-  std::size_t end{};       // one past the last byte read
-  std::size_t scanned{};   // bytes after `begin` already searched for '\n'
+  std::size_t begin{};    // first unread byte
+  std::size_t end{};      // one past the last byte read
+  std::size_t scanned{};  // bytes after `begin` already searched for '\n'
   bool endOfInput{};
-  bool discarding{};       // inside a line longer than MAX_LINE_LENGTH
+  bool discarding{};  // inside a line longer than MAX_LINE_LENGTH
 
   void report(std::uint32_t column, std::string_view message) {
     ++errorCount;
@@ -155,6 +155,7 @@ struct LogReader::Impl {
         report(1, "line longer than 4096 characters");
         continue;
       }
+      if (lineNumber == 1 && startsWith(line, "\xEF\xBB\xBF")) line.remove_prefix(3);  // UTF-8 BOM
       const bool continuation = afterErrorFrame && !line.empty() && line[0] == '\t';
       afterErrorFrame = false;
       std::size_t first = 0;
@@ -166,9 +167,8 @@ struct LogReader::Impl {
       LogRecord record;
       record.line = lineNumber;
       detail::LineError error;
-      const detail::LineResult result = format == LogFormat::VectorAsc
-                                            ? asc.parseLine(line, record, error)
-                                            : detail::parseCandumpLine(line, record, error);
+      const detail::LineResult result = format == LogFormat::VectorAsc ? asc.parseLine(line, record, error)
+                                                                       : detail::parseCandumpLine(line, record, error);
       if (result == detail::LineResult::Frame) {
         ++recordCount;
         afterErrorFrame = (record.frame.flags & FLAG_ERROR) != 0;
@@ -182,8 +182,7 @@ struct LogReader::Impl {
 
 LogReader::LogReader(std::unique_ptr<Impl> impl) noexcept : m_impl(std::move(impl)) {}
 
-LogReader::LogReader(std::istream& input, std::string sourceName, LogFormat format)
-    : m_impl(std::make_unique<Impl>()) {
+LogReader::LogReader(std::istream& input, std::string sourceName, LogFormat format) : m_impl(std::make_unique<Impl>()) {
   m_impl->input = &input;
   m_impl->sourceName = std::move(sourceName);
   m_impl->format = format;
@@ -210,12 +209,26 @@ LogReader::LogReader(LogReader&&) noexcept = default;
 LogReader& LogReader::operator=(LogReader&&) noexcept = default;
 LogReader::~LogReader() = default;
 
-std::optional<LogRecord> LogReader::next() { return m_impl->next(); }
-void LogReader::setErrorHandler(ErrorHandler handler) { m_impl->errorHandler = std::move(handler); }
-const std::optional<Error>& LogReader::lastError() const noexcept { return m_impl->lastError; }
-std::uint64_t LogReader::errorCount() const noexcept { return m_impl->errorCount; }
-std::uint64_t LogReader::recordCount() const noexcept { return m_impl->recordCount; }
-std::uint64_t LogReader::lineCount() const noexcept { return m_impl->lineNumber; }
-LogFormat LogReader::format() const noexcept { return m_impl->format; }
+std::optional<LogRecord> LogReader::next() {
+  return m_impl->next();
+}
+void LogReader::setErrorHandler(ErrorHandler handler) {
+  m_impl->errorHandler = std::move(handler);
+}
+const std::optional<Error>& LogReader::lastError() const noexcept {
+  return m_impl->lastError;
+}
+std::uint64_t LogReader::errorCount() const noexcept {
+  return m_impl->errorCount;
+}
+std::uint64_t LogReader::recordCount() const noexcept {
+  return m_impl->recordCount;
+}
+std::uint64_t LogReader::lineCount() const noexcept {
+  return m_impl->lineNumber;
+}
+LogFormat LogReader::format() const noexcept {
+  return m_impl->format;
+}
 
 }  // namespace openvcu::can

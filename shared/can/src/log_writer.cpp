@@ -31,15 +31,14 @@ char* writeDecimal(char* out, std::uint64_t value) noexcept {
 
 }  // namespace
 
-std::size_t formatCandumpL(const Frame& frame, std::string_view channel, std::span<char> out,
-                           char direction) noexcept {
+std::size_t formatCandumpL(const Frame& frame, std::string_view channel, std::span<char> out, char direction) noexcept {
   if (out.size() < candumpLMaxLength(channel.size())) return 0;
   char* p = out.data();
 
   // Sign and magnitude in microseconds, rounded towards minus infinity.
   const bool negative = frame.timestampNs < 0;
-  const std::uint64_t magnitudeNs = negative ? 0 - static_cast<std::uint64_t>(frame.timestampNs)
-                                             : static_cast<std::uint64_t>(frame.timestampNs);
+  const std::uint64_t magnitudeNs =
+      negative ? 0 - static_cast<std::uint64_t>(frame.timestampNs) : static_cast<std::uint64_t>(frame.timestampNs);
   const std::uint64_t micros = negative ? (magnitudeNs + 999) / 1000 : magnitudeNs / 1000;
   *p++ = '(';
   if (negative && micros != 0) *p++ = '-';
@@ -67,8 +66,8 @@ std::size_t formatCandumpL(const Frame& frame, std::string_view channel, std::sp
   }
   *p++ = '#';
   if ((frame.flags & FLAG_FD) != 0) {
-    const unsigned fdFlags = ((frame.flags & FLAG_BRS) != 0 ? CANFD_BRS : 0u) |
-                             ((frame.flags & FLAG_ESI) != 0 ? CANFD_ESI : 0u);
+    const unsigned fdFlags =
+        ((frame.flags & FLAG_BRS) != 0 ? CANFD_BRS : 0u) | ((frame.flags & FLAG_ESI) != 0 ? CANFD_ESI : 0u);
     *p++ = '#';
     *p++ = HEX_DIGITS[fdFlags];
   } else if ((frame.flags & FLAG_RTR) != 0) {

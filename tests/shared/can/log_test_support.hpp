@@ -2,12 +2,12 @@
 // Test helpers: read a whole log into owned records (LogRecord::channel is only valid
 // until the next next(), so the helpers copy it).
 
-#include "openvcu/can/log_reader.hpp"
-
 #include <cstdint>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "openvcu/can/log_reader.hpp"
 
 namespace openvcu::can::test {
 

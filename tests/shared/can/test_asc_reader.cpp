@@ -1,11 +1,11 @@
 // Vector ASC logs: header state, classic, CAN FD, remote and error frames, skipped events.
 
-#include "log_test_support.hpp"
-
 #include <doctest/doctest.h>
 
 #include <filesystem>
 #include <string>
+
+#include "log_test_support.hpp"
 
 using namespace openvcu::can;
 using openvcu::can::test::payloadOf;
@@ -58,8 +58,9 @@ TEST_CASE("ASC fixture gives classic, remote, error and CAN FD frames and skips 
 }
 
 TEST_CASE("ASC is detected from its header lines on a stream") {
-  const auto result = readText("date Tue May 27 04:09:35.000 pm 2014\nbase hex  timestamps absolute\n"
-                               "   0.019968 1  64              Rx   d 4 64 00 00 00\n");
+  const auto result = readText(
+      "date Tue May 27 04:09:35.000 pm 2014\nbase hex  timestamps absolute\n"
+      "   0.019968 1  64              Rx   d 4 64 00 00 00\n");
 
   CHECK(result.format == LogFormat::VectorAsc);
   REQUIRE(result.records.size() == 1);
@@ -68,11 +69,12 @@ TEST_CASE("ASC is detected from its header lines on a stream") {
 }
 
 TEST_CASE("ASC relative timestamps accumulate and decimal base reads decimal ids") {
-  const auto result = readText("base dec  timestamps relative\n"
-                               "   1.5 1  100  Rx   d 2 10 255\n"
-                               "   0.25 1  Statistic: D 0\n"
-                               "   0.25 1  101  Rx   d 1 7\n",
-                               LogFormat::VectorAsc);
+  const auto result = readText(
+      "base dec  timestamps relative\n"
+      "   1.5 1  100  Rx   d 2 10 255\n"
+      "   0.25 1  Statistic: D 0\n"
+      "   0.25 1  101  Rx   d 1 7\n",
+      LogFormat::VectorAsc);
 
   REQUIRE(result.records.size() == 2);
   CHECK(result.records[0].frame.id == 100);
@@ -82,8 +84,9 @@ TEST_CASE("ASC relative timestamps accumulate and decimal base reads decimal ids
 }
 
 TEST_CASE("ASC German month names and remote CANFD lines are understood") {
-  const auto result = readText("date Mi Okt 4 10:00:00.500 2023\n"
-                               "  1.0 CANFD   3 Tx     50005x      0 1 5 0 140000 73 200050 7a60\n");
+  const auto result = readText(
+      "date Mi Okt 4 10:00:00.500 2023\n"
+      "  1.0 CANFD   3 Tx     50005x      0 1 5 0 140000 73 200050 7a60\n");
 
   REQUIRE(result.records.size() == 1);
   CHECK(result.records[0].frame.flags == (FLAG_EXTENDED | FLAG_RTR));

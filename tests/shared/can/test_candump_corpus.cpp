@@ -5,15 +5,15 @@
 //  - a length that is neither classic (0-8) nor a CAN FD length ("[10]") is rejected.
 //  - PEAK TRC lines (test_pcan_*) are another format: they must be rejected, not misread.
 
-#include "log_test_support.hpp"
-
 #include <doctest/doctest.h>
-#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
+
+#include "log_test_support.hpp"
 
 using namespace openvcu::can;
 using nlohmann::json;
@@ -39,8 +39,8 @@ std::string expectedHex(const std::string& data) {
 }
 
 bool isValidLength(std::size_t length) {
-  return length <= 8 || length == 12 || length == 16 || length == 20 || length == 24 || length == 32 ||
-         length == 48 || length == 64;
+  return length <= 8 || length == 12 || length == 16 || length == 20 || length == 24 || length == 32 || length == 48 ||
+         length == 64;
 }
 
 /// Broken-down civil time of `timestampNs` shifted by `offsetHours` (the corpus' tzinfo).
@@ -55,8 +55,13 @@ Civil civilOf(std::int64_t timestampNs, int offsetHours) {
   const auto day = floor<days>(time);
   const year_month_day date{day};
   const hh_mm_ss clock{floor<microseconds>(time - day)};
-  return {int(date.year()), unsigned(date.month()), unsigned(date.day()), clock.hours().count(),
-          clock.minutes().count(), clock.seconds().count(), long(clock.subseconds().count())};
+  return {int(date.year()),
+          unsigned(date.month()),
+          unsigned(date.day()),
+          clock.hours().count(),
+          clock.minutes().count(),
+          clock.seconds().count(),
+          long(clock.subseconds().count())};
 }
 
 /// How a case was checked, for the summary line.
@@ -117,7 +122,8 @@ void checkCase(const json& testCase, Tally& tally) {
     CHECK(civil.hour == expect["timestamp.hour"].get<long>());
     CHECK(civil.minute == expect["timestamp.minute"].get<long>());
     CHECK(civil.second == expect["timestamp.second"].get<long>());
-    if (expect.contains("timestamp.microsecond")) CHECK(civil.microsecond == expect["timestamp.microsecond"].get<long>());
+    if (expect.contains("timestamp.microsecond"))
+      CHECK(civil.microsecond == expect["timestamp.microsecond"].get<long>());
   }
 }
 
@@ -138,8 +144,7 @@ TEST_CASE("every cantools candump case the reader can express parses as cantools
     ++cases;
   }
   CHECK(cases > 0);
-  MESSAGE("checked " << cases << " cantools cases: " << tally.frames << " frames field by field, "
-                     << tally.noFrame << " without a data frame, " << tally.parsesOnly << " parse-only, "
-                     << tally.rejectedLength << " rejected for an invalid length, " << tally.rejectedOtherFormat
-                     << " PEAK TRC lines rejected");
+  MESSAGE("checked " << cases << " cantools cases: " << tally.frames << " frames field by field, " << tally.noFrame
+                     << " without a data frame, " << tally.parsesOnly << " parse-only, " << tally.rejectedLength
+                     << " rejected for an invalid length, " << tally.rejectedOtherFormat << " PEAK TRC lines rejected");
 }

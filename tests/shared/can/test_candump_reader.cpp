@@ -1,8 +1,8 @@
 // candump line formats: -L (compact) and the console formats (default, -ta/-td/-tz/-tA, -x, -a, -e).
 
-#include "log_test_support.hpp"
-
 #include <doctest/doctest.h>
+
+#include "log_test_support.hpp"
 
 using namespace openvcu::can;
 using openvcu::can::test::payloadOf;
@@ -32,8 +32,9 @@ TEST_CASE("candump -L extended data frame is read with its full-precision timest
 }
 
 TEST_CASE("candump -L timestamps keep nanoseconds and never go through a double") {
-  const auto result = readText("(1436509052.123456789) can0 001#00\n(1700000000.1) can0 001#00\n"
-                               "(9.0000000019) can0 001#00\n");
+  const auto result = readText(
+      "(1436509052.123456789) can0 001#00\n(1700000000.1) can0 001#00\n"
+      "(9.0000000019) can0 001#00\n");
 
   REQUIRE(result.records.size() == 3);
   CHECK(result.records[0].frame.timestampNs == 1436509052123456789);
@@ -54,8 +55,9 @@ TEST_CASE("candump -L standard id has three digits and extended ids more") {
 }
 
 TEST_CASE("candump -L CAN FD frame carries BRS and ESI from the flags digit") {
-  const auto result = readText("(0.1) can0 123##1DEADBEEF\n(0.2) can0 123##2\n"
-                               "(0.3) can0 18DAF100##3000102030405060708090A0B\n");
+  const auto result = readText(
+      "(0.1) can0 123##1DEADBEEF\n(0.2) can0 123##2\n"
+      "(0.3) can0 18DAF100##3000102030405060708090A0B\n");
 
   REQUIRE(result.records.size() == 3);
   CHECK(result.records[0].frame.flags == (FLAG_FD | FLAG_BRS));
@@ -87,8 +89,9 @@ TEST_CASE("candump -L error frame keeps the error class as id and its data") {
 }
 
 TEST_CASE("candump -L direction suffix, byte separators and len8_dlc suffix are accepted") {
-  const auto result = readText("(0.1) can0 123#AA R\n(0.2) can0 123#BB T\n(0.3) can0 123#11.22.33\n"
-                               "(0.4) can0 123#1122334455667788_9\n");
+  const auto result = readText(
+      "(0.1) can0 123#AA R\n(0.2) can0 123#BB T\n(0.3) can0 123#11.22.33\n"
+      "(0.4) can0 123#1122334455667788_9\n");
 
   REQUIRE(result.records.size() == 4);
   CHECK(result.records[0].direction == 'R');
@@ -118,8 +121,9 @@ TEST_CASE("candump default format without timestamp is read") {
 }
 
 TEST_CASE("candump -ta, -td and -tz timestamps are read as written") {
-  const auto result = readText(" (1436509052.249713)  can0  123   [2]  11 22\n"
-                               " (002.047817)  vcan0  064   [1]  F0\n");
+  const auto result = readText(
+      " (1436509052.249713)  can0  123   [2]  11 22\n"
+      " (002.047817)  vcan0  064   [1]  F0\n");
 
   REQUIRE(result.records.size() == 2);
   CHECK(result.records[0].frame.timestampNs == EPOCH_NS);
@@ -135,8 +139,9 @@ TEST_CASE("candump -tA date timestamp is read as UTC") {
 }
 
 TEST_CASE("candump console CAN FD frame has a two-digit length") {
-  const auto result = readText("  can0  456  [12]  00 11 22 33 44 55 66 77 88 99 AA BB\n"
-                               "  can0  456  [08]  01 02 03 04 05 06 07 08\n");
+  const auto result = readText(
+      "  can0  456  [12]  00 11 22 33 44 55 66 77 88 99 AA BB\n"
+      "  can0  456  [08]  01 02 03 04 05 06 07 08\n");
 
   REQUIRE(result.records.size() == 2);
   CHECK(result.records[0].frame.flags == FLAG_FD);
@@ -147,8 +152,9 @@ TEST_CASE("candump console CAN FD frame has a two-digit length") {
 }
 
 TEST_CASE("candump -x direction and BRS/ESI marks are read") {
-  const auto result = readText(" (0.1)  can0  RX B E  456  [08]  01 02 03 04 05 06 07 08\n"
-                               " (0.2)  can0  TX - -  123   [1]  41\n");
+  const auto result = readText(
+      " (0.1)  can0  RX B E  456  [08]  01 02 03 04 05 06 07 08\n"
+      " (0.2)  can0  TX - -  123   [1]  41\n");
 
   REQUIRE(result.records.size() == 2);
   CHECK(result.records[0].direction == 'R');
@@ -158,11 +164,12 @@ TEST_CASE("candump -x direction and BRS/ESI marks are read") {
 }
 
 TEST_CASE("candump console remote request, ASCII column and ERRORFRAME are read") {
-  const auto result = readText("  can0  123   [3]  remote request\n"
-                               "  can1  123   [8]  31 30 30 2E 35 20 46 4D   '100.5 FM'\n"
-                               "  can0  20000004   [8]  00 04 00 00 00 00 00 00   ERRORFRAME\n"
-                               "\tcontroller-problem{rx-error-warning}\n"
-                               "  can0  00000123   [0]\n");
+  const auto result = readText(
+      "  can0  123   [3]  remote request\n"
+      "  can1  123   [8]  31 30 30 2E 35 20 46 4D   '100.5 FM'\n"
+      "  can0  20000004   [8]  00 04 00 00 00 00 00 00   ERRORFRAME\n"
+      "\tcontroller-problem{rx-error-warning}\n"
+      "  can0  00000123   [0]\n");
 
   REQUIRE(result.records.size() == 4);
   CHECK(result.records[0].frame.flags == FLAG_RTR);

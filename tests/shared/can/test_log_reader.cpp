@@ -1,11 +1,11 @@
 // LogReader as a stream: files, line endings, comments, error reporting and recovery.
 
-#include "log_test_support.hpp"
-
 #include <doctest/doctest.h>
 
 #include <sstream>
 #include <string>
+
+#include "log_test_support.hpp"
 
 using namespace openvcu::can;
 using openvcu::can::test::payloadOf;
@@ -73,8 +73,7 @@ TEST_CASE("malformed lines are reported with line, column and reason and reading
   CHECK(result.errors[1].toString() == file + ":3:17: data length 9 exceeds 8 for a classic frame");
   CHECK(result.errors[2].toString() == file + ":4:17: standard identifier 0x800 exceeds 0x7FF");
   CHECK(result.errors[3].toString() == file + ":5:23: invalid hex digit 'G' in data");
-  CHECK(result.errors[4].message ==
-        "data length 9 is not a valid CAN FD length (0-8, 12, 16, 20, 24, 32, 48, 64)");
+  CHECK(result.errors[4].message == "data length 9 is not a valid CAN FD length (0-8, 12, 16, 20, 24, 32, 48, 64)");
   CHECK(result.errors[5].toString() == file + ":7:16: data length 9 exceeds 8 for a classic frame");
   CHECK(result.errors[6].location.line == 8);
   CHECK(result.errors[6].message == "invalid CAN identifier 'ERROR' (expected 3 or 8 hex digits)");

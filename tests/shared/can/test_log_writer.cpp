@@ -1,13 +1,13 @@
 // formatCandumpL, and reader(writer(frame)) == frame for every kind of frame.
 
-#include "log_test_support.hpp"
-#include "openvcu/can/log_writer.hpp"
-
 #include <doctest/doctest.h>
 
 #include <array>
 #include <random>
 #include <sstream>
+
+#include "log_test_support.hpp"
+#include "openvcu/can/log_writer.hpp"
 
 using namespace openvcu::can;
 
@@ -41,8 +41,7 @@ TEST_CASE("writer formats standard, FD, remote and error frames") {
   CHECK(formatCandumpL(makeFrame(0x7B, 0, {}, 0), "vcan0") == "(0.000000) vcan0 07B#");
   CHECK(formatCandumpL(makeFrame(0x123, FLAG_FD | FLAG_BRS, {0xDE, 0xAD, 0xBE, 0xEF}, 5), "can1") ==
         "(0.000000) can1 123##1DEADBEEF");
-  CHECK(formatCandumpL(makeFrame(0x123, FLAG_FD | FLAG_ESI, {}, 1'000'000'001), "can1") ==
-        "(1.000000) can1 123##2");
+  CHECK(formatCandumpL(makeFrame(0x123, FLAG_FD | FLAG_ESI, {}, 1'000'000'001), "can1") == "(1.000000) can1 123##2");
   Frame remote = makeFrame(0x123, FLAG_RTR, {}, 2'500'000'000);
   remote.length = 5;
   CHECK(formatCandumpL(remote, "can0") == "(2.500000) can0 123#R5");
@@ -110,14 +109,14 @@ TEST_CASE("random frames survive a write and read round trip") {
   std::ostringstream text;
   for (int i = 0; i < FRAME_COUNT; ++i) {
     Frame frame;
-    frame.timestampNs = static_cast<std::int64_t>(random() % 2'000'000'000u) * 1'000'000 + (random() % 1'000'000) * 1000;
+    frame.timestampNs =
+        static_cast<std::int64_t>(random() % 2'000'000'000u) * 1'000'000 + (random() % 1'000'000) * 1000;
     const bool extended = (random() & 1) != 0;
     const bool fd = (random() % 3) == 0;
     frame.id = extended ? random() & EXTENDED_ID_MASK : random() & STANDARD_ID_MASK;
     frame.flags = static_cast<std::uint8_t>((extended ? FLAG_EXTENDED : 0) | (fd ? FLAG_FD : 0));
     if (fd && (random() & 1) != 0) frame.flags |= FLAG_BRS;
-    frame.length = fd ? dlcToLength(static_cast<std::uint8_t>(random() % 16))
-                      : static_cast<std::uint8_t>(random() % 9);
+    frame.length = fd ? dlcToLength(static_cast<std::uint8_t>(random() % 16)) : static_cast<std::uint8_t>(random() % 9);
     for (std::size_t b = 0; b < frame.length; ++b) frame.data[b] = static_cast<std::uint8_t>(random());
     frames.push_back(frame);
     text << formatCandumpL(frame, "vcan0") << '\n';

@@ -11,12 +11,12 @@
 // as microseconds): nanoseconds below the microsecond are dropped (rounded towards minus
 // infinity). No line ending is written.
 
-#include "openvcu/can/frame.hpp"
-
 #include <cstddef>
 #include <span>
 #include <string>
 #include <string_view>
+
+#include "openvcu/can/frame.hpp"
 
 namespace openvcu::can {
 

@@ -1,0 +1,99 @@
+// libFuzzer target for openvcu::can::LogReader (candump and Vector ASC) and the candump -L
+// writer. Arbitrary bytes go through the reader in every format mode; the run fails
+// (abort) when a record breaks the Frame invariants or when reader(writer(frame)) does
+// not give the same frame back. Needs only openvcu::can (and openvcu::core).
+//
+//   clang++ -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined fuzz/fuzz_candump.cpp ... && ./fuzz_candump
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <istream>
+#include <streambuf>
+#include <string>
+
+#include "openvcu/can/log_reader.hpp"
+#include "openvcu/can/log_writer.hpp"
+
+namespace {
+
+using namespace openvcu::can;
+
+/// Reads the fuzzer's bytes in place, without copying them into a string.
+class ByteStreamBuf : public std::streambuf {
+ public:
+  ByteStreamBuf(const std::uint8_t* data, std::size_t size) {
+    char* begin = const_cast<char*>(reinterpret_cast<const char*>(data));  // read-only use
+    setg(begin, begin, begin + size);
+  }
+};
+
+bool isValidFdLength(std::size_t length) {
+  return length <= 8 || length == 12 || length == 16 || length == 20 || length == 24 || length == 32 || length == 48 ||
+         length == 64;
+}
+
+void require(bool condition) {
+  if (!condition) std::abort();
+}
+
+/// Frame invariants the reader promises for every record.
+void checkInvariants(const LogRecord& record) {
+  const Frame& frame = record.frame;
+  require(frame.length <= MAX_DATA_LENGTH);
+  require(frame.fd() ? isValidFdLength(frame.length) : frame.length <= CLASSIC_DATA_LENGTH);
+  require(frame.extended() || (frame.flags & FLAG_ERROR) != 0 ? frame.id <= EXTENDED_ID_MASK
+                                                              : frame.id <= STANDARD_ID_MASK);
+  require(frame.fd() || (frame.flags & (FLAG_BRS | FLAG_ESI)) == 0);
+  require(!(frame.fd() && (frame.flags & (FLAG_RTR | FLAG_ERROR)) != 0));
+  require(record.line > 0);
+  require(record.direction == 0 || record.direction == 'R' || record.direction == 'T');
+  for (std::size_t i = frame.length; i < MAX_DATA_LENGTH; ++i) require(frame.data[i] == 0);
+}
+
+/// Microseconds rounded towards minus infinity: what a candump -L line keeps.
+std::int64_t floorMicros(std::int64_t ns) {
+  return ns >= 0 ? ns / 1000 : -((-(ns + 1)) / 1000) - 1;
+}
+
+void checkRoundTrip(const LogRecord& record) {
+  const std::string line = formatCandumpL(record.frame, record.channel, record.direction);
+  ByteStreamBuf buffer(reinterpret_cast<const std::uint8_t*>(line.data()), line.size());
+  std::istream input(&buffer);
+  LogReader reader(input, "round-trip", LogFormat::Candump);
+  const auto maybeAgain = reader.next();
+  if (!maybeAgain) {
+    // Times beyond year 2262 cannot be written back; anything else must read back.
+    require(record.frame.timestampNs / 1'000'000'000 >= 9'223'372'035 ||
+            record.frame.timestampNs / 1'000'000'000 <= -9'223'372'035);
+    return;
+  }
+  const Frame& a = record.frame;
+  const Frame& b = maybeAgain->frame;
+  require(a.id == b.id && a.flags == b.flags && a.length == b.length && a.data == b.data);
+  require(floorMicros(a.timestampNs) * 1000 == b.timestampNs);
+  require(maybeAgain->channel == record.channel && maybeAgain->direction == record.direction);
+}
+
+void run(const std::uint8_t* data, std::size_t size, LogFormat format) {
+  ByteStreamBuf buffer(data, size);
+  std::istream input(&buffer);
+  LogReader reader(input, "fuzz", format);
+  std::uint64_t previousLine = 0;
+  while (const auto maybeRecord = reader.next()) {
+    checkInvariants(*maybeRecord);
+    require(maybeRecord->line > previousLine);
+    previousLine = maybeRecord->line;
+    checkRoundTrip(*maybeRecord);
+  }
+  if (reader.errorCount() > 0) require(reader.lastError().has_value());
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  run(data, size, LogFormat::Auto);
+  run(data, size, LogFormat::Candump);
+  run(data, size, LogFormat::VectorAsc);
+  return 0;
+}

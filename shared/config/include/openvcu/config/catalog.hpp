@@ -1,0 +1,33 @@
+#pragma once
+// The signal catalog of a configuration: what every process of one instance agrees on,
+// so that they all compute the same shared-table layout.
+//
+// Order (deterministic): for each bus in file order, its messages in the bus' list
+// order ("all" = DBC order), each message's decodable signals in DBC order, keyed
+// "Transmitter.Message.Signal" (the BO_ transmitter as written); then the internal
+// signals: the declared ones ("internal.<name>") in file order, then the built-in ones
+// (BUILTIN_INTERNAL_SIGNALS below, then one heartbeat per service).
+
+#include "openvcu/config/vehicle.hpp"
+#include "openvcu/core/result.hpp"
+#include "openvcu/signals/catalog.hpp"
+
+#include <array>
+#include <string>
+#include <string_view>
+
+namespace openvcu::config {
+
+inline constexpr std::string_view INTERNAL_PREFIX = "internal.";
+
+/// The services of a stack; each has a heartbeat counter "internal.service.<name>.heartbeat".
+inline constexpr std::array<std::string_view, 6> SERVICES = {"can-rx", "can-tx", "fsm", "gpio", "hmi", "ecu-sim"};
+
+/// Table key of a DBC signal.
+std::string signalKey(const dbc::Message& message, const dbc::Signal& signal);
+
+/// The catalog of a loaded configuration. Fails only on duplicate keys (e.g. an internal
+/// signal named like a built-in one), naming both.
+Result<signals::Catalog> buildCatalog(const VehicleConfig& config);
+
+}  // namespace openvcu::config

@@ -1,0 +1,73 @@
+#pragma once
+// JSON configuration files: reading with line:column errors, and a checker that walks a
+// document, names every problem by its JSON path and catches unknown keys with a
+// "did you mean" (the thesis' program silently ignored a mistyped key).
+//
+//   JsonChecker check("vehicle.json");
+//   const auto& buses = check.array(root, "/buses", "buses");
+//   -> errors like "vehicle.json: /buses/0/link: unknown link 'cam0'; expected socketcan:IFACE, sim:NAME or replay:FILE"
+
+#include "openvcu/core/error.hpp"
+#include "openvcu/core/result.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <initializer_list>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace openvcu::config {
+
+using Json = nlohmann::json;
+
+/// Parses JSON text; a syntax error names line and column.
+Result<Json> parseJson(std::string_view text, const std::string& fileName);
+/// Reads and parses a JSON file.
+Result<Json> readJsonFile(const std::string& path);
+
+/// Collects errors and warnings while a loader walks a document. Getters never throw;
+/// on a wrong or missing value they record an error and return the fallback.
+class JsonChecker {
+ public:
+  explicit JsonChecker(std::string fileName) : m_file(std::move(fileName)) {}
+
+  void error(const std::string& path, std::string message);
+  void warning(const std::string& path, std::string message);
+  [[nodiscard]] bool ok() const noexcept { return m_errorCount == 0; }
+  [[nodiscard]] const std::vector<Error>& diagnostics() const noexcept { return m_diagnostics; }
+  /// The first error, for Result<T> returns.
+  [[nodiscard]] Error firstError() const;
+  [[nodiscard]] const std::string& fileName() const noexcept { return m_file; }
+
+  /// Reports keys of `object` not in `known` (with a suggestion) as errors.
+  void onlyKeys(const Json& object, const std::string& path, std::initializer_list<std::string_view> known);
+
+  bool isObject(const Json& value, const std::string& path);
+  /// Member access: nullptr (and an error when `required`) if absent.
+  const Json* member(const Json& object, const std::string& path, std::string_view key, bool required);
+
+  std::optional<std::string> string(const Json& object, const std::string& path, std::string_view key,
+                                    bool required = true);
+  std::optional<double> number(const Json& object, const std::string& path, std::string_view key,
+                               bool required = true);
+  std::optional<bool> boolean(const Json& object, const std::string& path, std::string_view key,
+                              bool required = true);
+  /// An array member; empty (and an error when required) if absent or not an array.
+  const Json* array(const Json& object, const std::string& path, std::string_view key, bool required = true);
+
+  static std::string join(const std::string& path, std::string_view key) {
+    return path + "/" + std::string(key);
+  }
+  static std::string join(const std::string& path, std::size_t index) {
+    return path + "/" + std::to_string(index);
+  }
+
+ private:
+  std::string m_file;
+  std::vector<Error> m_diagnostics;
+  std::size_t m_errorCount{};
+};
+
+}  // namespace openvcu::config
