@@ -23,4 +23,4 @@ case "$target" in
     ;;
 esac
 exec "build-fuzz/fuzz/$target" "$work" "${seeds[@]}" -max_total_time="$seconds" \
-  -artifact_prefix="$findings/" -max_len=65536 -timeout=10 -print_final_stats=1
+  -artifact_prefix="$findings/" -max_len="${MAX_LEN:-65536}" -timeout=10 -print_final_stats=1

@@ -1,0 +1,103 @@
+#pragma once
+// The event plane (LCM) without seeing LCM: typed publish and subscribe of the structs in
+// events.hpp on the channels of one stack instance.
+//
+//   auto busResult = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, "hhea");
+//   if (!busResult) { std::cerr << busResult.error().toString() << '\n'; return 1; }
+//   ipc::EventBus& events = *busResult;
+//   events.onCommand([&](const ipc::CommandRequest& request) { ... });
+//   events.publish(ipc::Heartbeat{.service = "vcu-fsm", ...});
+//   // in the main loop: poll/epoll/Waiter on events.fileno(), then events.handle(0ms)
+//
+// URLs: "udpm://239.255.76.67:7667?ttl=0" (default, this host only), "memq://" (in-process,
+// for unit tests), "file://LOG?speed=0" (replay), "tcpq://127.0.0.1:7700" (hub).
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "openvcu/core/result.hpp"
+#include "openvcu/ipc/events.hpp"
+
+namespace openvcu::ipc {
+
+struct EventBusImpl;
+
+/// Identifies one subscription for EventBus::unsubscribe.
+struct Subscription {
+  std::uint64_t id{};
+};
+
+enum class HandleResult : std::uint8_t {
+  Handled,  ///< one message was dispatched (to zero or more callbacks)
+  Timeout,  ///< nothing arrived in time
+  Failed,   ///< LCM reported an error (the URL's transport broke)
+};
+
+/// A connection to the LCM event plane for one stack instance. Movable.
+/// @note publish() may be called from any thread (LCM serialises sends). subscribe,
+///       unsubscribe and handle from one thread; callbacks run inside handle(), on that
+///       thread. Not real-time: encoding allocates. Never throws.
+class EventBus {
+ public:
+  /// Connects to `url` (empty: DEFAULT_EVENT_URL). `instance` names the channels
+  /// (isValidName). For udpm the host needs a multicast route (e.g. on lo); without one
+  /// LCM's self test fails and the error says so.
+  static Result<EventBus> open(std::string_view url, std::string_view instance);
+
+  EventBus(EventBus&& other) noexcept;
+  EventBus& operator=(EventBus&& other) noexcept;
+  EventBus(const EventBus&) = delete;
+  EventBus& operator=(const EventBus&) = delete;
+  ~EventBus();
+
+  /// Encode and send on this instance's channel. false on failure (counted in
+  /// publishFailures()). A 0 timestampNs is replaced by the current CLOCK_REALTIME.
+  bool publish(const CommandRequest& message) noexcept;
+  bool publish(const CommandAck& message) noexcept;
+  bool publish(const FsmTransition& message) noexcept;
+  bool publish(const FaultEvent& message) noexcept;
+  bool publish(const LogRecord& message) noexcept;
+  bool publish(const Heartbeat& message) noexcept;
+  bool publish(const SignalSnapshot& message) noexcept;
+
+  /// Calls `callback` from handle() for each message on this instance's channel.
+  /// A message that does not decode is dropped and counted (decodeErrors()); an exception
+  /// leaving a callback is caught and counted (callbackErrors()).
+  Result<Subscription> onCommand(std::function<void(const CommandRequest&)> callback);
+  Result<Subscription> onAck(std::function<void(const CommandAck&)> callback);
+  Result<Subscription> onFsmTransition(std::function<void(const FsmTransition&)> callback);
+  Result<Subscription> onFault(std::function<void(const FaultEvent&)> callback);
+  Result<Subscription> onLog(std::function<void(const LogRecord&)> callback);
+  Result<Subscription> onHeartbeat(std::function<void(const Heartbeat&)> callback);
+  Result<Subscription> onSnapshot(std::function<void(const SignalSnapshot&)> callback);
+  void unsubscribe(Subscription subscription) noexcept;
+
+  /// Readable when a message waits: for poll/epoll or Waiter::attachFd. -1 on failure.
+  [[nodiscard]] int fileno() const noexcept;
+
+  /// Dispatches at most one waiting message, waiting up to `timeout` for one (0: do not
+  /// wait). Callbacks run inside.
+  HandleResult handle(std::chrono::milliseconds timeout) noexcept;
+
+  /// Dispatches everything already waiting without blocking; returns how many.
+  std::size_t handleAll() noexcept;
+
+  [[nodiscard]] const std::string& instance() const noexcept;
+  [[nodiscard]] const std::string& url() const noexcept;
+  /// This instance's channel for `kind`.
+  [[nodiscard]] std::string channel(EventKind kind) const;
+
+  [[nodiscard]] std::uint64_t publishFailures() const noexcept;
+  [[nodiscard]] std::uint64_t decodeErrors() const noexcept;
+  [[nodiscard]] std::uint64_t callbackErrors() const noexcept;
+
+ private:
+  explicit EventBus(std::unique_ptr<EventBusImpl> impl) noexcept;
+  std::unique_ptr<EventBusImpl> m_impl;
+};
+
+}  // namespace openvcu::ipc

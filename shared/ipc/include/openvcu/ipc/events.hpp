@@ -1,0 +1,135 @@
+#pragma once
+// The events of the stack as plain openvcu structs: the C++ face of the LCM types in
+// shared/ipc/lcm/*.lcm (the IDL is the contract; these mirror it field by field, and
+// EventBus converts). Services use these and never see LCM's generated classes.
+//
+// Channels (INSTANCE = the stack instance in upper case, e.g. "hhea" -> HHEA):
+//   OPENVCU_<INSTANCE>_COMMAND    CommandRequest   openvcu_lcm.command_request_t
+//   OPENVCU_<INSTANCE>_ACK        CommandAck       openvcu_lcm.command_ack_t
+//   OPENVCU_<INSTANCE>_FSM        FsmTransition    openvcu_lcm.fsm_transition_t
+//   OPENVCU_<INSTANCE>_FAULT      FaultEvent       openvcu_lcm.fault_event_t
+//   OPENVCU_<INSTANCE>_LOG        LogRecord        openvcu_lcm.log_record_t
+//   OPENVCU_<INSTANCE>_HEARTBEAT  Heartbeat        openvcu_lcm.heartbeat_t
+//   OPENVCU_<INSTANCE>_SNAPSHOT   SignalSnapshot   openvcu_lcm.signal_snapshot_t
+//
+// Timestamps are CLOCK_REALTIME nanoseconds since the Unix epoch; EventBus stamps the
+// current time into a 0 timestampNs when publishing.
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace openvcu::ipc {
+
+/// Host-local multicast (ttl=0: never leaves this machine). Also LCM's own default, so
+/// lcm-spy and lcm-logger without arguments see the stack.
+inline constexpr std::string_view DEFAULT_EVENT_URL = "udpm://239.255.76.67:7667?ttl=0";
+
+enum class EventKind : std::uint8_t { Command, Ack, Fsm, Fault, Log, Heartbeat, Snapshot };
+
+/// "COMMAND", "ACK", "FSM", "FAULT", "LOG", "HEARTBEAT", "SNAPSHOT".
+std::string_view channelSuffix(EventKind kind) noexcept;
+
+/// "OPENVCU_HHEA_HEARTBEAT" for ("hhea", EventKind::Heartbeat). `instance` must satisfy
+/// isValidName() (topics.hpp).
+std::string channelName(std::string_view instance, EventKind kind);
+
+/// command_request_t::kind. Values are the IDL's constants; a receiver must refuse
+/// values it does not know (the enum may hold them).
+enum class CommandKind : std::int8_t {
+  SetSignal = 1,       ///< set the commanded value of `key` to `value`
+  SetOverride = 2,     ///< operator override of `key` to `value`, wins until cleared
+  ClearOverride = 3,   ///< remove the override of `key`
+  OperatorSwitch = 4,  ///< operator intent (Start, Connect Driving, ...): switch `key` to `value`
+  FaultReset = 5,      ///< reset latched fault `key` (empty: all)
+};
+
+struct CommandRequest {
+  std::int64_t timestampNs{};
+  std::int64_t requestId{};  ///< unique per issuer; echoed in the CommandAck
+  std::string issuer;        ///< "vcu-hmi", "vcu", ...
+  CommandKind kind{CommandKind::SetSignal};
+  std::string key;
+  double value{};
+  std::string text;
+  bool operator==(const CommandRequest&) const = default;
+};
+
+struct CommandAck {
+  std::int64_t timestampNs{};
+  std::int64_t requestId{};
+  std::string issuer;     ///< copied from the request
+  std::string responder;  ///< the service that decided
+  bool accepted{};
+  std::string reason;  ///< why refused; empty when accepted
+  bool operator==(const CommandAck&) const = default;
+};
+
+struct FsmTransition {
+  std::int64_t timestampNs{};
+  std::string fromState;  ///< empty for the initial entry
+  std::string toState;
+  std::string cause;
+  bool operator==(const FsmTransition&) const = default;
+};
+
+enum class FaultSeverity : std::int8_t { Info = 0, Warning = 1, Error = 2, Critical = 3 };
+
+/// A fault raised (active) or cleared (!active).
+struct FaultEvent {
+  std::int64_t timestampNs{};
+  std::string name;
+  std::string source;
+  FaultSeverity severity{FaultSeverity::Error};
+  bool active{true};
+  std::string text;
+  bool operator==(const FaultEvent&) const = default;
+};
+
+enum class LogLevel : std::int8_t { Trace = 0, Debug = 1, Info = 2, Warning = 3, Error = 4, Critical = 5 };
+
+struct LogRecord {
+  std::int64_t timestampNs{};
+  std::string service;
+  LogLevel level{LogLevel::Info};
+  std::string text;
+  bool operator==(const LogRecord&) const = default;
+};
+
+/// One named counter of a heartbeat (the IDL carries names and values as parallel
+/// arrays so lcm-spy shows them side by side; here they cannot get out of step).
+struct Counter {
+  std::string name;
+  std::int64_t value{};
+  bool operator==(const Counter&) const = default;
+};
+
+struct Heartbeat {
+  std::int64_t timestampNs{};
+  std::string service;
+  std::string instance;  ///< the stack instance
+  std::int32_t pid{};
+  std::int64_t uptimeMs{};
+  std::vector<Counter> counters;
+  std::string status;  ///< one line: "ok", "bus vehicle: bus-off", ...
+  bool operator==(const Heartbeat&) const = default;
+};
+
+/// One signal in a snapshot.
+struct SignalValue {
+  std::string key;
+  double value{};
+  std::uint8_t quality{};  ///< the signal table's quality bits
+  bool operator==(const SignalValue&) const = default;
+};
+
+/// A rate-limited batch of signal values for people and recorders (never for control).
+struct SignalSnapshot {
+  std::int64_t timestampNs{};
+  std::string source;
+  std::vector<SignalValue> signals;
+  bool operator==(const SignalSnapshot&) const = default;
+};
+
+}  // namespace openvcu::ipc

@@ -1,0 +1,78 @@
+#pragma once
+// One blocking wait for a service's inputs: frame subscribers (iceoryx WaitSet, no fd)
+// and ordinary file descriptors such as EventBus::fileno() (LCM).
+//
+//   auto waiterResult = ipc::Waiter::create();
+//   waiterResult->attach(rxSubscriber, RX_ID);
+//   waiterResult->attachFd(eventBus.fileno(), EVENTS_ID);
+//   while (running) {
+//     for (std::uint64_t id : waiterResult->waitFor(std::chrono::milliseconds{100})) {
+//       if (id == RX_ID) while (auto maybeSample = rxSubscriber.take()) handle(*maybeSample);
+//       if (id == EVENTS_ID) eventBus.handleAll();
+//     }
+//   }
+//
+// Why a helper thread for fds: iceoryx 2.0's WaitSet waits on a semaphore in shared
+// memory and has no fd, so poll() cannot wait on it. attachFd() starts
+// one thread per Waiter that poll()s the fds and wakes the WaitSet; everything else (the
+// callbacks, take()) stays on the caller's thread. Added latency ~one thread wake-up.
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <span>
+
+#include "openvcu/core/result.hpp"
+
+namespace openvcu::ipc {
+
+class FrameSubscriber;
+struct WaiterImpl;
+
+/// Waits on several frame subscribers and fds with a timeout. Movable: the WaitSet
+/// itself stays put on the heap, attachments survive a move.
+/// @note restricted thread-safe: attach/detach/wait from one thread; wake() from any thread.
+class Waiter {
+ public:
+  /// Most attachments (subscribers + fds) one Waiter takes.
+  static constexpr std::size_t CAPACITY = 64;
+
+  /// Needs an initialised Runtime (the WaitSet's condition variable lives in RouDi's memory).
+  static Result<Waiter> create();
+
+  Waiter(Waiter&& other) noexcept;
+  Waiter& operator=(Waiter&& other) noexcept;
+  Waiter(const Waiter&) = delete;
+  Waiter& operator=(const Waiter&) = delete;
+  ~Waiter();
+
+  /// Reports `id` from wait while `subscriber` has data (level-triggered: again and again
+  /// until it is drained). The subscriber must stay alive while attached, or detach first
+  /// (destroying an attached subscriber detaches it). Fails when full or already attached.
+  Status attach(FrameSubscriber& subscriber, std::uint64_t id);
+  void detach(FrameSubscriber& subscriber) noexcept;
+
+  /// Reports `id` from wait when `fd` is readable. After it is reported, the fd is watched
+  /// again from the next wait call on: handle it before waiting again, or it is reported
+  /// again at once. Detach before closing the fd. Fails on a negative fd, a duplicate, or
+  /// when full. The first attachFd starts the Waiter's watcher thread.
+  Status attachFd(int fd, std::uint64_t id);
+  void detachFd(int fd) noexcept;
+
+  /// Blocks until something attached is ready, wake() is called or `timeout` passed.
+  /// Returns the ids of what is ready (empty on timeout or wake-up). The span stays valid
+  /// until the next wait call. Allocates nothing.
+  std::span<const std::uint64_t> waitFor(std::chrono::nanoseconds timeout) noexcept;
+  std::span<const std::uint64_t> waitUntil(std::chrono::steady_clock::time_point deadline) noexcept;
+
+  /// Makes a current or the next wait return (for shutdown and cross-thread nudges).
+  /// @note thread-safe, not async-signal-safe: from a signal handler set a flag and rely
+  ///       on the wait timeout instead.
+  void wake() noexcept;
+
+ private:
+  explicit Waiter(std::unique_ptr<WaiterImpl> impl) noexcept;
+  std::unique_ptr<WaiterImpl> m_impl;
+};
+
+}  // namespace openvcu::ipc

@@ -1,0 +1,389 @@
+#include "openvcu/ipc/event_bus.hpp"
+
+#include "openvcu/ipc/topics.hpp"
+
+// Generated at build time from shared/ipc/lcm/*.lcm (lcm-gen -x); private to this file.
+#include <openvcu_lcm/command_ack_t.hpp>
+#include <openvcu_lcm/command_request_t.hpp>
+#include <openvcu_lcm/fault_event_t.hpp>
+#include <openvcu_lcm/fsm_transition_t.hpp>
+#include <openvcu_lcm/heartbeat_t.hpp>
+#include <openvcu_lcm/log_record_t.hpp>
+#include <openvcu_lcm/signal_snapshot_t.hpp>
+
+// The C API, not lcm-cpp.hpp: LCM 1.3.1's member-handler subscription crashes when built
+// with -fsanitize=vptr (part of the Asan preset's -fsanitize=undefined); the C API is all we need.
+#include <lcm/lcm.h>
+#include <time.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <climits>
+#include <vector>
+
+namespace openvcu::ipc {
+
+// The plain enums carry the IDL's constants: a mismatch is a contract break.
+static_assert(static_cast<std::int8_t>(CommandKind::SetSignal) == openvcu_lcm::command_request_t::SET_SIGNAL);
+static_assert(static_cast<std::int8_t>(CommandKind::SetOverride) == openvcu_lcm::command_request_t::SET_OVERRIDE);
+static_assert(static_cast<std::int8_t>(CommandKind::ClearOverride) == openvcu_lcm::command_request_t::CLEAR_OVERRIDE);
+static_assert(static_cast<std::int8_t>(CommandKind::OperatorSwitch) == openvcu_lcm::command_request_t::OPERATOR_SWITCH);
+static_assert(static_cast<std::int8_t>(CommandKind::FaultReset) == openvcu_lcm::command_request_t::FAULT_RESET);
+static_assert(static_cast<std::int8_t>(FaultSeverity::Info) == openvcu_lcm::fault_event_t::INFO);
+static_assert(static_cast<std::int8_t>(FaultSeverity::Warning) == openvcu_lcm::fault_event_t::WARNING);
+static_assert(static_cast<std::int8_t>(FaultSeverity::Error) == openvcu_lcm::fault_event_t::ERROR);
+static_assert(static_cast<std::int8_t>(FaultSeverity::Critical) == openvcu_lcm::fault_event_t::CRITICAL);
+static_assert(static_cast<std::int8_t>(LogLevel::Trace) == openvcu_lcm::log_record_t::TRACE);
+static_assert(static_cast<std::int8_t>(LogLevel::Debug) == openvcu_lcm::log_record_t::DEBUG);
+static_assert(static_cast<std::int8_t>(LogLevel::Info) == openvcu_lcm::log_record_t::INFO);
+static_assert(static_cast<std::int8_t>(LogLevel::Warning) == openvcu_lcm::log_record_t::WARNING);
+static_assert(static_cast<std::int8_t>(LogLevel::Error) == openvcu_lcm::log_record_t::ERROR);
+static_assert(static_cast<std::int8_t>(LogLevel::Critical) == openvcu_lcm::log_record_t::CRITICAL);
+
+namespace {
+
+constexpr std::size_t EVENT_KIND_COUNT = 7;
+/// Messages LCM keeps per subscription until handle() takes them; beyond, it drops
+/// arrivals. LCM's default of 30 overflows when a busy service is ~10 ms late with a burst of
+/// log records; 512 small events cost nothing until they are actually queued.
+constexpr int SUBSCRIPTION_QUEUE_CAPACITY = 512;
+
+std::int64_t realtimeNowNs() noexcept {
+  timespec now{};
+  ::clock_gettime(CLOCK_REALTIME, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+std::int64_t stampOrNow(std::int64_t timestampNs) noexcept {
+  return timestampNs != 0 ? timestampNs : realtimeNowNs();
+}
+
+bool fitsArray(std::size_t size) noexcept {
+  return size <= static_cast<std::size_t>(INT32_MAX);
+}
+
+// ---- plain struct <-> generated LCM type ----------------------------------------------
+// toLcm returns false when the message cannot be represented (an array over 2^31 entries).
+
+bool toLcm(const CommandRequest& in, openvcu_lcm::command_request_t& out) {
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.request_id = in.requestId;
+  out.issuer = in.issuer;
+  out.kind = static_cast<std::int8_t>(in.kind);
+  out.key = in.key;
+  out.value = in.value;
+  out.text = in.text;
+  return true;
+}
+CommandRequest fromLcm(const openvcu_lcm::command_request_t& in) {
+  return CommandRequest{in.timestamp_ns, in.request_id, in.issuer, static_cast<CommandKind>(in.kind),
+                        in.key,          in.value,      in.text};
+}
+
+bool toLcm(const CommandAck& in, openvcu_lcm::command_ack_t& out) {
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.request_id = in.requestId;
+  out.issuer = in.issuer;
+  out.responder = in.responder;
+  out.accepted = in.accepted;
+  out.reason = in.reason;
+  return true;
+}
+CommandAck fromLcm(const openvcu_lcm::command_ack_t& in) {
+  return CommandAck{in.timestamp_ns, in.request_id, in.issuer, in.responder, in.accepted != 0, in.reason};
+}
+
+bool toLcm(const FsmTransition& in, openvcu_lcm::fsm_transition_t& out) {
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.from_state = in.fromState;
+  out.to_state = in.toState;
+  out.cause = in.cause;
+  return true;
+}
+FsmTransition fromLcm(const openvcu_lcm::fsm_transition_t& in) {
+  return FsmTransition{in.timestamp_ns, in.from_state, in.to_state, in.cause};
+}
+
+bool toLcm(const FaultEvent& in, openvcu_lcm::fault_event_t& out) {
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.name = in.name;
+  out.source = in.source;
+  out.severity = static_cast<std::int8_t>(in.severity);
+  out.active = in.active;
+  out.text = in.text;
+  return true;
+}
+FaultEvent fromLcm(const openvcu_lcm::fault_event_t& in) {
+  return FaultEvent{in.timestamp_ns, in.name, in.source, static_cast<FaultSeverity>(in.severity),
+                    in.active != 0,  in.text};
+}
+
+bool toLcm(const LogRecord& in, openvcu_lcm::log_record_t& out) {
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.service = in.service;
+  out.level = static_cast<std::int8_t>(in.level);
+  out.text = in.text;
+  return true;
+}
+LogRecord fromLcm(const openvcu_lcm::log_record_t& in) {
+  return LogRecord{in.timestamp_ns, in.service, static_cast<LogLevel>(in.level), in.text};
+}
+
+bool toLcm(const Heartbeat& in, openvcu_lcm::heartbeat_t& out) {
+  if (!fitsArray(in.counters.size())) return false;
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.service = in.service;
+  out.instance = in.instance;
+  out.pid = in.pid;
+  out.uptime_ms = in.uptimeMs;
+  out.num_counters = static_cast<std::int32_t>(in.counters.size());
+  out.counter_names.clear();
+  out.counter_values.clear();
+  out.counter_names.reserve(in.counters.size());
+  out.counter_values.reserve(in.counters.size());
+  for (const Counter& counter : in.counters) {
+    out.counter_names.push_back(counter.name);
+    out.counter_values.push_back(counter.value);
+  }
+  out.status = in.status;
+  return true;
+}
+Heartbeat fromLcm(const openvcu_lcm::heartbeat_t& in) {
+  Heartbeat out{in.timestamp_ns, in.service, in.instance, in.pid, in.uptime_ms, {}, in.status};
+  out.counters.reserve(in.counter_names.size());
+  for (std::size_t i = 0; i < in.counter_names.size() && i < in.counter_values.size(); ++i) {
+    out.counters.push_back(Counter{in.counter_names[i], in.counter_values[i]});
+  }
+  return out;
+}
+
+bool toLcm(const SignalSnapshot& in, openvcu_lcm::signal_snapshot_t& out) {
+  if (!fitsArray(in.signals.size())) return false;
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.source = in.source;
+  out.num_signals = static_cast<std::int32_t>(in.signals.size());
+  out.keys.clear();
+  out.values.clear();
+  out.quality.clear();
+  out.keys.reserve(in.signals.size());
+  out.values.reserve(in.signals.size());
+  out.quality.reserve(in.signals.size());
+  for (const SignalValue& signal : in.signals) {
+    out.keys.push_back(signal.key);
+    out.values.push_back(signal.value);
+    out.quality.push_back(signal.quality);
+  }
+  return true;
+}
+SignalSnapshot fromLcm(const openvcu_lcm::signal_snapshot_t& in) {
+  SignalSnapshot out{in.timestamp_ns, in.source, {}};
+  const std::size_t count = std::min({in.keys.size(), in.values.size(), in.quality.size()});
+  out.signals.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) out.signals.push_back(SignalValue{in.keys[i], in.values[i], in.quality[i]});
+  return out;
+}
+
+/// Receives raw LCM messages for one subscription and hands them to `dispatch`.
+struct RawHandler {
+  std::function<void(const void* data, std::uint32_t size)> dispatch;
+};
+
+// LCM's C callback: user data is the RawHandler of the subscription.
+void onLcmMessage(const lcm_recv_buf_t* buffer, const char* /*channel*/, void* userData) {
+  static_cast<RawHandler*>(userData)->dispatch(buffer->data, buffer->data_size);
+}
+
+}  // namespace
+
+struct EventBusImpl {
+  struct Entry {
+    std::uint64_t id{};
+    lcm_subscription_t* subscription{nullptr};
+    std::unique_ptr<RawHandler> handler;
+  };
+
+  EventBusImpl() = default;
+  EventBusImpl(const EventBusImpl&) = delete;
+  EventBusImpl& operator=(const EventBusImpl&) = delete;
+  ~EventBusImpl() {
+    if (lcm == nullptr) return;
+    for (const Entry& entry : entries) lcm_unsubscribe(lcm, entry.subscription);
+    lcm_destroy(lcm);
+  }
+
+  std::string url;
+  std::string instance;
+  std::array<std::string, EVENT_KIND_COUNT> channels;
+  lcm_t* lcm{nullptr};
+  std::vector<Entry> entries;
+  std::uint64_t nextId{1};
+  std::atomic<std::uint64_t> publishFailures{0};
+  std::atomic<std::uint64_t> decodeErrors{0};
+  std::atomic<std::uint64_t> callbackErrors{0};
+
+  const std::string& channel(EventKind kind) const { return channels.at(static_cast<std::size_t>(kind)); }
+
+  template <typename LcmType, typename Plain>
+  bool publish(EventKind kind, const Plain& message) noexcept {
+    try {
+      LcmType encoded;
+      if (toLcm(message, encoded)) {
+        const int size = encoded.getEncodedSize();
+        std::vector<std::uint8_t> buffer(static_cast<std::size_t>(size));
+        if (encoded.encode(buffer.data(), 0, size) == size &&
+            lcm_publish(lcm, channel(kind).c_str(), buffer.data(), static_cast<unsigned int>(size)) == 0) {
+          return true;
+        }
+      }
+    } catch (...) {  // bad_alloc while encoding: count it like any failed send
+    }
+    ++publishFailures;
+    return false;
+  }
+
+  template <typename LcmType, typename Plain>
+  Result<Subscription> subscribe(EventKind kind, std::function<void(const Plain&)> callback) {
+    if (!callback) return Error{"EventBus: empty callback for " + channel(kind)};
+    auto handler = std::make_unique<RawHandler>();
+    handler->dispatch = [this, callback = std::move(callback)](const void* data, std::uint32_t size) {
+      try {
+        LcmType decoded;
+        if (size > static_cast<std::uint32_t>(INT_MAX) || decoded.decode(data, 0, static_cast<int>(size)) < 0) {
+          ++decodeErrors;
+          return;
+        }
+        callback(fromLcm(decoded));
+      } catch (...) {  // never let an exception unwind through LCM's C code
+        ++callbackErrors;
+      }
+    };
+    lcm_subscription_t* subscription = lcm_subscribe(lcm, channel(kind).c_str(), &onLcmMessage, handler.get());
+    if (subscription == nullptr) return Error{"EventBus: cannot subscribe to " + channel(kind) + " on " + url};
+    lcm_subscription_set_queue_capacity(subscription, SUBSCRIPTION_QUEUE_CAPACITY);
+    const std::uint64_t id = nextId++;
+    entries.push_back(Entry{id, subscription, std::move(handler)});
+    return Subscription{id};
+  }
+};
+
+Result<EventBus> EventBus::open(std::string_view url, std::string_view instance) {
+  if (!isValidName(instance)) {
+    return Error{"invalid instance name '" + std::string(instance) + "': use 1..32 characters of [A-Za-z0-9_-]"};
+  }
+  auto impl = std::make_unique<EventBusImpl>();
+  impl->url = url.empty() ? std::string(DEFAULT_EVENT_URL) : std::string(url);
+  impl->instance = std::string(instance);
+  for (std::size_t i = 0; i < EVENT_KIND_COUNT; ++i) {
+    impl->channels.at(i) = channelName(instance, static_cast<EventKind>(i));
+  }
+  const std::string routeHint =
+      impl->url.rfind("udpm://", 0) == 0
+          ? " (multicast needs a route, e.g. `ip route add 224.0.0.0/4 dev lo`; see docs/design/ipc.md)"
+          : "";
+  impl->lcm = lcm_create(impl->url.c_str());
+  if (impl->lcm == nullptr) return Error{"cannot open LCM at " + impl->url + routeHint};
+  // LCM sets up udpm's receive side lazily; ask for the fd now so a broken transport
+  // (no multicast route: LCM's self test fails) is reported here, not on first wait.
+  if (lcm_get_fileno(impl->lcm) < 0) return Error{"cannot receive on LCM at " + impl->url + routeHint};
+  return EventBus(std::move(impl));
+}
+
+EventBus::EventBus(std::unique_ptr<EventBusImpl> impl) noexcept : m_impl(std::move(impl)) {}
+EventBus::EventBus(EventBus&& other) noexcept = default;
+EventBus& EventBus::operator=(EventBus&& other) noexcept = default;
+EventBus::~EventBus() = default;
+
+bool EventBus::publish(const CommandRequest& message) noexcept {
+  return m_impl->publish<openvcu_lcm::command_request_t>(EventKind::Command, message);
+}
+bool EventBus::publish(const CommandAck& message) noexcept {
+  return m_impl->publish<openvcu_lcm::command_ack_t>(EventKind::Ack, message);
+}
+bool EventBus::publish(const FsmTransition& message) noexcept {
+  return m_impl->publish<openvcu_lcm::fsm_transition_t>(EventKind::Fsm, message);
+}
+bool EventBus::publish(const FaultEvent& message) noexcept {
+  return m_impl->publish<openvcu_lcm::fault_event_t>(EventKind::Fault, message);
+}
+bool EventBus::publish(const LogRecord& message) noexcept {
+  return m_impl->publish<openvcu_lcm::log_record_t>(EventKind::Log, message);
+}
+bool EventBus::publish(const Heartbeat& message) noexcept {
+  return m_impl->publish<openvcu_lcm::heartbeat_t>(EventKind::Heartbeat, message);
+}
+bool EventBus::publish(const SignalSnapshot& message) noexcept {
+  return m_impl->publish<openvcu_lcm::signal_snapshot_t>(EventKind::Snapshot, message);
+}
+
+Result<Subscription> EventBus::onCommand(std::function<void(const CommandRequest&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::command_request_t>(EventKind::Command, std::move(callback));
+}
+Result<Subscription> EventBus::onAck(std::function<void(const CommandAck&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::command_ack_t>(EventKind::Ack, std::move(callback));
+}
+Result<Subscription> EventBus::onFsmTransition(std::function<void(const FsmTransition&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::fsm_transition_t>(EventKind::Fsm, std::move(callback));
+}
+Result<Subscription> EventBus::onFault(std::function<void(const FaultEvent&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::fault_event_t>(EventKind::Fault, std::move(callback));
+}
+Result<Subscription> EventBus::onLog(std::function<void(const LogRecord&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::log_record_t>(EventKind::Log, std::move(callback));
+}
+Result<Subscription> EventBus::onHeartbeat(std::function<void(const Heartbeat&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::heartbeat_t>(EventKind::Heartbeat, std::move(callback));
+}
+Result<Subscription> EventBus::onSnapshot(std::function<void(const SignalSnapshot&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::signal_snapshot_t>(EventKind::Snapshot, std::move(callback));
+}
+
+void EventBus::unsubscribe(Subscription subscription) noexcept {
+  auto& entries = m_impl->entries;
+  for (auto it = entries.begin(); it != entries.end(); ++it) {
+    if (it->id == subscription.id) {
+      lcm_unsubscribe(m_impl->lcm, it->subscription);
+      entries.erase(it);
+      return;
+    }
+  }
+}
+
+int EventBus::fileno() const noexcept {
+  return lcm_get_fileno(m_impl->lcm);
+}
+
+HandleResult EventBus::handle(std::chrono::milliseconds timeout) noexcept {
+  const auto clamped = std::clamp<std::chrono::milliseconds::rep>(timeout.count(), 0, INT_MAX);
+  const int rc = lcm_handle_timeout(m_impl->lcm, static_cast<int>(clamped));
+  if (rc > 0) return HandleResult::Handled;
+  if (rc == 0) return HandleResult::Timeout;
+  return HandleResult::Failed;
+}
+
+std::size_t EventBus::handleAll() noexcept {
+  std::size_t handled = 0;
+  while (lcm_handle_timeout(m_impl->lcm, 0) > 0) ++handled;
+  return handled;
+}
+
+const std::string& EventBus::instance() const noexcept {
+  return m_impl->instance;
+}
+const std::string& EventBus::url() const noexcept {
+  return m_impl->url;
+}
+std::string EventBus::channel(EventKind kind) const {
+  return m_impl->channel(kind);
+}
+std::uint64_t EventBus::publishFailures() const noexcept {
+  return m_impl->publishFailures;
+}
+std::uint64_t EventBus::decodeErrors() const noexcept {
+  return m_impl->decodeErrors;
+}
+std::uint64_t EventBus::callbackErrors() const noexcept {
+  return m_impl->callbackErrors;
+}
+
+}  // namespace openvcu::ipc

@@ -1,0 +1,119 @@
+#include "openvcu/ipc/runtime.hpp"
+
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <thread>
+
+#include "iceoryx_hoofs/log/logmanager.hpp"
+#include "iceoryx_posh/iceoryx_posh_types.hpp"
+#include "iceoryx_posh/runtime/posh_runtime.hpp"
+
+namespace openvcu::ipc {
+
+namespace {
+
+struct RuntimeState {
+  bool initialized{false};
+  std::string name;
+};
+
+RuntimeState& state() {
+  static RuntimeState instance;
+  return instance;
+}
+
+bool isValidAppName(std::string_view name) noexcept {
+  if (name.empty() || name.size() > iox::MAX_RUNTIME_NAME_LENGTH) return false;
+  for (const char c : name) {
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+/// connect() to RouDi's datagram socket: succeeds only while RouDi has it bound.
+/// Returns 0 or the errno of the failure.
+int probeRoudi() noexcept {
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return errno;
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  static_assert(ROUDI_SOCKET_PATH.size() < sizeof(address.sun_path));
+  std::memcpy(address.sun_path, ROUDI_SOCKET_PATH.data(), ROUDI_SOCKET_PATH.size());
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
+  const int rc = ::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address));
+  const int error = rc == 0 ? 0 : errno;
+  ::close(fd);
+  return error;
+}
+
+std::string roudiError(int error) {
+  std::string message = "iox-roudi is not running";
+  if (error == EACCES || error == EPERM) {
+    message = "iox-roudi is running but not reachable by this user";
+  }
+  message += " (";
+  message += ROUDI_SOCKET_PATH;
+  message += ": ";
+  message += std::strerror(error);
+  message += "); start it first, e.g. `iox-roudi -c config/iceoryx/roudi.toml`";
+  return message;
+}
+
+}  // namespace
+
+Status Runtime::init(std::string_view appName, std::chrono::milliseconds waitForRoudi) {
+  RuntimeState& current = state();
+  if (current.initialized) {
+    if (current.name == appName) return {};
+    return Error{"iceoryx runtime already initialised as '" + current.name + "', cannot re-initialise as '" +
+                 std::string(appName) + "'"};
+  }
+  if (!isValidAppName(appName)) {
+    return Error{"invalid iceoryx runtime name '" + std::string(appName) + "': use 1.." +
+                 std::to_string(iox::MAX_RUNTIME_NAME_LENGTH) + " characters of [A-Za-z0-9_.-]"};
+  }
+  const auto deadline = std::chrono::steady_clock::now() + waitForRoudi;
+  int error = probeRoudi();
+  while (error != 0 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds{5});
+    error = probeRoudi();
+  }
+  if (error != 0) return Error{roudiError(error)};
+
+  iox::log::LogManager::GetLogManager().SetDefaultLogLevel(iox::log::LogLevel::kWarn,
+                                                           iox::log::LogLevelOutput::kHideLogLevel);
+  iox::runtime::PoshRuntime::initRuntime(
+      iox::RuntimeName_t(iox::cxx::TruncateToCapacity, appName.data(), appName.size()));
+  current.initialized = true;
+  current.name = std::string(appName);
+  return {};
+}
+
+bool Runtime::initialized() noexcept {
+  return state().initialized;
+}
+
+std::string Runtime::name() {
+  return state().name;
+}
+
+bool Runtime::roudiReachable() noexcept {
+  return probeRoudi() == 0;
+}
+
+bool Runtime::waitForRoudi(std::chrono::milliseconds timeout) noexcept {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!roudiReachable()) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds{5});
+  }
+  return true;
+}
+
+}  // namespace openvcu::ipc

@@ -1,0 +1,208 @@
+// Unit tests of openvcu::ipc that need no RouDi and no network: the event bus over LCM's
+// in-process memq:// transport, the names, and the errors before a Runtime exists.
+
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <optional>
+#include <stdexcept>
+
+#include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/ipc/topics.hpp"
+#include "openvcu/ipc/waiter.hpp"
+
+namespace ipc = openvcu::ipc;
+using namespace std::chrono_literals;
+
+namespace {
+
+constexpr auto MEMQ_URL = "memq://";
+constexpr std::int64_t SOME_TIME_NS = 1'700'000'000'123'456'789;
+
+ipc::EventBus openMemq(std::string_view instance = "test") {
+  auto openResult = ipc::EventBus::open(MEMQ_URL, instance);
+  REQUIRE_MESSAGE(openResult.ok(), (openResult.ok() ? "" : openResult.error().toString()));
+  return std::move(*openResult);
+}
+
+/// Publishes `message` and dispatches until the callback registered by `subscribe` has seen it.
+template <typename Message, typename Subscribe>
+std::optional<Message> roundTrip(ipc::EventBus& sut, Subscribe subscribe, const Message& message) {
+  std::optional<Message> received;
+  auto subscription = subscribe([&](const Message& m) { received = m; });
+  REQUIRE(subscription.ok());
+  REQUIRE(sut.publish(message));
+  sut.handleAll();
+  sut.unsubscribe(*subscription);
+  return received;
+}
+
+}  // namespace
+
+TEST_CASE("channel names are OPENVCU_<INSTANCE>_<KIND> with the instance in upper case") {
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Heartbeat) == "OPENVCU_HHEA_HEARTBEAT");
+  CHECK(ipc::channelName("bench-2", ipc::EventKind::Command) == "OPENVCU_BENCH-2_COMMAND");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Ack) == "OPENVCU_HHEA_ACK");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Fsm) == "OPENVCU_HHEA_FSM");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Fault) == "OPENVCU_HHEA_FAULT");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Log) == "OPENVCU_HHEA_LOG");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Snapshot) == "OPENVCU_HHEA_SNAPSHOT");
+}
+
+TEST_CASE("frame topics name service openvcu, instance <instance>.<bus> and event rx/tx/send") {
+  CHECK(ipc::FrameTopic{"hhea", "vehicle", ipc::FrameStream::Received}.toString() == "openvcu/hhea.vehicle/rx");
+  CHECK(ipc::FrameTopic{"hhea", "battery", ipc::FrameStream::Sent}.toString() == "openvcu/hhea.battery/tx");
+  CHECK(ipc::FrameTopic{"hhea", "vehicle", ipc::FrameStream::SendRequest}.toString() == "openvcu/hhea.vehicle/send");
+}
+
+TEST_CASE("names accept 1..32 characters of [A-Za-z0-9_-] only") {
+  CHECK(ipc::isValidName("vehicle"));
+  CHECK(ipc::isValidName("bus_2-a"));
+  CHECK_FALSE(ipc::isValidName(""));
+  CHECK_FALSE(ipc::isValidName("has.dot"));
+  CHECK_FALSE(ipc::isValidName("OPENVCU_.*"));
+  CHECK_FALSE(ipc::isValidName(std::string(33, 'a')));
+}
+
+TEST_CASE("the bus name hash is FNV-1a 32 bit and stable") {
+  CHECK(ipc::fnv1a32("") == 0x811C9DC5u);
+  CHECK(ipc::fnv1a32("a") == 0xE40C292Cu);
+  static_assert(ipc::fnv1a32("vehicle") == ipc::fnv1a32("vehicle"));
+}
+
+TEST_CASE("every event type survives the trip through LCM's encoding unchanged") {
+  ipc::EventBus sut = openMemq();
+
+  const ipc::CommandRequest command{SOME_TIME_NS, 42,  "vcu-hmi",      ipc::CommandKind::SetOverride,
+                                    "PDU.Relay1", 1.5, "commissioning"};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onCommand(cb); }, command) == command);
+
+  const ipc::CommandAck ack{SOME_TIME_NS, 42, "vcu-hmi", "vcu-fsm", false, "override forbidden in Driving"};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onAck(cb); }, ack) == ack);
+
+  const ipc::FsmTransition transition{SOME_TIME_NS, "Standby", "Precharge", "operator Start"};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onFsmTransition(cb); }, transition) == transition);
+
+  const ipc::FaultEvent fault{SOME_TIME_NS, "BMS_Isolation",    "vcu-can-rx", ipc::FaultSeverity::Critical,
+                              true,         "isolation 80 kOhm"};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onFault(cb); }, fault) == fault);
+
+  const ipc::LogRecord log{SOME_TIME_NS, "vcu-can-tx", ipc::LogLevel::Warning, "schedule overrun 2.1 ms"};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onLog(cb); }, log) == log);
+
+  const ipc::Heartbeat heartbeat{
+      SOME_TIME_NS, "vcu-can-rx", "test", 1234, 98765, {{"frames_rx", 100000}, {"decode_errors", 3}}, "ok"};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onHeartbeat(cb); }, heartbeat) == heartbeat);
+
+  const ipc::SignalSnapshot snapshot{
+      SOME_TIME_NS, "vcu-can-rx", {{"BMS.SOC", 81.5, 1}, {"INV1.Speed", -1200.0, 3}, {"PDU.Relay1", 0.0, 0}}};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onSnapshot(cb); }, snapshot) == snapshot);
+}
+
+TEST_CASE("empty arrays, empty strings and unknown command kinds are carried as they are") {
+  ipc::EventBus sut = openMemq();
+  const ipc::Heartbeat quiet{SOME_TIME_NS, "", "", 0, 0, {}, ""};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onHeartbeat(cb); }, quiet) == quiet);
+  const ipc::SignalSnapshot none{SOME_TIME_NS, "x", {}};
+  CHECK(roundTrip(
+            sut, [&](auto cb) { return sut.onSnapshot(cb); }, none) == none);
+  constexpr auto UNKNOWN_KIND = static_cast<ipc::CommandKind>(99);
+  const ipc::CommandRequest future{SOME_TIME_NS, 1, "vcu", UNKNOWN_KIND, "k", 0.0, ""};
+  const auto received = roundTrip(
+      sut, [&](auto cb) { return sut.onCommand(cb); }, future);
+  REQUIRE(received);
+  CHECK(received->kind == UNKNOWN_KIND);
+}
+
+TEST_CASE("publishing stamps the current time into a zero timestamp and keeps a given one") {
+  ipc::EventBus sut = openMemq();
+  const auto received = roundTrip(
+      sut, [&](auto cb) { return sut.onLog(cb); }, ipc::LogRecord{0, "svc", {}, "t"});
+  REQUIRE(received);
+  const auto nowNs =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  CHECK(received->timestampNs > nowNs - std::int64_t{60'000'000'000});
+  CHECK(received->timestampNs <= nowNs);
+}
+
+TEST_CASE("messages reach only the subscriptions of their own instance and kind") {
+  auto sutResult = ipc::EventBus::open(MEMQ_URL, "alpha");
+  REQUIRE(sutResult.ok());
+  ipc::EventBus& sut = *sutResult;
+  int heartbeats = 0;
+  int logs = 0;
+  REQUIRE(sut.onHeartbeat([&](const ipc::Heartbeat&) { ++heartbeats; }).ok());
+  REQUIRE(sut.onLog([&](const ipc::LogRecord&) { ++logs; }).ok());
+  REQUIRE(sut.publish(ipc::Heartbeat{}));
+  REQUIRE(sut.publish(ipc::Heartbeat{}));
+  REQUIRE(sut.publish(ipc::FsmTransition{}));
+  sut.handleAll();  // memq drops the transition at once: nobody subscribed to FSM
+  CHECK(heartbeats == 2);
+  CHECK(logs == 0);
+  CHECK(sut.channel(ipc::EventKind::Heartbeat) == "OPENVCU_ALPHA_HEARTBEAT");
+}
+
+TEST_CASE("an unsubscribed callback is not called again") {
+  ipc::EventBus sut = openMemq();
+  int calls = 0;
+  auto subscription = sut.onFault([&](const ipc::FaultEvent&) { ++calls; });
+  REQUIRE(subscription.ok());
+  REQUIRE(sut.publish(ipc::FaultEvent{}));
+  sut.handleAll();
+  sut.unsubscribe(*subscription);
+  REQUIRE(sut.publish(ipc::FaultEvent{}));
+  sut.handleAll();
+  CHECK(calls == 1);
+}
+
+TEST_CASE("an exception thrown by a callback is caught and counted, later messages still arrive") {
+  ipc::EventBus sut = openMemq();
+  int calls = 0;
+  REQUIRE(sut.onAck([&](const ipc::CommandAck&) {
+               ++calls;
+               if (calls == 1) throw std::runtime_error("callback bug");
+             })
+              .ok());
+  REQUIRE(sut.publish(ipc::CommandAck{}));
+  REQUIRE(sut.publish(ipc::CommandAck{}));
+  sut.handleAll();
+  CHECK(calls == 2);
+  CHECK(sut.callbackErrors() == 1);
+  CHECK(sut.decodeErrors() == 0);
+}
+
+TEST_CASE("handle times out when nothing was published and fileno is valid for poll") {
+  ipc::EventBus sut = openMemq();
+  CHECK(sut.fileno() >= 0);
+  CHECK(sut.handle(0ms) == ipc::HandleResult::Timeout);
+  CHECK(sut.handle(10ms) == ipc::HandleResult::Timeout);
+}
+
+TEST_CASE("opening the event bus fails with a clear error for a bad URL or instance") {
+  auto badUrl = ipc::EventBus::open("bogus://nowhere", "test");
+  REQUIRE_FALSE(badUrl.ok());
+  CHECK(badUrl.error().message.find("bogus://nowhere") != std::string::npos);
+
+  auto badInstance = ipc::EventBus::open(MEMQ_URL, "no spaces");
+  REQUIRE_FALSE(badInstance.ok());
+  CHECK(badInstance.error().message.find("invalid instance name") != std::string::npos);
+}
+
+TEST_CASE("frame streams and waiters refuse to open before the runtime is initialised") {
+  auto publisher = ipc::FramePublisher::create({"test", "vehicle", ipc::FrameStream::Received});
+  REQUIRE_FALSE(publisher.ok());
+  CHECK(publisher.error().message.find("Runtime::init") != std::string::npos);
+  auto subscriber = ipc::FrameSubscriber::create({"test", "vehicle", ipc::FrameStream::Received});
+  REQUIRE_FALSE(subscriber.ok());
+  auto waiter = ipc::Waiter::create();
+  REQUIRE_FALSE(waiter.ok());
+}
