@@ -25,7 +25,8 @@ CompiledSignal layout(const Signal& sig, std::uint32_t index) {
   out.firstByte = sig.startBit / 8;
   if (sig.byteOrder == ByteOrder::LittleEndian) {
     out.shift = static_cast<std::uint8_t>(sig.startBit % 8);
-    out.lastByte = (sig.startBit + sig.size - 1) / 8;
+    // 64-bit sum: a start bit near 2^32 must not wrap around into the frame.
+    out.lastByte = static_cast<std::uint32_t>((std::uint64_t{sig.startBit} + sig.size - 1) / 8);
     out.wide = out.shift + sig.size > 64;
   } else {
     // Position of the LSB counted MSB-first from the first byte's bit 7.
@@ -64,7 +65,9 @@ MessageCodec MessageCodec::compile(const Database& database, const Message& mess
     bool usable = true;
     while (usable) {
       if (!cursor->decodable()) usable = false;
-      const bool multiplexed = cursor->muxRole == MuxRole::Multiplexed || cursor->muxRole == MuxRole::MultiplexedMultiplexor;
+      // Selected by a switch: "mN"/"mNM", or an "M" nested through SG_MUL_VAL_ (muxSwitch set).
+      const bool multiplexed = cursor->muxRole == MuxRole::Multiplexed ||
+                               cursor->muxRole == MuxRole::MultiplexedMultiplexor || !cursor->muxSwitch.empty();
       if (!multiplexed) break;
       if (cursor->muxSwitch.empty() || steps > static_cast<int>(count)) {
         usable = false;

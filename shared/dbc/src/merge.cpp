@@ -1,6 +1,7 @@
 // Merging several DBC files into one database (the thesis' "combined DBC").
 #include "openvcu/dbc/parser.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace openvcu::dbc {
@@ -11,6 +12,18 @@ std::string hexId(std::uint32_t id) {
   std::snprintf(buffer, sizeof buffer, "0x%X", id);
   return buffer;
 }
+
+/// Appends the items of `from` that `into` does not hold yet (identical definitions once).
+template <typename T>
+void appendMissing(std::vector<T>& into, const std::vector<T>& from) {
+  const std::size_t existing = into.size();
+  for (const T& item : from) {
+    if (std::find(into.begin(), into.begin() + static_cast<std::ptrdiff_t>(existing), item) ==
+        into.begin() + static_cast<std::ptrdiff_t>(existing)) {
+      into.push_back(item);
+    }
+  }
+}
 }  // namespace
 
 Status merge(Database& into, const Database& other, std::string_view otherName) {
@@ -20,6 +33,7 @@ Status merge(Database& into, const Database& other, std::string_view otherName) 
     const Message* sameId = msg.pseudo ? nullptr : combined.findMessage(msg.id, msg.extended);
     const Message* sameName = combined.findMessage(msg.name);
     if (sameId && *sameId == msg) continue;
+    if (msg.pseudo && sameName && *sameName == msg) continue;  // pseudo messages have no ID to compare
     if (sameId) {
       return Error{"message '" + msg.name + "' (ID " + hexId(msg.id) + ") conflicts with '" + sameId->name +
                        "' of the same ID defined differently",
@@ -51,11 +65,9 @@ Status merge(Database& into, const Database& other, std::string_view otherName) 
     if (!present) combined.valueTables.push_back(table);
   }
   for (const auto& [name, value] : other.networkAttributes) combined.networkAttributes.emplace(name, value);
-  combined.environmentVariables.insert(combined.environmentVariables.end(), other.environmentVariables.begin(),
-                                       other.environmentVariables.end());
-  combined.signalGroups.insert(combined.signalGroups.end(), other.signalGroups.begin(), other.signalGroups.end());
-  combined.relationAttributes.insert(combined.relationAttributes.end(), other.relationAttributes.begin(),
-                                     other.relationAttributes.end());
+  appendMissing(combined.environmentVariables, other.environmentVariables);
+  appendMissing(combined.signalGroups, other.signalGroups);
+  appendMissing(combined.relationAttributes, other.relationAttributes);
   if (combined.comment.empty()) combined.comment = other.comment;
   combined.reindex();
   into = std::move(combined);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <unordered_set>
 
 namespace openvcu::dbc {
 namespace {
@@ -65,6 +66,7 @@ class Parser {
         resync();
       }
     }
+    applyDefaults();
     detail::resolve(m_out.database, m_pending, m_file, m_out.diagnostics);
   }
 
@@ -272,7 +274,7 @@ class Parser {
     if (keyword == "VERSION") return version();
     if (keyword == "NS_") return newSymbols();
     if (keyword == "BS_") return bitTiming();
-    if (keyword == "BU_") return nodes();
+    if (keyword == "BU_") return nodes(start);
     if (keyword == "VAL_TABLE_") return valueTable();
     if (keyword == "BO_") return message(start);
     if (keyword == "SG_") {
@@ -283,7 +285,8 @@ class Parser {
     if (keyword == "CM_") return comment(start);
     if (keyword == "BA_DEF_") return attributeDefinition(start, false);
     if (keyword == "BA_DEF_REL_") return attributeDefinition(start, true);
-    if (keyword == "BA_DEF_DEF_" || keyword == "BA_DEF_DEF_REL_") return attributeDefault(start);
+    if (keyword == "BA_DEF_DEF_") return attributeDefault(start, false);
+    if (keyword == "BA_DEF_DEF_REL_") return attributeDefault(start, true);
     if (keyword == "BA_") return attribute(start);
     if (keyword == "BA_REL_") return relationAttribute(start);
     if (keyword == "VAL_") return values(start);
@@ -352,15 +355,21 @@ class Parser {
     return true;
   }
 
-  bool nodes() {
+  bool nodes(std::size_t start) {
     if (!punct(':')) return false;
-    // Node names may continue over several lines, up to the next statement.
+    // Node names may continue on indented lines (tesla_can.dbc), up to the next statement;
+    // a line starting in column 1 is the next statement, even a misspelt one.
+    const std::uint32_t statementLine = where(start).line;
     while (true) {
       m_scan.skipSpace();
       if (m_scan.atEnd()) return true;
+      const std::size_t at = m_scan.position();
+      const Where here = where(at);
+      if (here.line != statementLine && here.column == 1) return true;
       const std::string_view w = m_scan.peekWord();
       if (w.empty() || isKeyword(w)) return true;
       m_scan.word();
+      if (!m_nodeNames.emplace(w).second) warning(at, "node '" + std::string(w) + "' listed twice in BU_");
       Node node;
       node.name.assign(w);
       m_out.database.nodes.push_back(std::move(node));
@@ -575,21 +584,33 @@ class Parser {
     return true;
   }
 
-  bool attributeDefault(std::size_t start) {
-    std::string attributeName;
-    if (!quoted(attributeName, "attribute name")) return false;
-    AttributeValue value;
-    if (!attributeValue(value)) return false;
-    if (!terminate("BA_DEF_DEF_")) return false;
-    bool found = false;
-    for (auto& def : m_out.database.attributeDefinitions) {
-      if (def.name == attributeName) {
-        def.defaultValue = value;
-        found = true;
-      }
-    }
-    if (!found) warning(start, "default for undefined attribute '" + attributeName + "'");
+  bool attributeDefault(std::size_t start, bool relation) {
+    PendingDefault pending;
+    pending.position = start;
+    pending.relation = relation;
+    if (!quoted(pending.name, "attribute name")) return false;
+    if (!attributeValue(pending.value)) return false;
+    if (!terminate(relation ? "BA_DEF_DEF_REL_" : "BA_DEF_DEF_")) return false;
+    m_defaults.push_back(std::move(pending));
     return true;
+  }
+
+  /// BA_DEF_DEF_ names no object type: it sets the default of every definition of that
+  /// name (BA_DEF_DEF_REL_: of the relation definitions), wherever they are in the file.
+  void applyDefaults() {
+    for (const PendingDefault& pending : m_defaults) {
+      bool found = false;
+      for (auto& def : m_out.database.attributeDefinitions) {
+        const bool isRelation = def.object == ObjectType::NodeSignalRelation ||
+                                def.object == ObjectType::NodeMessageRelation ||
+                                def.object == ObjectType::NodeEnvRelation;
+        if (def.name == pending.name && isRelation == pending.relation) {
+          def.defaultValue = pending.value;
+          found = true;
+        }
+      }
+      if (!found) warning(pending.position, "default for undefined attribute '" + pending.name + "'");
+    }
   }
 
   bool attribute(std::size_t start) {
@@ -717,6 +738,7 @@ class Parser {
         continue;
       }
       if (m_scan.peek() == ';' || m_scan.atEnd()) break;
+      if (m_scan.atLineStart() && isKeyword(m_scan.peekWord())) break;  // ';' missing: terminate() warns
       const std::string_view w = m_scan.word();
       if (w.empty()) return expected("node name");
       env.accessNodes.emplace_back(w);
@@ -772,10 +794,19 @@ class Parser {
     return true;
   }
 
+  struct PendingDefault {
+    std::string name;
+    AttributeValue value;
+    std::size_t position{};
+    bool relation{};
+  };
+
   Scanner m_scan;
+  std::vector<PendingDefault> m_defaults;
   std::string_view m_file;
   ParseOutput& m_out;
   PendingState m_pending;
+  std::unordered_set<std::string> m_nodeNames;  ///< BU_ names seen so far, to warn about repeats
 };
 
 }  // namespace

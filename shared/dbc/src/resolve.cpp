@@ -24,7 +24,6 @@ class Resolver {
   void run() {
     classifyIds();
     indexMessages();
-    checkNodes();
     for (auto& item : m_pending.transmitters) applyTransmitters(item);
     for (auto& item : m_pending.comments) applyComment(item);
     for (auto& item : m_pending.values) applyValues(item);
@@ -84,15 +83,6 @@ class Resolver {
           warning(m_pending.signalWhere[i][s], "signal '" + msg.signals[s].name + "' defined twice in message '" + msg.name +
                                                    "'; references by name (CM_, BA_, VAL_) resolve to the first");
         }
-      }
-    }
-  }
-
-  void checkNodes() {
-    std::unordered_map<std::string, std::size_t> seen;
-    for (const Node& node : m_db.nodes) {
-      if (!seen.emplace(node.name, 0).second) {
-        warning(Where{}, "node '" + node.name + "' listed twice in BU_");
       }
     }
   }
@@ -240,15 +230,18 @@ class Resolver {
 
   void resolveMultiplexing(std::size_t messageIndex) {
     Message& msg = m_db.messages[messageIndex];
+    // Roots select without being selected. An "M" with its own SG_MUL_VAL_ is a nested
+    // multiplexor written the way cantools dumps it (instead of "mNM").
     std::vector<const Signal*> roots;
     for (const Signal& sig : msg.signals) {
-      if (sig.muxRole == MuxRole::Multiplexor) roots.push_back(&sig);
+      if (sig.muxRole == MuxRole::Multiplexor && !sig.extendedMux) roots.push_back(&sig);
     }
     for (std::size_t s = 0; s < msg.signals.size(); ++s) {
       Signal& sig = msg.signals[s];
       const Where where = m_pending.signalWhere[messageIndex][s];
       const bool multiplexed = sig.muxRole == MuxRole::Multiplexed || sig.muxRole == MuxRole::MultiplexedMultiplexor;
       if (!multiplexed) {
+        if (sig.extendedMux && sig.muxRole == MuxRole::Multiplexor && sig.muxSwitch != sig.name) continue;
         if (sig.extendedMux) {
           warning(where, "SG_MUL_VAL_ for '" + sig.name + "', which is not multiplexed (no mN); ignored");
           sig.extendedMux = false;

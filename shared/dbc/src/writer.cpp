@@ -2,6 +2,7 @@
 // double, so parse(write(db)) == db.
 #include "openvcu/dbc/parser.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <string>
 
@@ -186,8 +187,13 @@ class Writer {
       }
       m_out += ";\n";
     }
+    // One BA_DEF_DEF_ per name: it applies to every definition of that name.
+    std::vector<std::pair<std::string, bool>> written;
     for (const auto& def : m_db.attributeDefinitions) {
       if (!def.defaultValue) continue;
+      const std::pair<std::string, bool> key{def.name, isRelation(def.object)};
+      if (std::find(written.begin(), written.end(), key) != written.end()) continue;
+      written.push_back(key);
       m_out += isRelation(def.object) ? "BA_DEF_DEF_REL_ " : "BA_DEF_DEF_ ";
       quoted(def.name);
       m_out += ' ';

@@ -205,7 +205,7 @@ DecodeSummary MessageCodec::decode(std::span<const std::uint8_t> payload, Visito
   const std::uint8_t* padded = nullptr;
   const std::size_t length = payload.size();
   if (length <= 64) {
-    std::memcpy(small.data(), payload.data(), length);
+    if (length != 0) std::memcpy(small.data(), payload.data(), length);  // an empty span may be null
     std::memset(small.data() + length, 0, small.size() - length);
     padded = small.data();
   }

@@ -1,0 +1,224 @@
+#pragma once
+// The signal table: one slot per catalog signal in POSIX shared memory, shared by the
+// independent processes of one stack instance (can-rx, can-tx, fsm, gpio, hmi, vcu).
+// Each slot has three planes, each with its own update counter:
+//   bus      the value seen on the bus (can-rx; can-tx for what it sent), with quality
+//   command  the commanded value (fsm, gpio inputs, operator commands)
+//   override an operator override that wins over the command until cleared
+// Reads and writes never block and never take a lock; a process killed at any instruction
+// can neither block nor corrupt what the others read, and a restarted one simply carries
+// on. Design, protocol and memory-ordering argument: docs/design/signal-table.md.
+//
+//   auto catalogResult = signals::Catalog::create(std::move(infos));
+//   auto openResult = signals::SignalTable::open(*catalogResult, "hhea");
+//   if (!openResult) { std::cerr << openResult.error().toString() << '\n'; return 1; }
+//   SignalTable& table = *openResult;
+//   table.writeBus(soc, 87.5, signals::monotonicNowNs(), 0xF3, signals::Quality::Valid);
+//   if (const auto maybeBus = table.readBus(soc)) use(maybeBus->value);
+//
+// Timestamps are the caller's; the stack uses CLOCK_MONOTONIC nanoseconds (monotonicNowNs()),
+// which every process on the host shares.
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "openvcu/core/result.hpp"
+#include "openvcu/signals/catalog.hpp"
+
+namespace openvcu::signals {
+
+namespace detail {
+struct TableHeader;
+struct Slot;
+}  // namespace detail
+
+enum class Quality : std::uint8_t {
+  NeverReceived = 0,  ///< no value since the table was created
+  Valid = 1,
+  Stale = 2,       ///< no update within the signal's timeout
+  OutOfRange = 3,  ///< decoded value outside the DBC range
+};
+
+/// "NeverReceived", "Valid", "Stale", "OutOfRange" ("?" for anything else).
+[[nodiscard]] std::string_view qualityName(Quality quality) noexcept;
+
+/// Who wrote a command or an override (a small number per process, from the configuration).
+using WriterId = std::uint16_t;
+
+/// The bus plane. `updates` is the number of the write returned (writes started on this
+/// plane up to and including it); 0 with NeverReceived when the plane was never written.
+struct BusValue {
+  double value{};
+  std::int64_t timestampNs{};
+  std::uint16_t source{};  ///< J1939 source address or other producer id
+  Quality quality{Quality::NeverReceived};
+  std::uint64_t updates{};
+};
+
+struct CommandValue {
+  double value{};
+  std::int64_t timestampNs{};
+  WriterId writer{};
+  std::uint64_t updates{};  ///< 0: never commanded
+};
+
+struct OverrideValue {
+  double value{};  ///< 0 after clearOverride()
+  std::int64_t timestampNs{};
+  WriterId writer{};  ///< who set it, or who cleared it
+  bool active{};
+  std::uint64_t updates{};  ///< 0: never set
+};
+
+/// The three planes of one slot. Each plane is a consistent (value, timestamp, flags)
+/// triple; the planes are read one after the other, not as one atomic unit.
+struct SlotSnapshot {
+  BusValue bus;
+  CommandValue command;
+  OverrideValue override;
+};
+
+/// The value a transmitter should send: the override when active, else the command.
+struct EffectiveCommand {
+  double value{};
+  std::int64_t timestampNs{};
+  WriterId writer{};
+  bool overridden{};
+};
+
+/// Override wins over command; empty when neither an active override nor any command exists.
+/// @note noexcept, allocation-free.
+[[nodiscard]] std::optional<EffectiveCommand> effectiveCommand(const SlotSnapshot& snapshot) noexcept;
+
+/// CLOCK_MONOTONIC in nanoseconds (vDSO, no system call on Linux).
+[[nodiscard]] std::int64_t monotonicNowNs() noexcept;
+
+enum class OpenMode : std::uint8_t {
+  /// Services: attach; create the table if it is missing or was left incomplete by a
+  /// killed creator; replace a table of another configuration only when no process is
+  /// attached to it (otherwise refuse with a message naming both layouts).
+  CreateOrAttach,
+  /// Tools that must not create anything (`vcu signal get`): attach or fail.
+  AttachOnly,
+  /// `vcu table reset`: always start from a fresh, all-NeverReceived table. Processes still
+  /// attached keep the old table (now nameless) until they restart.
+  Recreate,
+};
+
+enum class Permissions : std::uint8_t {
+  OwnerOnly,      ///< 0600 (default): every process of the instance runs as one user
+  OwnerAndGroup,  ///< 0660: e.g. the HMI runs as another user of the creator's group
+};
+
+/// What the header of an open table says.
+struct TableInfo {
+  std::string name;  ///< "openvcu-hhea": the segment /dev/shm/openvcu-hhea
+  std::uint32_t formatVersion{};
+  std::uint64_t layoutHash{};
+  std::uint32_t slotCount{};
+  std::size_t bytes{};
+  std::int64_t createdRealtimeNs{};  ///< CLOCK_REALTIME at creation
+  std::int32_t creatorPid{};
+  bool createdByThisProcess{};  ///< this open() created (or re-created) the table
+};
+
+/// A mapped signal table. Valid once open() returned it; move-only; unmapping (destructor)
+/// detaches this process. Index arguments out of range make writes return false and reads
+/// return empty.
+/// @note thread-safe and process-safe: any number of threads and processes may call any
+///       method concurrently. Every per-signal method is noexcept, allocation-free,
+///       lock-free and free of system calls (except the wake described at waitForChange).
+class SignalTable {
+ public:
+  /// Attaches to (or creates, see OpenMode) the table "/openvcu-<instance>" for `catalog`.
+  /// `instance`: letters, digits, '-' and '_' (1..64 characters). Errors: a bad instance
+  /// name, a table of another configuration ("table 'openvcu-hhea' was created from
+  /// another configuration (layout 0x..., 812 signals; this process: 0x..., 815): stop
+  /// every service of this instance or run `vcu table reset`"), a missing table in
+  /// AttachOnly mode, and operating-system failures (permissions, no /dev/shm).
+  /// @note start-up only: allocates, makes system calls, may wait (at most ~5 s) for a
+  ///       process that is creating the table.
+  static Result<SignalTable> open(const Catalog& catalog, std::string_view instance,
+                                  OpenMode mode = OpenMode::CreateOrAttach,
+                                  Permissions permissions = Permissions::OwnerOnly);
+
+  /// Removes the names of an instance's table and lock file (tests, `vcu table reset`).
+  /// Attached processes keep their mappings. Not an error when nothing exists.
+  static Status remove(std::string_view instance);
+
+  /// Succeeds when `instance` is a valid instance name; else an error giving the rule.
+  static Status checkInstanceName(std::string_view instance);
+
+  /// "/dev/shm/openvcu-<instance>" and "/dev/shm/openvcu-<instance>.lock".
+  [[nodiscard]] static std::string segmentPath(std::string_view instance);
+  [[nodiscard]] static std::string lockPath(std::string_view instance);
+
+  SignalTable(SignalTable&& other) noexcept;
+  SignalTable& operator=(SignalTable&& other) noexcept;
+  SignalTable(const SignalTable&) = delete;
+  SignalTable& operator=(const SignalTable&) = delete;
+  ~SignalTable();
+
+  [[nodiscard]] std::size_t size() const noexcept { return m_slotCount; }
+  [[nodiscard]] TableInfo info() const;
+
+  // ---- writers --------------------------------------------------------------------------
+  // Each write bumps the change epoch. Concurrent writes to one plane are ordered by the
+  // ticket each takes first: the later ticket wins even if it finishes first.
+
+  /// Bus plane: a decoded (or sent) value. False only for an index out of range.
+  bool writeBus(SignalIndex index, double value, std::int64_t timestampNs, std::uint16_t source,
+                Quality quality) noexcept;
+  /// Sets the quality of the bus value currently visible (value, timestamp, source and the
+  /// update counter stay). If a new value arrives meanwhile, the mark does not apply to
+  /// it: a fresh value carries its own quality. False for an index out of range, a plane
+  /// never written, or (extremely rarely) when no complete value could be read.
+  bool markBusQuality(SignalIndex index, Quality quality) noexcept;
+  /// Command plane. False only for an index out of range.
+  bool writeCommand(SignalIndex index, double value, std::int64_t timestampNs, WriterId writer) noexcept;
+  /// Override plane: active override with `value`. False only for an index out of range.
+  bool setOverride(SignalIndex index, double value, std::int64_t timestampNs, WriterId writer) noexcept;
+  /// Override plane: inactive (value 0), recording who cleared it and when.
+  bool clearOverride(SignalIndex index, std::int64_t timestampNs, WriterId writer) noexcept;
+
+  // ---- readers --------------------------------------------------------------------------
+  // Each returns the newest complete write of the plane (wait-free: a bounded number of
+  // loads). Empty for an index out of range, or when the 4 newest writes of the plane were
+  // all unfinished (in progress or killed) during 3 attempts; the caller keeps its
+  // previous value and reads again next cycle.
+
+  [[nodiscard]] std::optional<BusValue> readBus(SignalIndex index) const noexcept;
+  [[nodiscard]] std::optional<CommandValue> readCommand(SignalIndex index) const noexcept;
+  [[nodiscard]] std::optional<OverrideValue> readOverride(SignalIndex index) const noexcept;
+  /// All three planes (empty if any of them is).
+  [[nodiscard]] std::optional<SlotSnapshot> read(SignalIndex index) const noexcept;
+
+  // ---- change notification --------------------------------------------------------------
+
+  /// A counter (31 bits, wrapping) that every write and quality mark increases.
+  [[nodiscard]] std::uint32_t changeEpoch() const noexcept;
+  /// Sleeps until changeEpoch() != lastEpoch or `timeout` passed; returns changeEpoch().
+  /// Typical loop: `auto epoch = t.changeEpoch(); for (;;) { scan(); epoch = t.waitForChange(epoch, 100ms); }`.
+  /// @note blocks (futex), so not for a real-time loop. Writers make one FUTEX_WAKE system
+  ///       call for the first change after a waiter went to sleep and none otherwise.
+  std::uint32_t waitForChange(std::uint32_t lastEpoch, std::chrono::nanoseconds timeout) const noexcept;
+
+ private:
+  SignalTable(int lockFd, void* base, std::size_t bytes, std::string name, bool created) noexcept;
+  void release() noexcept;
+
+  int m_lockFd{-1};  ///< holds LOCK_SH on the lock file for as long as we are attached
+  void* m_base{nullptr};
+  std::size_t m_bytes{};
+  detail::TableHeader* m_header{nullptr};
+  detail::Slot* m_slots{nullptr};
+  std::uint32_t m_slotCount{};
+  std::string m_name;
+  bool m_created{};
+};
+
+}  // namespace openvcu::signals

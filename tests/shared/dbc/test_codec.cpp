@@ -1,0 +1,320 @@
+// MessageCodec against known values: byte orders (incl. the Motorola "sawtooth" start
+// bit), sign extension, wide fields, floats, scaling, multiplexing, short frames,
+// encoding and the initial payload (J1939 "not available" fill, GenSigStartValue).
+
+#include "dbc_test_support.hpp"
+
+#include <doctest/doctest.h>
+
+#include <array>
+#include <cstring>
+#include <string>
+#include <vector>
+
+using namespace openvcu;
+using namespace openvcu::dbc;
+using namespace openvcu::dbc::test;
+
+// ------------------------------------------------------------------ byte orders
+
+TEST_CASE("codec decodes an Intel field LSB first") {
+  const ParseOutput parsed = oneMessage(" SG_ A : 8|16@1+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  CHECK(decodeOne(sut, hexBytes("00 34 12 00 00 00 00 00"), 0).rawUnsigned == 0x1234u);
+}
+
+TEST_CASE("codec decodes Motorola start 7 size 16 as bytes 0..1 big-endian") {
+  const ParseOutput parsed = oneMessage(" SG_ A : 7|16@0+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  CHECK(decodeOne(sut, hexBytes("12 34 FF FF FF FF FF FF"), 0).rawUnsigned == 0x1234u);
+}
+
+TEST_CASE("codec decodes Motorola start 12 size 12 across the sawtooth byte boundary") {
+  // MSB is byte 1 bit 4: byte 1 bits 4..0 then byte 2 bits 7..1; the other bits are noise.
+  const ParseOutput parsed = oneMessage(" SG_ A : 12|12@0+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  CHECK(decodeOne(sut, hexBytes("FF F5 79 FF 00 00 00 00"), 0).rawUnsigned == 0xABCu);
+}
+
+TEST_CASE("codec decodes Intel start 12 size 12 from the high nibble up") {
+  const ParseOutput parsed = oneMessage(" SG_ A : 12|12@1+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  CHECK(decodeOne(sut, hexBytes("FF CF AB FF 00 00 00 00"), 0).rawUnsigned == 0xABCu);
+}
+
+TEST_CASE("codec decodes a Motorola signal ending in the last bit of the frame") {
+  const ParseOutput parsed = oneMessage(" SG_ A : 51|12@0+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  CHECK(decodeOne(sut, hexBytes("00 00 00 00 00 00 0A BC"), 0).rawUnsigned == 0xABCu);
+}
+
+// ------------------------------------------------------------------ signs and widths
+
+TEST_CASE("codec sign-extends a big-endian 8-bit 0xFF to -1") {
+  // Regression of the original program, which decoded this as -1793.
+  const ParseOutput parsed = oneMessage(" SG_ A : 7|8@0- (1,0) [0|0] \"\" Vcu\n SG_ B : 15|12@0- (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  const auto visited = decodeAll(sut, hexBytes("FF FF F0 00 00 00 00 00"));
+
+  const Visited* a = findVisited(visited, 0);
+  const Visited* b = findVisited(visited, 1);
+  REQUIRE(a != nullptr);
+  REQUIRE(b != nullptr);
+  CHECK(a->value.kind == RawKind::Signed);
+  CHECK(a->value.rawSigned == -1);
+  CHECK(a->value.physical == -1.0);
+  CHECK(b->value.rawSigned == -1);
+}
+
+TEST_CASE("codec sign-extends the most negative value of a field") {
+  const ParseOutput parsed = oneMessage(" SG_ A : 7|16@0- (1,0) [0|0] \"\" Vcu\n SG_ B : 16|4@1- (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  const auto visited = decodeAll(sut, hexBytes("80 00 08 00 00 00 00 00"));
+
+  CHECK(visitedValue(visited, 0).rawSigned == -32768);
+  CHECK(visitedValue(visited, 1).rawSigned == -8);
+}
+
+TEST_CASE("codec decodes 32-bit fields without 32-bit overflow") {
+  const ParseOutput parsed =
+      oneMessage(" SG_ U : 0|32@1+ (1,0) [0|0] \"\" Vcu\n SG_ S : 32|32@1- (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  const auto visited = decodeAll(sut, hexBytes("FF FF FF FF 00 00 00 80"));
+
+  CHECK(visitedValue(visited, 0).rawUnsigned == 0xFFFFFFFFu);
+  CHECK(visitedValue(visited, 0).physical == 4294967295.0);
+  CHECK(visitedValue(visited, 1).rawSigned == -2147483648LL);
+}
+
+TEST_CASE("codec decodes 64-bit fields in both byte orders") {
+  const ParseOutput parsed = oneMessage(
+      " SG_ Intel : 0|64@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Motorola : 7|64@0+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Signed : 0|64@1- (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  const auto ordered = decodeAll(sut, hexBytes("01 02 03 04 05 06 07 08"));
+  const auto ones = decodeAll(sut, hexBytes("FF FF FF FF FF FF FF FF"));
+
+  REQUIRE(ordered.size() == 3);
+  REQUIRE(ones.size() == 3);
+  CHECK(visitedValue(ordered, 0).rawUnsigned == 0x0807060504030201ull);
+  CHECK(visitedValue(ordered, 1).rawUnsigned == 0x0102030405060708ull);
+  CHECK(visitedValue(ones, 0).rawUnsigned == 0xFFFFFFFFFFFFFFFFull);
+  CHECK(visitedValue(ones, 0).physical == 18446744073709551615.0);
+  CHECK(visitedValue(ones, 2).rawSigned == -1);
+}
+
+TEST_CASE("codec decodes an unaligned 64-bit field that spans nine bytes") {
+  const ParseOutput parsed = oneMessage(
+      " SG_ Intel : 4|64@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Motorola : 3|64@0+ (1,0) [0|0] \"\" Vcu\n", 9);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  // Value 0x123456789ABCDEF0 placed 4 bits up (Intel) and 4 bits in (Motorola).
+  const auto intel = decodeAll(sut, hexBytes("00 EF CD AB 89 67 45 23 01"));
+  const auto motorola = decodeAll(sut, hexBytes("01 23 45 67 89 AB CD EF 00"));
+
+  CHECK(visitedValue(intel, 0).rawUnsigned == 0x123456789ABCDEF0ull);
+  CHECK(visitedValue(motorola, 1).rawUnsigned == 0x123456789ABCDEF0ull);
+}
+
+// ------------------------------------------------------------------ floats and scaling
+
+TEST_CASE("codec decodes float32 and float64 signals") {
+  const ParseOutput parsed = oneMessage(
+      " SG_ F32 : 0|32@1+ (2,1) [0|0] \"\" Vcu\n"
+      " SG_ F64 : 32|64@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ F32Be : 103|32@0+ (1,0) [0|0] \"\" Vcu\n",
+      16, "SIG_VALTYPE_ 1 F32 : 1;\nSIG_VALTYPE_ 1 F64 : 2;\nSIG_VALTYPE_ 1 F32Be : 1;\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  const auto visited = decodeAll(sut, hexBytes("00 00 C0 3F 00 00 00 00 00 00 02 40 3F C0 00 00"));
+
+  REQUIRE(visited.size() == 3);
+  CHECK(visitedValue(visited, 0).kind == RawKind::Float32);
+  CHECK(visitedValue(visited, 0).rawFloat == 1.5);
+  CHECK(visitedValue(visited, 0).physical == 4.0);
+  CHECK(visitedValue(visited, 1).kind == RawKind::Float64);
+  CHECK(visitedValue(visited, 1).rawFloat == 2.25);
+  CHECK(visitedValue(visited, 2).rawFloat == 1.5);
+}
+
+TEST_CASE("codec computes physical = raw * factor + offset in double without truncation") {
+  const ParseOutput parsed = oneMessage(" SG_ T : 0|16@1+ (0.1,-40) [-40|6513.5] \"degC\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+  constexpr std::uint64_t RAW = 123;
+
+  const DecodedValue value = decodeOne(sut, hexBytes("7B 00 00 00 00 00 00 00"), 0);
+
+  CHECK(value.rawUnsigned == RAW);
+  CHECK(value.physical == static_cast<double>(RAW) * 0.1 + -40.0);
+  CHECK(value.physical == doctest::Approx(-27.7));
+}
+
+// ------------------------------------------------------------------ multiplexing and short frames
+
+TEST_CASE("codec visits only the active multiplexed signals, multiplexor first") {
+  const ParseOutput parsed = parse(readFixture("multiplexing.dbc"), "multiplexing.dbc");
+  REQUIRE_FALSE(parsed.hasErrors());
+  const Message* muxed = parsed.database.findMessage("Muxed");
+  REQUIRE(muxed != nullptr);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, *muxed);
+
+  // Selector 2 -> SubSelector (m2M) = 5 -> SubValueB (4-6, 9-9); Always is always there.
+  const auto visited = decodeAll(sut, hexBytes("02 05 77 00 00 00 00 99"));
+
+  std::vector<std::string> names;
+  for (const Visited& v : visited) names.push_back(muxed->signals[v.index].name);
+  CHECK(names == std::vector<std::string>{"Selector", "Always", "SubSelector", "SubValueB"});
+  const Visited* subValue = findVisited(visited, signalIndex(*muxed, "SubValueB"));
+  REQUIRE(subValue != nullptr);
+  CHECK(subValue->value.rawUnsigned == 0x77u);
+}
+
+TEST_CASE("codec selects m1 and skips the other pages") {
+  const ParseOutput parsed = parse(readFixture("multiplexing.dbc"), "multiplexing.dbc");
+  const Message* muxed = parsed.database.findMessage("Muxed");
+  REQUIRE(muxed != nullptr);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, *muxed);
+
+  const auto visited = decodeAll(sut, hexBytes("01 FF FF 00 00 00 00 00"));
+
+  CHECK(visited.size() == 3);
+  const Visited* value1 = findVisited(visited, signalIndex(*muxed, "Value1"));
+  REQUIRE(value1 != nullptr);
+  CHECK(value1->value.rawSigned == -1);
+  CHECK(value1->value.physical == -0.5);
+  CHECK(findVisited(visited, signalIndex(*muxed, "Value0")) == nullptr);
+}
+
+TEST_CASE("codec ignores a nested multiplexor whose own page is not selected") {
+  const ParseOutput parsed = parse(readFixture("multiplexing.dbc"), "multiplexing.dbc");
+  const Message* muxed = parsed.database.findMessage("Muxed");
+  REQUIRE(muxed != nullptr);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, *muxed);
+
+  // Selector 0 selects Value0; the bits SubSelector would read hold 3, but it is inactive.
+  const auto visited = decodeAll(sut, hexBytes("00 03 44 00 00 00 00 00"));
+
+  CHECK(findVisited(visited, signalIndex(*muxed, "Value0")) != nullptr);
+  CHECK(findVisited(visited, signalIndex(*muxed, "SubSelector")) == nullptr);
+  CHECK(findVisited(visited, signalIndex(*muxed, "SubValueA")) == nullptr);
+  CHECK(visited.size() == 3);
+}
+
+TEST_CASE("codec lets a signed multiplexor reading -128 select m128") {
+  const ParseOutput parsed = parse(readFixture("multiplexing.dbc"), "multiplexing.dbc");
+  const Message* signedMux = parsed.database.findMessage("SignedMux");
+  REQUIRE(signedMux != nullptr);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, *signedMux);
+
+  const auto visited = decodeAll(sut, hexBytes("80 2A 00 00 00 00 00 00"));
+
+  REQUIRE(findVisited(visited, signalIndex(*signedMux, "Mode")) != nullptr);
+  CHECK(findVisited(visited, signalIndex(*signedMux, "Mode"))->value.rawSigned == -128);
+  const Visited* high = findVisited(visited, signalIndex(*signedMux, "HighPage"));
+  REQUIRE(high != nullptr);
+  CHECK(high->value.rawUnsigned == 0x2Au);
+  CHECK(findVisited(visited, signalIndex(*signedMux, "LowPage")) == nullptr);
+}
+
+TEST_CASE("codec follows two independent multiplexors with several ranges") {
+  const ParseOutput parsed = parse(readFixture("multiplexing.dbc"), "multiplexing.dbc");
+  const Message* twoMux = parsed.database.findMessage("TwoMultiplexors");
+  REQUIRE(twoMux != nullptr);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, *twoMux);
+  const std::uint32_t valueA = signalIndex(*twoMux, "ValueA");
+  const std::uint32_t valueB = signalIndex(*twoMux, "ValueB");
+
+  const auto bothActive = decodeAll(sut, hexBytes("C1 11 22 00 00 00 00 00"));  // MuxA 1, MuxB 12 (8-15)
+  const auto onlyB = decodeAll(sut, hexBytes("52 11 22 00 00 00 00 00"));       // MuxA 2, MuxB 5
+  const auto neither = decodeAll(sut, hexBytes("42 11 22 00 00 00 00 00"));     // MuxA 2, MuxB 4
+
+  CHECK(findVisited(bothActive, valueA) != nullptr);
+  CHECK(findVisited(bothActive, valueB) != nullptr);
+  CHECK(findVisited(onlyB, valueA) == nullptr);
+  CHECK(findVisited(onlyB, valueB) != nullptr);
+  CHECK(findVisited(neither, valueA) == nullptr);
+  CHECK(findVisited(neither, valueB) == nullptr);
+}
+
+TEST_CASE("codec decodes what fits in a frame shorter than the DBC length and counts the rest as missing") {
+  const ParseOutput parsed = oneMessage(
+      " SG_ A : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ B : 16|16@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ C : 56|8@1+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+  DecodeSummary summary;
+
+  const auto visited = decodeAll(sut, hexBytes("11 22 33"), &summary);
+
+  CHECK(summary.decoded == 1);
+  CHECK(summary.missing == 2);
+  REQUIRE(visited.size() == 1);
+  CHECK(visited[0].value.rawUnsigned == 0x11u);
+}
+
+TEST_CASE("codec counts every signal as missing for an empty payload") {
+  const ParseOutput parsed = oneMessage(" SG_ A : 0|8@1+ (1,0) [0|0] \"\" Vcu\n SG_ B : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+  DecodeSummary summary;
+
+  const auto visited = decodeAll(sut, std::span<const std::uint8_t>{}, &summary);
+
+  CHECK(visited.empty());
+  CHECK(summary.missing == 2);
+}
+
+TEST_CASE("codec decodes transport-protocol payloads longer than 64 bytes") {
+  constexpr std::uint32_t TP_LENGTH = 100;
+  const ParseOutput parsed = oneMessage(" SG_ Late : 760|16@1+ (1,0) [0|0] \"\" Vcu\n SG_ Last : 799|8@0+ (1,0) [0|0] \"\" Vcu\n",
+                                        TP_LENGTH);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+  std::vector<std::uint8_t> payload(TP_LENGTH, 0);
+  payload[95] = 0x34;
+  payload[96] = 0x12;
+  payload[99] = 0xA5;
+
+  const auto visited = decodeAll(sut, payload);
+
+  REQUIRE(visited.size() == 2);
+  CHECK(visitedValue(visited, 0).rawUnsigned == 0x1234u);
+  CHECK(visitedValue(visited, 1).rawUnsigned == 0xA5u);
+}
+
+TEST_CASE("codec never reads outside the frame for a start bit near 2^32") {
+  const ParseOutput parsed = oneMessage(" SG_ Far : 4294967290|8@1+ (1,0) [0|0] \"\" Vcu\n SG_ FarBe : 4294967288|8@0+ (1,0) [0|0] \"\" Vcu\n");
+  const Message& message = onlyMessage(parsed);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, message);
+  DecodeSummary summary;
+
+  const auto visited = decodeAll(sut, hexBytes("FF FF FF FF FF FF FF FF"), &summary);
+
+  CHECK(visited.empty());
+  CHECK(summary.missing == 2);
+  std::array<std::uint8_t, CLASSIC_LENGTH> buffer{};
+  CHECK(sut.encode(0, 1.0, buffer) == EncodeStatus::BufferTooShort);
+}
+
+TEST_CASE("codec leaves signals over 64 bits and mismatched floats out of the compiled layout") {
+  const ParseOutput parsed = oneMessage(" SG_ Text : 0|72@1+ (1,0) [0|0] \"\" Vcu\n SG_ BadFloat : 0|16@1+ (1,0) [0|0] \"\" Vcu\n"
+                                        " SG_ Ok : 0|8@1+ (1,0) [0|0] \"\" Vcu\n",
+                                        16, "SIG_VALTYPE_ 1 BadFloat : 1;\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+  std::array<std::uint8_t, 16> buffer{};
+
+  CHECK(sut.skippedSignals() == std::vector<std::uint32_t>{0, 1});
+  CHECK(sut.find(0) == nullptr);
+  REQUIRE(sut.find(2) != nullptr);
+  CHECK(sut.signals().size() == 1);
+  CHECK(sut.encode(0, 1.0, buffer) == EncodeStatus::NotEncodable);
+}

@@ -1,0 +1,205 @@
+// DBC grammar, part 2: multiplexing (M, mN, mNM, bare m, SG_MUL_VAL_).
+
+#include "dbc_test_support.hpp"
+
+#include <doctest/doctest.h>
+
+#include <string>
+
+using namespace openvcu;
+using namespace openvcu::dbc;
+using namespace openvcu::dbc::test;
+
+namespace {
+const Signal* signalOf(const ParseOutput& output, std::string_view name) {
+  if (output.database.messages.empty()) return nullptr;
+  return output.database.messages[0].findSignal(name);
+}
+}  // namespace
+
+TEST_CASE("parser reads M as multiplexor and mN as multiplexed by it") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Page0 m0 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Page17 m17 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
+
+  CHECK(sut.diagnostics.empty());
+  const Signal* selector = signalOf(sut, "Selector");
+  const Signal* page17 = signalOf(sut, "Page17");
+  REQUIRE(selector != nullptr);
+  REQUIRE(page17 != nullptr);
+  CHECK(selector->muxRole == MuxRole::Multiplexor);
+  CHECK(page17->muxRole == MuxRole::Multiplexed);
+  CHECK(page17->muxValue == 17);
+  CHECK(page17->muxSwitch == "Selector");
+  CHECK(page17->muxRanges.empty());
+  CHECK_FALSE(page17->extendedMux);
+}
+
+TEST_CASE("parser reads mNM as a multiplexed multiplexor") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Sub m2M : 8|4@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Leaf m3 : 16|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 Sub Selector 2-2;\n"
+      "SG_MUL_VAL_ 1 Leaf Sub 3-3;\n");
+
+  CHECK(sut.diagnostics.empty());
+  const Signal* sub = signalOf(sut, "Sub");
+  const Signal* leaf = signalOf(sut, "Leaf");
+  REQUIRE(sub != nullptr);
+  REQUIRE(leaf != nullptr);
+  CHECK(sub->muxRole == MuxRole::MultiplexedMultiplexor);
+  CHECK(sub->muxValue == 2);
+  CHECK(sub->muxSwitch == "Selector");
+  CHECK(leaf->muxSwitch == "Sub");
+  CHECK(leaf->extendedMux);
+}
+
+TEST_CASE("parser reads a bare m indicator as a multiplexor") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Code m : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Page1 m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
+
+  CHECK(sut.diagnostics.empty());
+  const Signal* code = signalOf(sut, "Code");
+  const Signal* page1 = signalOf(sut, "Page1");
+  REQUIRE(code != nullptr);
+  REQUIRE(page1 != nullptr);
+  CHECK(code->muxRole == MuxRole::Multiplexor);
+  CHECK(page1->muxSwitch == "Code");
+}
+
+TEST_CASE("parser rejects a malformed multiplexer indicator") {
+  const ParseOutput sut = parseText("BO_ 1 M: 8 Vcu\n SG_ Bad mX : 0|8@1+ (1,0) [0|0] \"\" Vcu\n");
+
+  CHECK(hasError(sut, "bad multiplexer indicator 'mX'"));
+}
+
+TEST_CASE("parser warns about a multiplexed signal in a message without a multiplexor") {
+  const ParseOutput sut = parseText("BO_ 1 M: 8 Vcu\n SG_ Orphan m1 : 0|8@1+ (1,0) [0|0] \"\" Vcu\n");
+
+  CHECK_FALSE(sut.hasErrors());
+  CHECK(hasWarning(sut, "has no multiplexor"));
+}
+
+TEST_CASE("parser reads SG_MUL_VAL_ with one range") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Value m5 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 Value Selector 5-9;\n");
+
+  CHECK(sut.diagnostics.empty());
+  const Signal* value = signalOf(sut, "Value");
+  REQUIRE(value != nullptr);
+  CHECK(value->extendedMux);
+  CHECK(value->muxSwitch == "Selector");
+  CHECK(value->muxRanges == std::vector<MuxRange>{{5, 9}});
+}
+
+TEST_CASE("parser reads SG_MUL_VAL_ with several ranges") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Value m8 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 Value Selector 8-8, 16-16,24-31 ;\n");
+
+  CHECK(sut.diagnostics.empty());
+  const Signal* value = signalOf(sut, "Value");
+  REQUIRE(value != nullptr);
+  CHECK(value->muxRanges == std::vector<MuxRange>{{8, 8}, {16, 16}, {24, 31}});
+}
+
+TEST_CASE("parser assigns two independent multiplexors through SG_MUL_VAL_") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ MuxA M : 0|4@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ MuxB M : 4|4@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ ValueA m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ ValueB m2 : 16|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 ValueA MuxA 1-1;\n"
+      "SG_MUL_VAL_ 1 ValueB MuxB 2-2;\n");
+
+  CHECK(sut.diagnostics.empty());
+  const Signal* valueA = signalOf(sut, "ValueA");
+  const Signal* valueB = signalOf(sut, "ValueB");
+  REQUIRE(valueA != nullptr);
+  REQUIRE(valueB != nullptr);
+  CHECK(valueA->muxSwitch == "MuxA");
+  CHECK(valueB->muxSwitch == "MuxB");
+}
+
+TEST_CASE("parser uses the first multiplexor with a warning when several exist and SG_MUL_VAL_ is missing") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ MuxA M : 0|4@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ MuxB M : 4|4@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Value m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
+
+  CHECK_FALSE(sut.hasErrors());
+  CHECK(hasWarning(sut, "several multiplexors"));
+  const Signal* value = signalOf(sut, "Value");
+  REQUIRE(value != nullptr);
+  CHECK(value->muxSwitch == "MuxA");
+}
+
+TEST_CASE("parser reports SG_MUL_VAL_ naming a multiplexor the message does not have") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Value m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 Value Nobody 1-1;\n");
+
+  CHECK(hasError(sut, "does not have"));
+}
+
+TEST_CASE("parser ignores SG_MUL_VAL_ for a signal that is not multiplexed, with a warning") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Plain : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 Plain Selector 1-1;\n");
+
+  CHECK(hasWarning(sut, "not multiplexed"));
+  const Signal* plain = signalOf(sut, "Plain");
+  REQUIRE(plain != nullptr);
+  CHECK_FALSE(plain->extendedMux);
+  CHECK(plain->muxSwitch.empty());
+}
+
+TEST_CASE("parser reports an SG_MUL_VAL_ range whose upper bound is below its lower bound") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ Value m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 Value Selector 9-3;\n");
+
+  CHECK(hasError(sut, "upper bound below lower bound"));
+}
+
+TEST_CASE("parser reports a multiplexor chain that loops") {
+  const ParseOutput sut = parseText(
+      "BO_ 1 M: 8 Vcu\n"
+      " SG_ A m1M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      " SG_ B m1M : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
+      "SG_MUL_VAL_ 1 A B 1-1;\n"
+      "SG_MUL_VAL_ 1 B A 1-1;\n");
+
+  CHECK(hasError(sut, "loops"));
+}
+
+TEST_CASE("parser reads the multiplexing fixture without diagnostics") {
+  const ParseOutput sut = parse(readFixture("multiplexing.dbc"), "multiplexing.dbc");
+
+  INFO(describe(sut));
+  CHECK(sut.diagnostics.empty());
+  const Message* twoMux = sut.database.findMessage("TwoMultiplexors");
+  REQUIRE(twoMux != nullptr);
+  const Signal* valueB = twoMux->findSignal("ValueB");
+  REQUIRE(valueB != nullptr);
+  CHECK(valueB->muxRanges == std::vector<MuxRange>{{2, 3}, {5, 5}, {8, 15}});
+}
