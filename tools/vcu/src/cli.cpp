@@ -6,6 +6,8 @@
 
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
+#include "signal_commands.hpp"
+#include "status_commands.hpp"
 
 namespace openvcu::cli {
 namespace {
@@ -59,6 +61,8 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     app.get_formatter()->column_width(36);
     CommandContext context{streams};
     registerDbcCommands(app, context);
+    registerSignalCommands(app, context);
+    registerStatusCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

@@ -12,6 +12,7 @@
 #include "openvcu/dbc/model.hpp"
 
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <span>
@@ -100,6 +101,11 @@ class MessageCodec {
 
   /// Extracts one signal's raw value from a buffer holding at least lastByte + 9 bytes.
   static DecodedValue extract(const CompiledSignal& signal, const std::uint8_t* padded) noexcept;
+  /// Masks, sign-extends and scales a signal's raw bits (right-aligned).
+  static DecodedValue toValue(const CompiledSignal& signal, std::uint64_t bits) noexcept;
+  /// Classic-frame fast path: `word` holds payload bytes 0..7 (byte 0 least significant),
+  /// and the signal lies within them (lastByte < 8, so never `wide`).
+  static DecodedValue extractFromWord(const CompiledSignal& signal, std::uint64_t word) noexcept;
 
  private:
   [[nodiscard]] bool selected(const CompiledSignal& signal, const std::uint64_t* slots,
@@ -149,6 +155,10 @@ inline DecodedValue MessageCodec::extract(const CompiledSignal& signal,
       bits = word >> signal.shift;
     }
   }
+  return toValue(signal, bits);
+}
+
+inline DecodedValue MessageCodec::toValue(const CompiledSignal& signal, std::uint64_t bits) noexcept {
   bits &= signal.mask;
 
   DecodedValue value;
@@ -183,6 +193,13 @@ inline DecodedValue MessageCodec::extract(const CompiledSignal& signal,
   return value;
 }
 
+inline DecodedValue MessageCodec::extractFromWord(const CompiledSignal& signal, std::uint64_t word) noexcept {
+  const unsigned byteShift = signal.firstByte * 8;
+  if (signal.byteOrder == ByteOrder::LittleEndian) return toValue(signal, word >> (byteShift + signal.shift));
+  // Bytes 0..7 MSB-first, moved so the signal's first byte leads, as extract()'s window.
+  return toValue(signal, (__builtin_bswap64(word) << byteShift) >> signal.shift);
+}
+
 inline bool MessageCodec::selected(const CompiledSignal& signal, const std::uint64_t* slots,
                                    std::uint32_t activeSlots) const noexcept {
   if (signal.switchSlot < 0) return true;
@@ -201,18 +218,41 @@ DecodeSummary MessageCodec::decode(std::span<const std::uint8_t> payload, Visito
   // Windows read up to 9 bytes past a signal's first byte: decode from a zero-padded copy
   // so no signal ever reads outside the received bytes.
   constexpr std::size_t PAD = 9;
+  const std::size_t length = payload.size();
+  DecodeSummary summary;
+  std::uint64_t slots[MAX_MUX_SLOTS];
+  std::uint32_t activeSlots = 0;
+  if (length <= 8) {
+    // Classic frames: one 64-bit word, a shift and a mask per signal (no padded copy).
+    static_assert(std::endian::native == std::endian::little, "the word fast path assumes a little-endian host");
+    std::uint64_t word = 0;
+    if (length != 0) std::memcpy(&word, payload.data(), length);
+    for (const CompiledSignal& signal : m_signals) {
+      if (!selected(signal, slots, activeSlots)) continue;
+      if (signal.lastByte >= length) {
+        ++summary.missing;
+        continue;
+      }
+      const DecodedValue value = extractFromWord(signal, word);
+      if (signal.ownSlot >= 0) {
+        const auto slot = static_cast<std::uint32_t>(signal.ownSlot);
+        slots[slot] = value.kind == RawKind::Signed ? static_cast<std::uint64_t>(value.rawSigned) & signal.mask
+                                                    : value.rawUnsigned;
+        activeSlots |= 1u << slot;
+      }
+      ++summary.decoded;
+      visit(signal.index, value);
+    }
+    return summary;
+  }
   std::array<std::uint8_t, 64 + PAD> small;
   const std::uint8_t* padded = nullptr;
-  const std::size_t length = payload.size();
   if (length <= 64) {
     if (length != 0) std::memcpy(small.data(), payload.data(), length);  // an empty span may be null
     std::memset(small.data() + length, 0, small.size() - length);
     padded = small.data();
   }
 
-  DecodeSummary summary;
-  std::uint64_t slots[MAX_MUX_SLOTS];
-  std::uint32_t activeSlots = 0;
   for (const CompiledSignal& signal : m_signals) {
     if (!selected(signal, slots, activeSlots)) continue;
     if (signal.lastByte >= length) {

@@ -1,0 +1,80 @@
+#pragma once
+// The one wait of a service: frame subscribers (iceoryx), file descriptors (the LCM event
+// bus, the shutdown signalfd, sockets) and periodic timers, all in one blocking call, with
+// every callback on the service's own thread (no locks in service code) and no busy loop.
+//
+//   auto loopResult = service::Loop::create();
+//   service::Loop& loop = *loopResult;
+//   loop.addFd(events.fileno(), [&] { events.handleAll(); });
+//   loop.addTimer(cycleTimer, [&](const service::TimerTick& tick) { onCycle(tick); });
+//   loop.addSubscriber(rxSubscriber, [&] { while (auto maybeSample = rxSubscriber.take()) onFrame(*maybeSample); });
+//   return loop.run();   // until stop(exitCode)
+//
+// Two back ends, chosen by what is attached:
+//   - no frame subscriber: poll(2) on the fds (a service without iceoryx never needs RouDi);
+//   - from the first addSubscriber on: ipc::Waiter, its WaitSet for the subscribers and
+//     attachFd for every fd (iceoryx 2.0's WaitSet has no fd, docs/design/ipc.md).
+// Either way the wait blocks until something is ready: there is no periodic wake-up.
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+
+#include "openvcu/core/result.hpp"
+#include "openvcu/service/timer.hpp"
+
+namespace openvcu::ipc {
+class FrameSubscriber;
+}
+
+namespace openvcu::service {
+
+struct LoopImpl;
+
+/// @note restricted thread-safe: add/remove/run/runOnce on one thread; stop() from any
+///       thread (not from a signal handler: use ShutdownSignals). Callbacks run inside
+///       run()/runOnce() on that thread and may call add/remove/stop.
+class Loop {
+ public:
+  static Result<Loop> create();
+
+  Loop(Loop&& other) noexcept;
+  Loop& operator=(Loop&& other) noexcept;
+  Loop(const Loop&) = delete;
+  Loop& operator=(const Loop&) = delete;
+  ~Loop();
+
+  /// Calls `onReadable` whenever `fd` is readable (level-triggered: the callback must
+  /// consume what made it readable, or it is called again at once). Fails for a negative
+  /// or already added fd. Remove the fd before closing it.
+  Status addFd(int fd, std::function<void()> onReadable);
+  /// Stops watching `fd` (safe inside a callback).
+  void removeFd(int fd) noexcept;
+
+  /// Calls `onTick` for each tick of `timer` (the loop takes the tick). The timer must
+  /// outlive the loop or be removed (removeFd(timer.fd())).
+  Status addTimer(PeriodicTimer& timer, std::function<void(const TimerTick&)> onTick);
+
+  /// Calls `onData` while `subscriber` holds samples (level-triggered: take them all).
+  /// Needs an initialised ipc::Runtime; switches the loop to the ipc::Waiter back end.
+  /// The subscriber must outlive the loop.
+  Status addSubscriber(ipc::FrameSubscriber& subscriber, std::function<void()> onData);
+
+  /// Waits and dispatches until stop(); returns the code given to stop().
+  int run();
+  /// One wait of at most `timeout`, then the callbacks of what is ready. false once stopped.
+  bool runOnce(std::chrono::nanoseconds timeout);
+
+  /// Makes run() return `exitCode` after the callback in progress (if any) finishes.
+  void stop(int exitCode = 0) noexcept;
+  [[nodiscard]] bool stopped() const noexcept;
+  /// true when the iceoryx back end (ipc::Waiter) is in use.
+  [[nodiscard]] bool usesWaiter() const noexcept;
+
+ private:
+  explicit Loop(std::unique_ptr<LoopImpl> impl) noexcept;
+  std::unique_ptr<LoopImpl> m_impl;
+};
+
+}  // namespace openvcu::service

@@ -1,0 +1,78 @@
+#!/bin/bash
+# Runs one command in a throw-away sandbox: the launcher of every multi-process test
+# (tests/integration, tests/shared/service, anything registered with openvcu_isolated_test).
+#   - private mount namespace with fresh tmpfs on /dev/shm and /tmp: an iox-roudi or a
+#     signal table created inside never meets the machine's (/tmp/roudi, /tmp/*.lock,
+#     /dev/shm/iceoryx_mgmt, /dev/shm/openvcu-*), and /dev/shm of this machine is shared
+#     with other users;
+#   - private network namespace with only `lo` up and 224.0.0.0/4 routed on it: LCM's udpm
+#     multicast works and cannot leave (network rule: loopback only);
+#   - private PID namespace with the command's parent as PID 1: when the command exits, the
+#     kernel ends every process it left behind (iox-roudi, services, java, Xvfb), and
+#     --kill-child does the same when ctest kills us on a timeout.
+# Directories under /tmp that the command needs (the build tree) are bound back into the
+# fresh /tmp at the same path with --keep. Supervisor variables that would leak in from
+# outside (NOTIFY_SOCKET, WATCHDOG_*, JOURNAL_STREAM, OPENVCU_CONFIG) are cleared, and
+# OPENVCU_ISOLATED=1 tells the command it is inside.
+#
+#   run_isolated.sh [--keep DIR]... [--] COMMAND [ARG]...
+#
+# Needs root or unprivileged user namespaces (then it adds --user --map-root-user).
+# Generalises tests/shared/ipc/run_isolated.sh (same sandbox, plus the cleared variables).
+set -euo pipefail
+
+keep=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --keep) keep+=("$2"); shift 2 ;;
+    --) shift; break ;;
+    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+    *) break ;;
+  esac
+done
+if [[ $# -eq 0 ]]; then
+  echo "run_isolated.sh: no command given (see --help)" >&2
+  exit 2
+fi
+
+if [[ "${OPENVCU_ISOLATION_STAGE:-}" != "inside" ]]; then
+  userns=()
+  if [[ "$(id -u)" != 0 ]]; then userns=(--user --map-root-user); fi
+  keepArgs=()
+  for dir in "${keep[@]}"; do keepArgs+=(--keep "$dir"); done
+  OPENVCU_ISOLATION_STAGE=inside exec unshare "${userns[@]}" --mount --net --pid --fork --kill-child \
+    --mount-proc --propagation private -- "$0" "${keepArgs[@]}" -- "$@"
+fi
+
+# ---- inside the namespaces (we are PID 1) ----
+unset OPENVCU_ISOLATION_STAGE NOTIFY_SOCKET WATCHDOG_USEC WATCHDOG_PID JOURNAL_STREAM OPENVCU_CONFIG
+fds=()
+for dir in "${keep[@]}"; do
+  dir="$(cd "$dir" && pwd -P)"
+  exec {fd}<"$dir"  # hold the directory open across the /tmp mount
+  fds+=("$fd:$dir")
+done
+workdir="$(pwd -P)"
+
+mount -t tmpfs -o mode=1777,size=512m openvcu-shm /dev/shm
+mount -t tmpfs -o mode=1777,size=512m openvcu-tmp /tmp
+for entry in "${fds[@]}"; do
+  fd="${entry%%:*}"; dir="${entry#*:}"
+  case "$dir" in
+    /tmp|/tmp/*|/dev/shm|/dev/shm/*)
+      mkdir -p "$dir"
+      # --no-canonicalize: resolve the fd link in the kernel, not to its (now hidden) path
+      mount --no-canonicalize --bind "/proc/$$/fd/$fd" "$dir" ;;
+  esac
+done
+cd "$workdir" 2>/dev/null || true
+
+ipcmd="$(command -v ip || echo /usr/sbin/ip)"
+"$ipcmd" link set lo up
+"$ipcmd" route add 224.0.0.0/4 dev lo
+
+export OPENVCU_ISOLATED=1
+# Not exec: PID 1 ignores default-action signals and must reap orphans; stay the parent.
+set +e
+"$@"
+exit $?

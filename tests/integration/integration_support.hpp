@@ -1,0 +1,58 @@
+#pragma once
+// What every integration case needs: the sandbox check, iox-roudi plus the fixture service
+// started through the harness, and `vcu` run against the integration configuration.
+
+#include <doctest/doctest.h>
+
+#include <string>
+#include <vector>
+
+#include "harness.hpp"
+
+namespace openvcu::integration {
+
+inline const std::string VCU = VCU_BINARY;
+inline const std::string FIXTURE = FIXTURE_SERVICE;
+inline const std::string CONFIG = INTEGRATION_CONFIG;
+/// The instance of tests/data/integration/vehicle.json.
+inline constexpr const char* INSTANCE = "itest";
+/// The fixture's writer id (fixture_service.cpp), shown by `vcu signal get/watch`.
+inline constexpr const char* FIXTURE_WRITER_TEXT = "writer 240";
+
+/// The fixture service's start specification (the same for a restart).
+inline harness::ProcessSpec fixtureSpec() {
+  return harness::ProcessSpec{.name = "fixture", .argv = {FIXTURE, "--config", CONFIG}, .notifyReadiness = true};
+}
+
+/// `vcu <arguments> --config CONFIG`.
+inline harness::CommandResult vcu(harness::Harness& sut, std::vector<std::string> arguments) {
+  std::vector<std::string> argv{VCU};
+  argv.insert(argv.end(), arguments.begin(), arguments.end());
+  argv.emplace_back("--config");
+  argv.push_back(CONFIG);
+  return sut.run(argv);
+}
+
+/// iox-roudi and a ready fixture service, or a failed REQUIRE.
+inline harness::Process& startStack(harness::Harness& sut) {
+  const auto roudi = sut.startRoudi();
+  REQUIRE_STATUS(roudi);
+  auto fixture = sut.start(fixtureSpec());
+  REQUIRE_STATUS(fixture);
+  return **fixture;
+}
+
+inline bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+}  // namespace openvcu::integration
+
+/// Every case starts with this: outside the sandbox it skips with a message.
+#define SKIP_UNLESS_ISOLATED()                 \
+  do {                                         \
+    if (!openvcu::harness::isolated()) {       \
+      MESSAGE(openvcu::harness::NOT_ISOLATED); \
+      return;                                  \
+    }                                          \
+  } while (false)

@@ -1,0 +1,141 @@
+// The loop's poll back end (no iceoryx): fds, timers, stop, removal. The iceoryx back end
+// (frame subscribers through ipc::Waiter) is tested in test_service_runtime with a real RouDi.
+
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <thread>
+
+#include "openvcu/service/loop.hpp"
+
+namespace service = openvcu::service;
+using namespace std::chrono_literals;
+
+namespace {
+
+/// A pipe whose read end a loop watches.
+struct Pipe {
+  Pipe() { REQUIRE(::pipe(fds) == 0); }
+  Pipe(const Pipe&) = delete;
+  Pipe& operator=(const Pipe&) = delete;
+  ~Pipe() {
+    ::close(fds[0]);
+    ::close(fds[1]);
+  }
+  void put() const {
+    const char byte = 'x';
+    REQUIRE(::write(fds[1], &byte, 1) == 1);
+  }
+  void take() const {
+    char byte = 0;
+    REQUIRE(::read(fds[0], &byte, 1) == 1);
+  }
+  [[nodiscard]] int readEnd() const { return fds[0]; }
+  int fds[2]{-1, -1};
+};
+
+service::Loop makeLoop() {
+  auto loopResult = service::Loop::create();
+  REQUIRE(loopResult.ok());
+  return std::move(*loopResult);
+}
+
+}  // namespace
+
+TEST_CASE("a readable fd calls its callback, and an idle loop waits without calling anything") {
+  service::Loop sut = makeLoop();
+  Pipe pipe;
+  int calls = 0;
+  REQUIRE(sut.addFd(pipe.readEnd(),
+                    [&] {
+                      ++calls;
+                      pipe.take();
+                    })
+              .ok());
+
+  pipe.put();
+  CHECK(sut.runOnce(5s));
+  CHECK(calls == 1);
+  CHECK(sut.runOnce(20ms));  // nothing ready: the wait times out
+  CHECK(calls == 1);
+  CHECK_FALSE(sut.usesWaiter());
+}
+
+TEST_CASE("a timer ticks through the loop with its deadline and cycle number") {
+  service::Loop sut = makeLoop();
+  auto timerResult = service::PeriodicTimer::create(2ms);
+  REQUIRE(timerResult.ok());
+  std::vector<service::TimerTick> ticks;
+  REQUIRE(sut.addTimer(*timerResult,
+                       [&](const service::TimerTick& tick) {
+                         ticks.push_back(tick);
+                         if (ticks.size() == 3) sut.stop(0);
+                       })
+              .ok());
+
+  const int exitCode = sut.run();
+
+  CHECK(exitCode == 0);
+  REQUIRE(ticks.size() == 3);
+  CHECK(ticks[0].cycle >= 1);
+  CHECK(ticks[2].cycle > ticks[1].cycle);
+  CHECK(ticks[2].deadline > ticks[1].deadline);
+}
+
+TEST_CASE("stop from another thread ends run with its exit code") {
+  service::Loop sut = makeLoop();
+  constexpr int EXIT_CODE = 3;
+
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(10ms);
+    sut.stop(EXIT_CODE);
+  });
+  const int exitCode = sut.run();
+  stopper.join();
+
+  CHECK(exitCode == EXIT_CODE);
+  CHECK(sut.stopped());
+  CHECK_FALSE(sut.runOnce(0ns));
+}
+
+TEST_CASE("an fd removed inside its own callback is not called again") {
+  service::Loop sut = makeLoop();
+  Pipe pipe;
+  int calls = 0;
+  REQUIRE(sut.addFd(pipe.readEnd(),
+                    [&] {
+                      ++calls;
+                      sut.removeFd(pipe.readEnd());  // leaves the byte unread: level-triggered would call again
+                    })
+              .ok());
+
+  pipe.put();
+  sut.runOnce(1s);
+  sut.runOnce(20ms);
+
+  CHECK(calls == 1);
+}
+
+TEST_CASE("fds are refused when negative or already watched") {
+  service::Loop sut = makeLoop();
+  Pipe pipe;
+  REQUIRE(sut.addFd(pipe.readEnd(), [] {}).ok());
+
+  const auto duplicate = sut.addFd(pipe.readEnd(), [] {});
+  const auto negative = sut.addFd(-1, [] {});
+
+  REQUIRE_FALSE(duplicate.ok());
+  CHECK(duplicate.error().message.find("already watched") != std::string::npos);
+  CHECK_FALSE(negative.ok());
+}
+
+TEST_CASE("a callback that throws stops the loop with exit code 1 instead of unwinding through the wait") {
+  service::Loop sut = makeLoop();
+  Pipe pipe;
+  REQUIRE(sut.addFd(pipe.readEnd(), [] { throw std::runtime_error("bug"); }).ok());
+
+  pipe.put();
+  const int exitCode = sut.run();
+
+  CHECK(exitCode == 1);
+}

@@ -1,0 +1,233 @@
+// `vcu status` and `vcu spy`. Each subcommand's description and footer are its manual.
+#include "status_commands.hpp"
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "diagnostics.hpp"
+#include "openvcu/ipc/event_bus.hpp"
+#include "text_table.hpp"
+
+extern char** environ;
+
+namespace openvcu::cli {
+namespace {
+
+constexpr const char* STATUS_DESCRIPTION = "List the services of a running stack from their heartbeats";
+constexpr const char* STATUS_FOOTER =
+    "Listens to the heartbeats (LCM, channel OPENVCU_<INSTANCE>_HEARTBEAT) for --wait\n"
+    "seconds (default 1.5; services beat once a second) and prints one line per service\n"
+    "process heard: program, pid, uptime, age of its last heartbeat, its status line\n"
+    "('starting', 'ready', 'stopping (SIGTERM)', or its own) and its counters.\n"
+    "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
+    "\n"
+    "Example:\n"
+    "  vcu status --config config/hhea/vehicle.json --wait 3\n"
+    "Exit: 0 at least one service heard, 1 none heard or configuration error, 2 usage\n"
+    "error.\n";
+
+constexpr const char* SPY_DESCRIPTION = "Start lcm-spy with the project's event types";
+constexpr const char* SPY_FOOTER =
+    "Runs shared/ipc/lcm-spy.sh (java lcm.spy.Spy with lcm.jar, jchart2d.jar and the\n"
+    "build's openvcu-lcm-types.jar) on the stack's LCM URL: every OPENVCU_* channel\n"
+    "decoded. The command is built as an argument list, never through a shell.\n"
+    "URL: --lcm-url, else the configuration's (--config or $OPENVCU_CONFIG), else\n"
+    "udpm://239.255.76.67:7667?ttl=0. Types: --types JAR, else the build's jar, else\n"
+    "what lcm-spy.sh finds ($OPENVCU_LCM_TYPES_JAR, build*/shared/ipc/).\n"
+    "Needs a display: headless, run 'xvfb-run -a vcu spy'.\n"
+    "\n"
+    "Examples:\n"
+    "  vcu spy --config config/hhea/vehicle.json\n"
+    "  vcu spy --dry-run\n"
+    "Exit: 0 lcm-spy closed normally, 1 it could not start or failed, 2 usage error.\n";
+
+std::string counterText(const std::vector<ipc::Counter>& counters) {
+  std::string text;
+  for (const ipc::Counter& counter : counters) {
+    if (!text.empty()) text += ' ';
+    text += counter.name + "=" + std::to_string(counter.value);
+  }
+  return text.empty() ? "-" : text;
+}
+
+std::string shellQuoted(const std::string& argument) {
+  if (!argument.empty() && argument.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
+                                                      "_-./:=@%+,") == std::string::npos) {
+    return argument;
+  }
+  std::string quoted = "'";
+  for (const char c : argument) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+/// Ignores SIGINT and SIGQUIT while a foreground child runs (Ctrl-C is the child's), as
+/// system(3) does; restores them afterwards.
+class IgnoreInterruptsScope {
+ public:
+  IgnoreInterruptsScope() {
+    struct sigaction ignore {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    ::sigaction(SIGINT, &ignore, &m_previousInt);
+    ::sigaction(SIGQUIT, &ignore, &m_previousQuit);
+  }
+  IgnoreInterruptsScope(const IgnoreInterruptsScope&) = delete;
+  IgnoreInterruptsScope& operator=(const IgnoreInterruptsScope&) = delete;
+  ~IgnoreInterruptsScope() {
+    ::sigaction(SIGINT, &m_previousInt, nullptr);
+    ::sigaction(SIGQUIT, &m_previousQuit, nullptr);
+  }
+
+ private:
+  struct sigaction m_previousInt {};
+  struct sigaction m_previousQuit {};
+};
+
+void addStatus(CLI::App& app, CommandContext& context) {
+  auto options = std::make_shared<StatusOptions>();
+  CLI::App* status = app.add_subcommand("status", STATUS_DESCRIPTION);
+  status->footer(STATUS_FOOTER);
+  status->add_option("-w,--wait", options->waitSeconds, "seconds to listen (default 1.5)")
+      ->check(CLI::PositiveNumber)
+      ->option_text("SECONDS");
+  addStackOptions(*status, options->stack);
+  status->callback([options, &context] { context.exitCode = runStatus(*options, context.streams); });
+}
+
+void addSpy(CLI::App& app, CommandContext& context) {
+  auto options = std::make_shared<SpyOptions>();
+  CLI::App* spy = app.add_subcommand("spy", SPY_DESCRIPTION);
+  spy->footer(SPY_FOOTER);
+  spy->add_option("--lcm-url", options->lcmUrl, "LCM URL (default: the configuration's)")->option_text("URL");
+  spy->add_option("--types", options->typesJar, "the LCM types jar (default: the build's)")->option_text("JAR");
+  spy->add_flag("--dry-run", options->dryRun, "print the command instead of running it");
+  addStackOptions(*spy, options->stack);
+  spy->callback([options, &context] { context.exitCode = runSpy(*options, context.streams); });
+}
+
+}  // namespace
+
+ExitCode runStatus(const StatusOptions& options, Streams streams) {
+  ExitCode exitCode = ExitCode::Ok;
+  const auto maybeStack = loadStack(options.stack, streams.err, &exitCode);
+  if (!maybeStack) return exitCode;
+  auto eventsResult = ipc::EventBus::open(maybeStack->config.lcmUrl, maybeStack->config.instance);
+  if (!eventsResult) {
+    reportError(streams.err, eventsResult.error().message);
+    return ExitCode::Failure;
+  }
+  ipc::EventBus& events = *eventsResult;
+  std::map<std::pair<std::string, std::int32_t>, ipc::Heartbeat> latest;  // by (program, pid)
+  auto subscribed = events.onHeartbeat([&](const ipc::Heartbeat& heartbeat) {
+    auto& slot = latest[{heartbeat.service, heartbeat.pid}];
+    if (heartbeat.timestampNs >= slot.timestampNs) slot = heartbeat;
+  });
+  if (!subscribed) {
+    reportError(streams.err, subscribed.error().message);
+    return ExitCode::Failure;
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                               std::chrono::duration<double>(options.waitSeconds));
+  while (true) {
+    const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) break;
+    if (events.handle(left) == ipc::HandleResult::Failed) break;
+  }
+  if (latest.empty()) {
+    reportError(streams.err, "no heartbeat on " + events.channel(ipc::EventKind::Heartbeat) + " within " +
+                                 formatNumber(options.waitSeconds) +
+                                 " s (is the stack running? events: " + maybeStack->config.lcmUrl + ")");
+    return ExitCode::Failure;
+  }
+  const std::int64_t now = realtimeNowNs();
+  TextTable table({"SERVICE", "PID", "UPTIME", "LAST BEAT", "STATUS", "COUNTERS"});
+  for (const auto& [key, heartbeat] : latest) {
+    table.addRow({heartbeat.service, std::to_string(heartbeat.pid), formatDuration(heartbeat.uptimeMs * 1'000'000),
+                  formatDuration(std::max<std::int64_t>(0, now - heartbeat.timestampNs)) + " ago",
+                  heartbeat.status.empty() ? "-" : heartbeat.status, counterText(heartbeat.counters)});
+  }
+  std::string out;
+  table.appendTo(out);
+  streams.out.write(out);
+  return ExitCode::Ok;
+}
+
+ExitCode runSpy(const SpyOptions& options, Streams streams) {
+  std::string url = options.lcmUrl;
+  const bool configNamed =
+      !options.stack.configPath.empty() || std::getenv(std::string(CONFIG_ENVIRONMENT_VARIABLE).c_str()) != nullptr;
+  if (url.empty() && configNamed) {
+    ExitCode exitCode = ExitCode::Ok;
+    const auto maybeStack = loadStack(options.stack, streams.err, &exitCode);
+    if (!maybeStack) return exitCode;
+    url = maybeStack->config.lcmUrl;
+  }
+  if (url.empty()) url = std::string(ipc::DEFAULT_EVENT_URL);
+  const std::string script = OPENVCU_LCM_SPY_SCRIPT;
+  if (::access(script.c_str(), X_OK) != 0) {
+    reportError(streams.err, "cannot run " + script + " (lcm-spy wrapper of shared/ipc)");
+    return ExitCode::Failure;
+  }
+  std::string jar = options.typesJar;
+  if (jar.empty() && ::access(OPENVCU_LCM_TYPES_JAR, R_OK) == 0) jar = OPENVCU_LCM_TYPES_JAR;
+  std::vector<std::string> argv{script, "--lcm-url", url};
+  if (!jar.empty()) {
+    argv.emplace_back("--types");
+    argv.push_back(jar);
+  }
+  if (options.dryRun) {
+    std::string line;
+    for (const std::string& argument : argv) line += (line.empty() ? "" : " ") + shellQuoted(argument);
+    streams.out.write(line + "\n");
+    return ExitCode::Ok;
+  }
+  streams.out.flush();
+  streams.err.flush();
+  std::vector<char*> args;
+  for (const std::string& argument : argv) args.push_back(const_cast<char*>(argument.c_str()));
+  args.push_back(nullptr);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t defaults;
+  sigemptyset(&defaults);
+  sigaddset(&defaults, SIGINT);
+  sigaddset(&defaults, SIGQUIT);
+  posix_spawnattr_setsigdefault(&attributes, &defaults);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
+  const IgnoreInterruptsScope ignoreInterrupts;
+  pid_t pid = -1;
+  const int rc = ::posix_spawn(&pid, script.c_str(), nullptr, &attributes, args.data(), environ);
+  posix_spawnattr_destroy(&attributes);
+  if (rc != 0) {
+    reportError(streams.err, "cannot start " + script + ": " + std::strerror(rc));
+    return ExitCode::Failure;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return ExitCode::Ok;
+  reportError(streams.err,
+              "lcm-spy ended with " + (WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
+                                                         : "signal " + std::to_string(WTERMSIG(status))));
+  return ExitCode::Failure;
+}
+
+void registerStatusCommands(CLI::App& app, CommandContext& context) {
+  addStatus(app, context);
+  addSpy(app, context);
+}
+
+}  // namespace openvcu::cli
