@@ -7,7 +7,7 @@
 // stamped by publish; events: CLOCK_REALTIME stamped by publish).
 //
 // Run it isolated (it starts its own iox-roudi and uses multicast on lo):
-//   tests/shared/ipc/run_isolated.sh --keep BUILD -- BUILD/bench/ipc/ipc_latency_bench [--samples N] [--period-us P]
+//   tests/harness/run_isolated.sh --keep BUILD -- BUILD/bench/ipc/ipc_latency_bench [--samples N] [--period-us P]
 
 #include <time.h>
 #include <unistd.h>
@@ -211,7 +211,7 @@ int main(int argc, char** argv) {
 
   if (!ipctest::isolated()) {
     std::cerr << "ipc_latency_bench starts its own iox-roudi and uses multicast: run it inside\n"
-                 "  tests/shared/ipc/run_isolated.sh --keep <build dir> -- <this program>\n";
+                 "  tests/harness/run_isolated.sh --keep <build dir> -- <this program>\n";
     return 1;
   }
   const std::string config = std::string(OPENVCU_SOURCE_DIR) + "/config/iceoryx/roudi.toml";

@@ -18,7 +18,6 @@
 #   run_isolated.sh [--keep DIR]... [--] COMMAND [ARG]...
 #
 # Needs root or unprivileged user namespaces (then it adds --user --map-root-user).
-# Generalises tests/shared/ipc/run_isolated.sh (same sandbox, plus the cleared variables).
 set -euo pipefail
 
 keep=()
