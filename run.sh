@@ -3,7 +3,8 @@
 #
 # The services (can-rx, can-tx, fsm, gpio, hmi, ecu-sim) do not exist yet. Until they do,
 # this installs what is missing, builds the `vcu` tool and checks the embedded HHEA
-# configuration: the vehicle DBC is parsed, validated and summarised.
+# configuration: the vehicle DBC is parsed, validated and summarised, and vehicle.json is
+# loaded into its signal catalog.
 #   ./run.sh                 check and summarise config/hhea
 #   ./run.sh --info          also list every HHEA message and signal
 set -euo pipefail
@@ -25,6 +26,9 @@ cmake --build build --target vcu -j "$(nproc 2>/dev/null || echo 2)" >/dev/null
 vcu=build/bin/vcu
 echo "== openvcu: HHEA compact track loader configuration (config/hhea)"
 "$vcu" dbc check config/hhea/hhea.dbc
+# Loading the signal catalog validates the whole vehicle.json (buses, DBC, internal signals).
+echo "== The operator switches and internal signals of config/hhea/vehicle.json"
+"$vcu" signal list --config config/hhea/vehicle.json 'internal.*'
 if [ $info -eq 1 ]; then
   "$vcu" dbc info config/hhea/hhea.dbc
 else

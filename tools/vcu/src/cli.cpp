@@ -13,7 +13,7 @@ namespace openvcu::cli {
 namespace {
 
 constexpr const char* DESCRIPTION =
-    "vcu: the openvcu command-line tool. Checks, lists and decodes DBC files and CAN logs.";
+    "vcu: the openvcu command-line tool. Checks, lists and decodes DBC files and CAN logs; reads and commands the signals of a running stack.";
 
 constexpr const char* FOOTER =
     "Run 'vcu COMMAND --help' (e.g. 'vcu dbc decode --help') for a command's manual.\n"
