@@ -24,6 +24,13 @@ signals::SignalInfo internalInfo(std::string name, std::string unit, double mini
 
 }  // namespace
 
+std::optional<std::uint8_t> nodeAddress(const dbc::Database& database, const dbc::Node& node) {
+  const auto value = database.attribute(node.attributes, "NmStationAddress", dbc::ObjectType::Node);
+  if (!value || value->kind != dbc::AttributeValue::Kind::Number) return std::nullopt;
+  if (value->number < 0 || value->number > 253) return std::nullopt;  // 254 null, 255 global
+  return static_cast<std::uint8_t>(value->number);
+}
+
 Result<signals::Catalog> buildCatalog(const VehicleConfig& config) {
   std::vector<signals::SignalInfo> list;
   for (const BusConfig& bus : config.buses) {
@@ -60,6 +67,25 @@ Result<signals::Catalog> buildCatalog(const VehicleConfig& config) {
   for (const std::string_view service : SERVICES) {
     list.push_back(internalInfo("service." + std::string(service) + ".heartbeat", "", 0, 1.8e19,
                                 "heartbeat counter of vcu-" + std::string(service)));
+  }
+  for (const BusConfig& bus : config.buses) {
+    list.push_back(internalInfo("bus." + bus.name + ".load", "%", 0, 1000,
+                                "bus load over the last second from the wire time of every frame (can-rx)"));
+    auto state = internalInfo("bus." + bus.name + ".state", "", 0, 4, "link and controller state (can-rx)");
+    state.valueTexts = {{0, "active"}, {1, "warning"}, {2, "passive"}, {3, "bus-off"}, {4, "down"}};
+    list.push_back(std::move(state));
+  }
+  for (const dbc::Node& node : config.database.nodes) {
+    if (node.name == config.node || !nodeAddress(config.database, node)) continue;
+    const std::string prefix = "dm1." + node.name + ".";
+    list.push_back(internalInfo(prefix + "activeDtcs", "", 0, 445, "active DTCs in the node's last DM1 (can-rx)"));
+    for (const char* lamp : {"protectLamp", "amberWarningLamp", "redStopLamp", "malfunctionLamp"}) {
+      auto info = internalInfo(prefix + lamp, "", 0, 3, "DM1 lamp status (can-rx)");
+      info.valueTexts = {{0, "off"}, {1, "on"}, {2, "error"}, {3, "not available"}};
+      list.push_back(std::move(info));
+    }
+    list.push_back(internalInfo(prefix + "firstSpn", "", 0, 524287, "SPN of the first active DTC, 0 when none"));
+    list.push_back(internalInfo(prefix + "firstFmi", "", 0, 31, "FMI of the first active DTC, 0 when none"));
   }
   return signals::Catalog::create(std::move(list));
 }

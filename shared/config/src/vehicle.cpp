@@ -93,7 +93,7 @@ class Loader {
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
     m_check.onlyKeys(root, "", {"instance", "node", "dbc", "buses", "fsm", "schedule", "gpio", "simulation",
-                                "internalSignals", "lcm", "comment"});
+                                "receive", "internalSignals", "lcm", "comment"});
     instance(root);
     dbcFiles(root);
     node(root);
@@ -170,7 +170,8 @@ class Loader {
       const std::string path = JsonChecker::join("/buses", i);
       const Json& item = (*list)[i];
       if (!m_check.isObject(item, path)) continue;
-      m_check.onlyKeys(item, path, {"name", "link", "bitrate", "fd", "messages", "comment"});
+      m_check.onlyKeys(item, path, {"name", "link", "bitrate", "dataBitrate", "fd", "filter", "replay", "messages",
+                                      "comment"});
       BusConfig bus;
       if (auto name = m_check.string(item, path, "name")) {
         if (!validInstanceName(*name)) m_check.error(path + "/name", "bus names are letters, digits, '-', '_'");
@@ -195,10 +196,47 @@ class Loader {
           bus.bitrate = static_cast<std::uint32_t>(*bitrate);
         }
       }
+      if (auto dataBitrate = m_check.number(item, path, "dataBitrate", false)) {
+        if (*dataBitrate < 10000 || *dataBitrate > 16000000 || *dataBitrate != std::floor(*dataBitrate)) {
+          m_check.error(path + "/dataBitrate", "must be a whole number of bit/s between 10000 and 16000000");
+        } else {
+          bus.dataBitrate = static_cast<std::uint32_t>(*dataBitrate);
+        }
+      }
       if (auto fd = m_check.boolean(item, path, "fd", false)) bus.fd = *fd;
+      if (auto filter = m_check.string(item, path, "filter", false)) {
+        if (*filter == "dbc") {
+          bus.filter = BusFilter::Dbc;
+        } else if (*filter == "all") {
+          bus.filter = BusFilter::All;
+        } else {
+          m_check.error(path + "/filter", "must be \"dbc\" (the bus' DBC messages) or \"all\"");
+        }
+      }
+      replay(item, path, bus);
       messages(item, path, bus, owner);
       m_config.buses.push_back(std::move(bus));
     }
+  }
+
+  void replay(const Json& item, const std::string& path, BusConfig& bus) {
+    const Json* settings = m_check.member(item, path, "replay", false);
+    if (!settings) return;
+    const std::string replayPath = path + "/replay";
+    if (!m_check.isObject(*settings, replayPath)) return;
+    m_check.onlyKeys(*settings, replayPath, {"speed", "loop", "channel", "comment"});
+    if (bus.link.kind != LinkKind::Replay) {
+      m_check.error(replayPath, "only a replay:FILE link takes replay settings");
+    }
+    if (auto speed = m_check.number(*settings, replayPath, "speed", false)) {
+      if (!(*speed >= 0.0 && *speed <= 1000.0)) {
+        m_check.error(replayPath + "/speed", "must be between 0 (as fast as possible) and 1000");
+      } else {
+        bus.replay.speed = *speed;
+      }
+    }
+    if (auto loop = m_check.boolean(*settings, replayPath, "loop", false)) bus.replay.loop = *loop;
+    if (auto channel = m_check.string(*settings, replayPath, "channel", false)) bus.replay.channel = *channel;
   }
 
   void messages(const Json& item, const std::string& path, BusConfig& bus,
@@ -251,7 +289,8 @@ class Loader {
     const std::pair<std::string_view, std::string*> entries[] = {{"fsm", &m_config.fsmFile},
                                                                  {"schedule", &m_config.scheduleFile},
                                                                  {"gpio", &m_config.gpioFile},
-                                                                 {"simulation", &m_config.simulationFile}};
+                                                                 {"simulation", &m_config.simulationFile},
+                                                                 {"receive", &m_config.receiveFile}};
     for (const auto& [key, target] : entries) {
       const auto file = m_check.string(root, "", key, false);
       if (!file) continue;

@@ -5,14 +5,17 @@
 // Order (deterministic): for each bus in file order, its messages in the bus' list
 // order ("all" = DBC order), each message's decodable signals in DBC order, keyed
 // "Transmitter.Message.Signal" (the BO_ transmitter as written); then the internal
-// signals: the declared ones ("internal.<name>") in file order, then the built-in ones
-// (BUILTIN_INTERNAL_SIGNALS below, then one heartbeat per service).
+// signals: the declared ones ("internal.<name>") in file order, then the built-in ones:
+// the FSM state, one heartbeat per service, the health of each bus (BUS_HEALTH_FIELDS)
+// and the DM1 summary of each addressed node (DM1_FIELDS).
 
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/signals/catalog.hpp"
 
 #include <array>
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -22,6 +25,16 @@ inline constexpr std::string_view INTERNAL_PREFIX = "internal.";
 
 /// The services of a stack; each has a heartbeat counter "internal.service.<name>.heartbeat".
 inline constexpr std::array<std::string_view, 6> SERVICES = {"can-rx", "can-tx", "fsm", "gpio", "hmi", "ecu-sim"};
+
+/// The J1939 source address of a DBC node (its NmStationAddress attribute), or empty.
+std::optional<std::uint8_t> nodeAddress(const dbc::Database& database, const dbc::Node& node);
+
+/// Per-bus health slots, written by can-rx: "internal.bus.<bus>.<BUS_HEALTH_FIELDS[i]>".
+inline constexpr std::array<std::string_view, 2> BUS_HEALTH_FIELDS = {"load", "state"};
+/// Per-node DM1 slots, for every DBC node with a source address except this VCU:
+/// "internal.dm1.<Node>.<DM1_FIELDS[i]>" (can-rx writes them on the bus plane).
+inline constexpr std::array<std::string_view, 7> DM1_FIELDS = {
+    "activeDtcs", "protectLamp", "amberWarningLamp", "redStopLamp", "malfunctionLamp", "firstSpn", "firstFmi"};
 
 /// Table key of a DBC signal.
 std::string signalKey(const dbc::Message& message, const dbc::Signal& signal);

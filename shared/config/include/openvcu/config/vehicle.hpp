@@ -8,6 +8,7 @@
 //     "dbc": ["hhea.dbc"],
 //     "buses": [{"name": "vehicle", "link": "sim:vehicle", "bitrate": 500000, "messages": "all"}],
 //     "fsm": "fsm.json", "schedule": "schedule.json", "gpio": "gpio.json", "simulation": "simulation.json",
+//     "receive": "receive.json",
 //     "internalSignals": [{"name": "operator.Start", "min": 0, "max": 1, "values": {"0": "Stop", "1": "Start"}}],
 //     "lcm": "udpm://239.255.76.67:7667?ttl=0"
 //   }
@@ -32,11 +33,27 @@ struct Link {
   [[nodiscard]] std::string toString() const;
 };
 
+/// What a link lets through to the services ("filter" in the bus object).
+enum class BusFilter : std::uint8_t {
+  Dbc,  ///< the bus' DBC messages (exact or by PGN) plus the J1939 protocol PGNs (default)
+  All,  ///< every frame (unknown IDs are then counted)
+};
+
+/// "replay" in the bus object: how a replay:FILE link plays its log.
+struct ReplaySettings {
+  double speed{1.0};    ///< 1 = original timing, 2 = twice as fast, 0 = as fast as possible
+  bool loop{false};     ///< start again at the end
+  std::string channel;  ///< only this log channel ("can0"); empty: all
+};
+
 struct BusConfig {
   std::string name;                      ///< logical name: "vehicle", "battery"
   Link link;
   std::uint32_t bitrate{500000};         ///< nominal bit rate, bit/s
+  std::uint32_t dataBitrate{2000000};    ///< CAN FD data-phase bit rate, bit/s
   bool fd{};                             ///< CAN FD
+  BusFilter filter{BusFilter::Dbc};
+  ReplaySettings replay;
   std::vector<std::size_t> messages;     ///< indices into VehicleConfig::database.messages
 };
 
@@ -64,6 +81,7 @@ struct VehicleConfig {
   std::string scheduleFile;
   std::string gpioFile;
   std::string simulationFile;
+  std::string receiveFile;     ///< can-rx's receive settings (receive.json); empty: defaults
   std::vector<InternalSignal> internalSignals;
   std::string lcmUrl{DEFAULT_LCM_URL};
 

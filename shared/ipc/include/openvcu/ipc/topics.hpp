@@ -7,6 +7,9 @@
 //   ("openvcu", "<instance>.<bus>", "rx")    frames received from the bus    (can-rx publishes)
 //   ("openvcu", "<instance>.<bus>", "tx")    frames actually sent on the bus (can-tx publishes)
 //   ("openvcu", "<instance>.<bus>", "send")  one-shot send requests          (can-tx subscribes)
+//   ("openvcu", "<instance>.<bus>", "req")   J1939 requests for this node     (can-rx -> can-tx)
+// and one per simulated bus (the sim:NAME link itself, shared by every stack instance):
+//   ("openvcu", "sim.<NAME>", "wire")        every frame on the simulated bus (sim links)
 //   e.g. FrameTopic{"hhea", "vehicle", FrameStream::Received} -> ("openvcu", "hhea.vehicle", "rx")
 //
 // Each topic carries FrameSample, 120 bytes of plain data living in iceoryx shared memory
@@ -65,6 +68,8 @@ enum class FrameStream : std::uint8_t {
   Received,     ///< "rx": frames read from the bus
   Sent,         ///< "tx": frames written to the bus
   SendRequest,  ///< "send": one-shot frames others ask can-tx to send
+  Request,      ///< "req": J1939 Request frames (PGN 59904) addressed to this node, for can-tx
+  SimWire,      ///< "wire": the simulated bus itself (FrameTopic{"sim", NAME, SimWire})
 };
 
 inline constexpr std::string_view FRAME_TOPIC_SERVICE = "openvcu";
@@ -78,6 +83,10 @@ constexpr std::string_view eventName(FrameStream stream) noexcept {
       return "tx";
     case FrameStream::SendRequest:
       return "send";
+    case FrameStream::Request:
+      return "req";
+    case FrameStream::SimWire:
+      return "wire";
   }
   return "rx";
 }

@@ -1,0 +1,228 @@
+#include "can_rx_app.hpp"
+
+#include <array>
+#include <deque>
+#include <optional>
+
+#include "openvcu/can/open_link.hpp"
+#include "openvcu/ipc/frame_stream.hpp"
+#include "receiver.hpp"
+
+namespace openvcu::canrx {
+namespace {
+
+constexpr std::size_t BATCH = 64;
+
+can::LinkOptions linkOptions(const config::BusConfig& bus, std::vector<can::IdFilter> filters) {
+  can::LinkOptions options;
+  options.bitrate = bus.bitrate;
+  options.dataBitrate = bus.dataBitrate;
+  options.fd = bus.fd;
+  if (bus.filter == config::BusFilter::Dbc) options.filters = std::move(filters);
+  options.replaySpeed = bus.replay.speed;
+  options.replayLoop = bus.replay.loop;
+  options.replayChannel = bus.replay.channel;
+  return options;
+}
+
+can::LinkKind linkKind(config::LinkKind kind) {
+  switch (kind) {
+    case config::LinkKind::SocketCan:
+      return can::LinkKind::SocketCan;
+    case config::LinkKind::Sim:
+      return can::LinkKind::Sim;
+    case config::LinkKind::Replay:
+      return can::LinkKind::Replay;
+  }
+  return can::LinkKind::Sim;
+}
+
+void fill(ipc::FrameSample& sample, const can::Frame& frame, std::int64_t monotonicNs, std::size_t bus) noexcept {
+  sample.frame = frame;
+  sample.monotonicNs = monotonicNs;
+  sample.hardwareNs = frame.timestampNs;
+  sample.busIndex = static_cast<std::uint16_t>(bus);
+}
+
+}  // namespace
+
+struct BusIo {
+  std::unique_ptr<can::Link> link;
+  std::optional<ipc::FramePublisher> received;
+  std::optional<ipc::FramePublisher> sent;
+  std::optional<ipc::FramePublisher> requests;
+  std::optional<ipc::FramePublisher> sendRequests;  ///< only for forwarding targets
+  std::uint64_t publishFailures{};
+  std::uint64_t forwardFailures{};
+  std::uint64_t transmitFailures{};
+};
+
+struct CanRxAppImpl final : ReceiverOutputs {
+  service::Service& runtime;
+  std::deque<BusIo> buses;  // deque: stable addresses for the loop's callbacks
+  std::optional<Receiver> receiver;
+  std::optional<service::PeriodicTimer> tick;
+  std::int64_t nextWindowNs{};
+  std::array<can::ReceivedFrame, BATCH> batch{};
+
+  explicit CanRxAppImpl(service::Service& service) : runtime(service) {}
+
+  // ---- ReceiverOutputs --------------------------------------------------------------------
+
+  static bool publish(std::optional<ipc::FramePublisher>& publisher, const can::Frame& frame,
+                      std::int64_t monotonicNs, std::size_t bus) noexcept {
+    if (!publisher) return false;
+    std::optional<ipc::FrameLoan> maybeLoan = publisher->loan();
+    if (!maybeLoan) return false;
+    fill(maybeLoan->sample(), frame, monotonicNs, bus);
+    return publisher->publish(std::move(*maybeLoan));
+  }
+
+  void received(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
+    if (!publish(buses[bus].received, frame.frame, frame.monotonicNs, bus)) ++buses[bus].publishFailures;
+  }
+  void request(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
+    if (!publish(buses[bus].requests, frame.frame, frame.monotonicNs, bus)) ++buses[bus].publishFailures;
+  }
+  void forward(std::size_t toBus, const can::Frame& frame) noexcept override {
+    if (!publish(buses[toBus].sendRequests, frame, signals::monotonicNowNs(), toBus)) ++buses[toBus].forwardFailures;
+  }
+  bool transmit(std::size_t bus, const can::Frame& frame) noexcept override {
+    BusIo& io = buses[bus];
+    if (io.link->send(frame) != can::SendStatus::Sent) {
+      ++io.transmitFailures;
+      return false;
+    }
+    (void)publish(io.sent, frame, signals::monotonicNowNs(), bus);
+    return true;
+  }
+  void fault(const ipc::FaultEvent& event) override {
+    runtime.events().publish(event);
+    const std::string text = (event.active ? "fault raised: " : "fault cleared: ") + event.name + ": " + event.text;
+    if (event.active) {
+      runtime.log().warning(text);
+    } else {
+      runtime.log().info(text);
+    }
+  }
+
+  // ---- the loop ---------------------------------------------------------------------------
+
+  void drain(std::size_t bus) noexcept {
+    can::Link& link = *buses[bus].link;
+    for (;;) {
+      const std::size_t count = link.receive(batch);
+      for (std::size_t i = 0; i < count; ++i) receiver->onFrame(bus, batch[i]);
+      if (count < batch.size()) break;
+    }
+    while (const std::optional<can::BusEvent> maybeEvent = link.nextEvent()) receiver->onBusEvent(bus, *maybeEvent);
+  }
+
+  void onTick() noexcept {
+    const std::int64_t now = signals::monotonicNowNs();
+    receiver->onTick(now);
+    if (now >= nextWindowNs) {
+      receiver->rollPeriodWindow();
+      nextWindowNs = now + 1'000'000'000;
+    }
+  }
+
+  Status open() {
+    const config::VehicleConfig& vehicle = runtime.config();
+    auto receiveResult = loadReceiveConfig(vehicle);
+    if (!receiveResult) return receiveResult.error();
+    const std::int64_t start = signals::monotonicNowNs();
+    auto receiverResult =
+        Receiver::create(vehicle, std::move(*receiveResult), runtime.catalog(), runtime.table(), *this, start);
+    if (!receiverResult) return receiverResult.error();
+    receiver.emplace(std::move(*receiverResult));
+
+    const std::string& instance = runtime.instance();
+    for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
+      const config::BusConfig& bus = vehicle.buses[b];
+      BusIo& io = buses.emplace_back();
+      auto linkResult = can::openLink(linkKind(bus.link.kind), bus.link.target, linkOptions(bus, receiver->filters(b)));
+      if (!linkResult) return Error{"bus '" + bus.name + "': " + linkResult.error().message};
+      io.link = std::move(*linkResult);
+      for (auto [stream, slot] : {std::pair{ipc::FrameStream::Received, &io.received},
+                                  std::pair{ipc::FrameStream::Sent, &io.sent},
+                                  std::pair{ipc::FrameStream::Request, &io.requests},
+                                  std::pair{ipc::FrameStream::SendRequest, &io.sendRequests}}) {
+        auto publisherResult = ipc::FramePublisher::create({instance, bus.name, stream});
+        if (!publisherResult) return Error{"bus '" + bus.name + "': " + publisherResult.error().message};
+        slot->emplace(std::move(*publisherResult));
+      }
+    }
+    for (std::size_t b = 0; b < buses.size(); ++b) {
+      const can::WaitHandle handle = buses[b].link->waitHandle();
+      Status added = handle.subscriber != nullptr
+                         ? runtime.loop().addSubscriber(*handle.subscriber, [this, b] { drain(b); })
+                         : runtime.loop().addFd(handle.fd, [this, b] { drain(b); });
+      if (!added) return added.error();
+    }
+    auto tickResult = service::PeriodicTimer::create(std::chrono::nanoseconds{receiver->tickPeriodNs()});
+    if (!tickResult) return tickResult.error();
+    tick.emplace(std::move(*tickResult));
+    if (Status added = runtime.loop().addTimer(*tick, [this](const service::TimerTick&) { onTick(); }); !added) {
+      return added.error();
+    }
+    registerCounters();
+    return {};
+  }
+
+  void registerCounters() {
+    const config::VehicleConfig& vehicle = runtime.config();
+    for (std::size_t b = 0; b < buses.size(); ++b) {
+      const std::string prefix = vehicle.buses[b].name + ".";
+      auto add = [&](const char* name, auto read) {
+        runtime.heartbeat().addCounterSource(prefix + name, [this, b, read] {
+          return static_cast<std::int64_t>(read(receiver->counters(b), buses[b]));
+        });
+      };
+      add("frames", [](const BusCounters& c, const BusIo&) { return c.frames; });
+      add("decoded", [](const BusCounters& c, const BusIo&) { return c.decoded; });
+      add("own_frames", [](const BusCounters& c, const BusIo&) { return c.ownFrames; });
+      add("unknown_ids", [](const BusCounters& c, const BusIo&) { return c.unknownIds; });
+      add("decode_errors", [](const BusCounters& c, const BusIo&) { return c.decodeErrors; });
+      add("out_of_range", [](const BusCounters& c, const BusIo&) { return c.outOfRange; });
+      add("timeouts", [](const BusCounters& c, const BusIo&) { return c.timeouts; });
+      add("requests", [](const BusCounters& c, const BusIo&) { return c.requests; });
+      add("tp_sessions", [](const BusCounters& c, const BusIo&) { return c.tpSessions; });
+      add("tp_completed", [](const BusCounters& c, const BusIo&) { return c.tpCompleted; });
+      add("tp_aborted", [](const BusCounters& c, const BusIo&) { return c.tpAborted; });
+      add("dm1", [](const BusCounters& c, const BusIo&) { return c.dm1Messages; });
+      add("safety_failures", [](const BusCounters& c, const BusIo&) { return c.safetyFailures; });
+      add("forwarded", [](const BusCounters& c, const BusIo&) { return c.forwarded; });
+      add("bus_errors", [](const BusCounters& c, const BusIo&) { return c.busErrors; });
+      add("load_permille", [](const BusCounters& c, const BusIo&) { return c.loadPermille; });
+      add("dropped", [](const BusCounters&, const BusIo& io) { return io.link->stats().receiveDropped; });
+      add("publish_failures", [](const BusCounters&, const BusIo& io) { return io.publishFailures; });
+      add("forward_failures", [](const BusCounters&, const BusIo& io) { return io.forwardFailures; });
+      add("transmit_failures", [](const BusCounters&, const BusIo& io) { return io.transmitFailures; });
+    }
+    for (const std::size_t messageIndex : receiver->trackedMessages()) {
+      const std::string prefix = "rx." + vehicle.database.messages[messageIndex].name + ".";
+      auto add = [&](const char* name, auto read) {
+        runtime.heartbeat().addCounterSource(prefix + name, [this, messageIndex, read] {
+          return static_cast<std::int64_t>(read(receiver->messageCounters(messageIndex)));
+        });
+      };
+      add("frames", [](const MessageCounters& c) { return c.frames; });
+      add("cycle_us", [](const MessageCounters& c) { return c.dbcCycleNs / 1000; });
+      add("period_us", [](const MessageCounters& c) { return c.meanPeriodNs / 1000; });
+      add("max_period_us", [](const MessageCounters& c) { return c.maxPeriodNs / 1000; });
+      add("stale", [](const MessageCounters& c) { return c.stale ? 1 : 0; });
+    }
+  }
+};
+
+Result<std::unique_ptr<CanRxApp>> CanRxApp::create(service::Service& runtime) {
+  auto impl = std::make_unique<CanRxAppImpl>(runtime);
+  if (Status opened = impl->open(); !opened) return opened.error();
+  return std::unique_ptr<CanRxApp>(new CanRxApp(std::move(impl)));
+}
+
+CanRxApp::CanRxApp(std::unique_ptr<CanRxAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
+CanRxApp::~CanRxApp() = default;
+
+}  // namespace openvcu::canrx

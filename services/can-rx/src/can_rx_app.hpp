@@ -1,0 +1,36 @@
+#pragma once
+// vcu-can-rx as an object over the service runtime: opens every configured bus's link,
+// the iceoryx streams ("rx", "tx" for its own TP answers, "req", and the "send" streams of
+// forwarding targets), builds the Receiver and puts links and timers into the loop.
+//
+//   auto appResult = canrx::CanRxApp::create(runtime);   // runtime: service::Service
+//   if (!appResult) return service::reportStartupError(info, appResult.error());
+//   return runtime.run();
+
+#include <memory>
+
+#include "openvcu/core/result.hpp"
+#include "openvcu/service/service.hpp"
+
+namespace openvcu::canrx {
+
+inline constexpr signals::WriterId CAN_RX_WRITER = 1;
+
+struct CanRxAppImpl;
+
+/// @note restricted thread-safe: lives on the service's loop thread.
+class CanRxApp {
+ public:
+  /// Loads the receive settings, opens links and streams, registers with the loop and the
+  /// heartbeat. Errors name the file, the JSON path or the link.
+  static Result<std::unique_ptr<CanRxApp>> create(service::Service& runtime);
+  ~CanRxApp();
+  CanRxApp(const CanRxApp&) = delete;
+  CanRxApp& operator=(const CanRxApp&) = delete;
+
+ private:
+  explicit CanRxApp(std::unique_ptr<CanRxAppImpl> impl) noexcept;
+  std::unique_ptr<CanRxAppImpl> m_impl;
+};
+
+}  // namespace openvcu::canrx

@@ -1,0 +1,63 @@
+#pragma once
+// can-rx's own settings: the file named by "receive" in the vehicle configuration
+// (config/hhea/receive.json). Every key is optional; without the file the defaults hold.
+//
+//   {
+//     "timeoutFactor": 3,                                  // timeout = 3 x the DBC cycle
+//     "messages": {"HVESSS1_PGN61590": {"timeoutMs": 300}, "HVESSHIST_PGN64606": {"timeoutMs": 0}},
+//     "safety": [{"message": "S1_ES_PGN61427", "maxDelayMs": 10, "headerCycleMs": 60}],
+//     "forward": [{"from": "vehicle", "to": "battery", "id": "0x18FF5071", "rewriteId": "0x18FF5021"},
+//                 {"from": "vehicle", "to": "battery", "pgn": 65280, "source": "0x71"}],
+//     "transport": {"maxPacketsPerCts": 16},
+//     "dm1": true
+//   }
+// Reference: services/can-rx/README.md.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "openvcu/config/vehicle.hpp"
+#include "openvcu/core/result.hpp"
+
+namespace openvcu::canrx {
+
+/// A J1939-76 safety data group another node sends us: the SDM (a DBC message) and the
+/// receiver's time limits. The SHM identifier follows from the SDM's.
+struct SafetyGroup {
+  std::size_t dataMessage{};             ///< index into the database's messages
+  std::int64_t maxHeaderToDataNs{};      ///< SRVT: SHM -> SDM
+  std::int64_t maxHeaderCycleNs{};       ///< SCT: SHM -> next SHM
+};
+
+/// Copy frames of one bus to another through can-tx's send-request stream.
+struct ForwardRule {
+  std::size_t fromBus{};
+  std::size_t toBus{};
+  bool byPgn{};                        ///< true: match the J1939 PGN (extended frames); false: the exact ID
+  std::uint32_t id{};                  ///< the ID (byPgn false) or the PGN (byPgn true)
+  bool extended{true};                 ///< for byPgn false: 29-bit ID (IDs above 0x7FF always are)
+  std::optional<std::uint8_t> source;  ///< byPgn: only from this source address
+  std::optional<std::uint32_t> rewriteId;  ///< send with this ID instead (same ID kind)
+};
+
+struct ReceiveConfig {
+  double timeoutFactor{3.0};
+  /// Per DBC message (by index): receive timeout in ns, 0 = never stale. Filled for every
+  /// message; those this node transmits have 0.
+  std::vector<std::int64_t> timeoutNs;
+  std::vector<SafetyGroup> safety;
+  std::vector<ForwardRule> forward;
+  std::uint8_t maxPacketsPerCts{16};
+  bool dm1{true};
+};
+
+/// The defaults for `vehicle` (timeouts = factor x GenMsgCycleTime of received messages).
+ReceiveConfig defaultReceiveConfig(const config::VehicleConfig& vehicle);
+
+/// Loads vehicle.receiveFile (defaults when it is empty). Errors name the file and the
+/// JSON path ("receive.json: /messages/HVESS1: unknown message; did you mean ...").
+Result<ReceiveConfig> loadReceiveConfig(const config::VehicleConfig& vehicle);
+
+}  // namespace openvcu::canrx
