@@ -433,6 +433,8 @@ Result<Process*> Harness::start(ProcessSpec spec, std::chrono::milliseconds read
   Process* process = *started;
   if (!notify) return process;
   if (waitForNotify(*process, "READY=1", readyTimeout)) return process;
+  // A captured process's output reaches its log file only as it is read: drain it first.
+  for (int chunk = 0; chunk < 64 && process->m_outFd >= 0; ++chunk) process->pump(std::chrono::milliseconds{100});
   if (!process->running()) {
     return Error{name + " (pid " + std::to_string(process->pid()) + ") exited with " +
                  process->exitStatus()->toString() + " before READY=1:\n" + readWholeFile(process->logPath(), 4000)};

@@ -115,7 +115,28 @@ struct CanRxAppImpl final : ReceiverOutputs {
       for (std::size_t i = 0; i < count; ++i) receiver->onFrame(bus, batch[i]);
       if (count < batch.size()) break;
     }
-    while (const std::optional<can::BusEvent> maybeEvent = link.nextEvent()) receiver->onBusEvent(bus, *maybeEvent);
+    while (const std::optional<can::BusEvent> maybeEvent = link.nextEvent()) {
+      receiver->onBusEvent(bus, *maybeEvent);
+      logBusEvent(bus, *maybeEvent);
+    }
+  }
+
+  /// State changes are logged; the frequent error classes are only counted.
+  void logBusEvent(std::size_t bus, const can::BusEvent& event) noexcept {
+    switch (event.kind) {
+      case can::BusEventKind::ProtocolError:
+      case can::BusEventKind::NoAck:
+      case can::BusEventKind::RxOverflow:
+      case can::BusEventKind::TxTimeout:
+        return;
+      default:
+        break;
+    }
+    try {
+      runtime.log().info("bus " + runtime.config().buses[bus].name + " (" + buses[bus].link->name() +
+                         "): " + std::string(can::busEventName(event.kind)));
+    } catch (...) {
+    }
   }
 
   void onTick() noexcept {

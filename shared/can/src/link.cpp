@@ -16,6 +16,7 @@ std::string_view linkKindName(LinkKind kind) noexcept {
 
 bool passes(std::span<const IdFilter> filters, const Frame& frame) noexcept {
   if (filters.empty() || (frame.flags & FLAG_ERROR) != 0) return true;
+  if ((frame.flags & FLAG_RTR) != 0) return false;  // filters accept data frames only, as on socketcan
   const bool extended = frame.extended();
   for (const IdFilter& filter : filters) {
     if (filter.extended == extended && (frame.id & filter.mask) == (filter.id & filter.mask)) return true;

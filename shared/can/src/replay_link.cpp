@@ -117,7 +117,10 @@ class ReplayLinkImpl final : public ReplayLink {
           m_state = readAhead(budget);
           break;
         case State::AtEnd:
-          if (!m_options.replayLoop || m_framesThisPass == 0) {
+          if (!m_options.replayLoop) {
+            finish(nowNs);
+          } else if (m_framesThisPass == 0) {
+            noteProblem("the log no longer holds a frame to replay");
             finish(nowNs);
           } else if (restarted) {
             more = false;  // one pass per call: come back through the event loop
@@ -267,6 +270,13 @@ class ReplayLinkImpl final : public ReplayLink {
     }
     m_malformedEarlierPasses += m_reader ? m_reader->errorCount() : 0;
     m_reader.reset();  // closes the file and frees the read buffer
+  }
+
+  void noteProblem(const char* message) noexcept {
+    try {
+      m_problem = Error{message, Location{m_path, 0, 0, {}}};
+    } catch (...) {  // out of memory: the ReplayFinished event still tells
+    }
   }
 
   /// The reader's last error outlives the reader (it is replaced on every pass).

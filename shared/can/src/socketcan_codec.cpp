@@ -124,8 +124,7 @@ bool toCanFrame(const Frame& frame, can_frame& out) noexcept {
 }
 
 bool toCanFdFrame(const Frame& frame, canfd_frame& out) noexcept {
-  if ((frame.flags & FLAG_FD) == 0 || (frame.flags & (FLAG_RTR | FLAG_ERROR)) != 0 ||
-      frame.length > MAX_DATA_LENGTH) {
+  if ((frame.flags & FLAG_FD) == 0 || (frame.flags & (FLAG_RTR | FLAG_ERROR)) != 0 || frame.length > MAX_DATA_LENGTH) {
     return false;
   }
   const std::optional<canid_t> maybeId = kernelId(frame, false);
@@ -164,8 +163,7 @@ Frame fromCanFdFrame(const canfd_frame& in) noexcept {
   return frame;
 }
 
-std::size_t encodeSocketFrame(const Frame& frame, bool fdLink,
-                              std::span<std::uint8_t, FD_DATAGRAM_SIZE> out) noexcept {
+std::size_t encodeSocketFrame(const Frame& frame, bool fdLink, std::span<std::uint8_t, FD_DATAGRAM_SIZE> out) noexcept {
   if (frame.fd()) {
     canfd_frame fdFrame;
     if (!fdLink || !toCanFdFrame(frame, fdFrame)) return 0;

@@ -4,7 +4,6 @@
 
 #include "openvcu/can/socketcan_link.hpp"
 
-#include <linux/can/error.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <net/if_arp.h>
@@ -67,7 +66,9 @@ struct ClockReading {
   std::int64_t monotonicNs{};
 };
 
-ClockReading readClocks() noexcept { return {clockNs(CLOCK_REALTIME), clockNs(CLOCK_MONOTONIC)}; }
+ClockReading readClocks() noexcept {
+  return {clockNs(CLOCK_REALTIME), clockNs(CLOCK_MONOTONIC)};
+}
 
 /// A zero or tiny reopen interval must not turn the timer into a busy loop.
 constexpr std::chrono::milliseconds MIN_REOPEN_INTERVAL{10};
@@ -90,12 +91,18 @@ struct alignas(8) DatagramBuffer {  // canfd_frame's alignment (data is aligned(
 };
 
 /// errno values of a non-blocking recv/send that only mean "not now".
-bool isTransient(int error) noexcept { return error == EAGAIN || error == EWOULDBLOCK || error == EINTR; }
+bool isTransient(int error) noexcept {
+  return error == EAGAIN || error == EWOULDBLOCK || error == EINTR;
+}
 
 /// errno values of send() that mean the kernel's transmit queue is full.
-bool isQueueFull(int error) noexcept { return isTransient(error) || error == ENOBUFS; }
+bool isQueueFull(int error) noexcept {
+  return isTransient(error) || error == ENOBUFS;
+}
 
-SocketAttempt failed(int errorNumber, const char* what = "") noexcept { return SocketAttempt{-1, errorNumber, what}; }
+SocketAttempt failed(int errorNumber, const char* what = "") noexcept {
+  return SocketAttempt{-1, errorNumber, what};
+}
 
 /// Fills ifr_name; false when the name does not fit (the kernel would say ENODEV).
 bool setInterfaceName(ifreq& request, const char* interface) noexcept {
@@ -126,7 +133,7 @@ class SocketCanLink final : public Link {
     } else {
       m_userFilters = options.filters;
     }
-    m_setup.interface = m_interface.c_str();
+    m_setup.interfaceName = m_interface.c_str();
     m_setup.fd = options.fd;
     m_setup.errorFrames = options.errorFrames;
     m_setup.kernelFilters = !options.filters.empty() && m_userFilters.empty();
@@ -260,12 +267,13 @@ std::size_t SocketCanLink::receive(std::span<ReceivedFrame> out) noexcept {
       m_messages[i].msg_hdr.msg_flags = 0;
       m_messages[i].msg_len = 0;
     }
-    const int count = ::recvmmsg(m_socket.get(), m_messages.data(), static_cast<unsigned int>(wanted), MSG_DONTWAIT,
-                                 nullptr);
+    const int count =
+        ::recvmmsg(m_socket.get(), m_messages.data(), static_cast<unsigned int>(wanted), MSG_DONTWAIT, nullptr);
     if (count <= 0) {
       // EAGAIN: drained. EINTR: the wait handle stays readable, the caller comes back.
       // ENETDOWN (interface down), ENODEV (interface gone) or anything else: start over.
-      if (count < 0 && !isTransient(errno)) goDown(errno);
+      const int error = count < 0 ? errno : 0;
+      if (error != 0 && !isTransient(error)) goDown(error);
       break;
     }
     const ClockReading clocks = readClocks();
@@ -347,11 +355,11 @@ SocketAttempt openRawCanSocket(const SocketSetup& setup) noexcept {
   if (!socket.valid()) return failed(errno);  // EAFNOSUPPORT: no SocketCAN in this kernel
   const int fd = socket.get();
 
-  const unsigned int interfaceIndex = ::if_nametoindex(setup.interface);
+  const unsigned int interfaceIndex = ::if_nametoindex(setup.interfaceName);
   if (interfaceIndex == 0) return failed(errno == 0 ? ENODEV : errno);
 
   ifreq request{};
-  if (!setInterfaceName(request, setup.interface)) return failed(ENODEV);
+  if (!setInterfaceName(request, setup.interfaceName)) return failed(ENODEV);
   if (::ioctl(fd, SIOCGIFHWADDR, &request) != 0) return failed(errno, "cannot read the interface type");
   if (request.ifr_hwaddr.sa_family != ARPHRD_CAN) return failed(EMEDIUMTYPE);
   if (setup.fd) {
@@ -365,9 +373,8 @@ SocketAttempt openRawCanSocket(const SocketSetup& setup) noexcept {
   if (setup.fd && !setOption(fd, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, ON)) {
     return failed(errno, "cannot enable CAN FD frames (CAN_RAW_FD_FRAMES)");
   }
-  if (setup.kernelFilters &&
-      ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, setup.filters.data(),
-                   static_cast<socklen_t>(setup.filters.size_bytes())) != 0) {
+  if (setup.kernelFilters && ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, setup.filters.data(),
+                                          static_cast<socklen_t>(setup.filters.size_bytes())) != 0) {
     return failed(errno, "cannot set the receive filters (CAN_RAW_FILTER)");
   }
   constexpr can_err_mask_t ALL_ERROR_CLASSES = CAN_ERR_MASK;
@@ -406,7 +413,8 @@ Result<std::unique_ptr<Link>> openSocketCanLinkWith(const std::string& interface
     return Error{openErrorMessage(interface, "cannot watch the reopen timer", errno)};
   }
 
-  auto link = std::make_unique<SocketCanLink>(interface, options, std::move(opener), std::move(epoll), std::move(timer));
+  auto link =
+      std::make_unique<SocketCanLink>(interface, options, std::move(opener), std::move(epoll), std::move(timer));
   const SocketAttempt attempt = link->openFirst();
   if (attempt.fd >= 0) {
     if (const int error = link->adopt(attempt.fd); error != 0) {

@@ -7,17 +7,17 @@ namespace openvcu::can {
 namespace {
 
 /// CRC-15 generator x^15+x^14+x^10+x^8+x^7+x^4+x^3+1 without its x^15 term
-/// (ISO 11898-1:2015 10.4.2.6): 0x4599 (17817).
+/// (ISO 11898-1:2015, CRC sequence): 0x4599 (17817).
 constexpr std::uint16_t CRC15_POLYNOMIAL = 0x4599;
 constexpr std::uint16_t CRC15_MASK = 0x7FFF;
 
-/// Consecutive equal bits after which a complementary stuff bit follows (ISO 11898-1 10.5).
+/// Consecutive equal bits after which a complementary stuff bit follows (ISO 11898-1:2015, bit stuffing).
 constexpr std::uint8_t STUFF_RUN = 5;
 
 /// CRC delimiter (1) + ACK slot (1) + ACK delimiter (1) + EOF (7) + intermission (3).
 constexpr std::uint32_t TRAILER_BITS = 13;
 
-/// CAN FD: stuff count field = 3-bit Gray-coded count + parity (ISO 11898-1:2015 10.4.2.6).
+/// CAN FD: stuff count field = 3-bit Gray-coded count + parity (ISO 11898-1:2015, CAN FD CRC field).
 constexpr std::uint32_t FD_STUFF_COUNT_BITS = 4;
 constexpr std::uint32_t FD_CRC17_BITS = 17;
 constexpr std::uint32_t FD_CRC21_BITS = 21;

@@ -498,3 +498,25 @@ TEST_CASE("the tick period is a quarter of the shortest timeout, within 5..100 m
   Fixture f;
   CHECK(f.sut->tickPeriodNs() == 15 * MS);  // ECU1_Status: 60 ms
 }
+
+TEST_CASE("a BAM from one node and an RTS/CTS transfer from another, interleaved, both complete") {
+  Fixture f;
+  // ECU1 broadcasts ECU1_Big (20 bytes) while the BMS sends us a DM1 with 2 DTCs (10 bytes) by RTS/CTS.
+  f.sut->onFrame(BUS_A, frameOf(0x1CECFF10, {0x20, 20, 0, 3, 0xFF, 0x30, 0xFF, 0x00}, START + 1 * MS));
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC21F3, {0x10, 10, 0, 2, 0xFF, 0xCA, 0xFE, 0x00}, START + 2 * MS));
+  REQUIRE(f.outputs.transmitted.size() == 1);
+  CHECK(f.outputs.transmitted[0].second.id == 0x1CECF321);  // CTS to the BMS
+  f.sut->onFrame(BUS_A, frameOf(0x1CEBFF10, {1, 0xAA, 0xBB, 3, 4, 5, 6, 7}, START + 3 * MS));
+  f.sut->onFrame(BUS_A, frameOf(0x1CEB21F3, {1, 0x00, 0xFF, 77, 0, 2, 1, 88}, START + 4 * MS));
+  f.sut->onFrame(BUS_A, frameOf(0x1CEBFF10, {2, 8, 9, 10, 11, 12, 13, 14}, START + 5 * MS));
+  f.sut->onFrame(BUS_A, frameOf(0x1CEB21F3, {2, 0, 4, 1, 0xFF, 0xFF, 0xFF, 0xFF}, START + 6 * MS));
+  f.sut->onFrame(BUS_A, frameOf(0x1CEBFF10, {3, 15, 16, 17, 18, 0x34, 0x12, 0xFF}, START + 7 * MS));
+  CHECK(f.bus("ECU1.ECU1_Big.First").value == 0xBBAA);
+  CHECK(f.bus("ECU1.ECU1_Big.Last").value == 0x1234);
+  CHECK(f.bus("internal.dm1.BMS.activeDtcs").value == 2.0);
+  CHECK(f.outputs.lastFault("dm1.BMS.spn77.fmi2") != nullptr);
+  CHECK(f.outputs.lastFault("dm1.BMS.spn88.fmi4") != nullptr);
+  REQUIRE(f.outputs.transmitted.size() == 2);
+  CHECK(f.outputs.transmitted[1].second.data[0] == 0x13);  // EndOfMsgAck to the BMS
+  CHECK(f.sut->counters(BUS_A).tpCompleted == 2);
+}

@@ -258,6 +258,25 @@ TEST_CASE("each pass of a looping replay gets a new time base without a catch-up
   CHECK(frames[2].frame.id == 0x101);
 }
 
+TEST_CASE("a looping replay whose file has gone finishes with the reason kept") {
+  TempDir dir;
+  REQUIRE(dir.ok());
+  const std::string path = dir.write("gone.log", spacedLog(2, 1));
+  auto sut = openOrFail(path, optionsAt(0.0, true));
+  std::filesystem::remove(path);  // the open reader keeps reading the unlinked file
+
+  const auto frames = play(*sut, 10);
+
+  CHECK(frames.size() == 2);
+  CHECK_FALSE(sut->up());
+  const auto events = takeEvents(*sut);
+  CHECK(countOf(events, BusEventKind::ReplayRestarted) == 1);
+  CHECK(countOf(events, BusEventKind::ReplayFinished) == 1);
+  const auto maybeError = sut->lastLogError();
+  REQUIRE(maybeError.has_value());
+  CHECK(maybeError->toString().find("cannot open log") != std::string::npos);
+}
+
 TEST_CASE("the end of the log emits ReplayFinished once, up() turns false and the handle goes quiet") {
   TempDir dir;
   REQUIRE(dir.ok());
@@ -294,6 +313,27 @@ TEST_CASE("only records of the selected channel are played") {
   REQUIRE(frames.size() == 2);
   CHECK(frames[0].frame.id == 0x201);
   CHECK(frames[1].frame.id == 0x202);
+}
+
+TEST_CASE("skipping many records of other channels returns to the caller with the handle readable") {
+  constexpr int OTHER_RECORDS = 3 * static_cast<int>(ReplayLink::SKIP_BUDGET);
+  TempDir dir;
+  REQUIRE(dir.ok());
+  std::string text = "(1.000000) can1 201#01\n";
+  for (int i = 0; i < OTHER_RECORDS; ++i) text += "(1.000000) can0 101#00\n";
+  text += "(1.000000) can1 202#02\n";
+  LinkOptions options = optionsAt(0.0);
+  options.replayChannel = "can1";
+  auto sut = openOrFail(dir.write("sparse.log", text), options);
+  std::vector<ReceivedFrame> batch(8);
+
+  CHECK(sut->receive(batch) == 1);  // both are due, but the skipping stops at the budget
+  CHECK(waitReadable(sut->waitHandle().fd, 0));
+  const auto rest = play(*sut, 1);
+
+  REQUIRE(rest.size() == 1);
+  CHECK(rest[0].frame.id == 0x202);
+  CHECK_FALSE(sut->up());
 }
 
 TEST_CASE("filters drop frames in user space and count them") {

@@ -68,8 +68,8 @@ std::int64_t nowNs(clockid_t clock) {
 // ----- a fake kernel: the link's socket is one end of a socketpair, the test holds the other
 
 struct FakeKernel {
-  std::vector<int> peers;          // test ends, one per successful open
-  int failWith = 0;                // errno the next opens fail with (0: succeed)
+  std::vector<int> peers;  // test ends, one per successful open
+  int failWith = 0;        // errno the next opens fail with (0: succeed)
   const char* failWhat = "";
   int opens = 0;
   SocketSetup lastSetup{};
@@ -199,8 +199,8 @@ TEST_CASE("a frame that cannot be classic is refused as a can_frame") {
   CHECK_FALSE(toCanFrame(nineBytes, sut));
   CHECK_FALSE(toCanFrame(makeFrame(STANDARD_ID, FLAG_FD, {1}), sut));
   CHECK_FALSE(toCanFrame(makeFrame(0x4, FLAG_ERROR, {0, 0, 0, 0, 0, 0, 0, 0}), sut));
-  CHECK_FALSE(toCanFrame(makeFrame(0x800, 0, {}), sut));                     // 12 bits on a standard ID
-  CHECK_FALSE(toCanFrame(makeFrame(0x20000000, FLAG_EXTENDED, {}), sut));    // 30 bits on an extended ID
+  CHECK_FALSE(toCanFrame(makeFrame(0x800, 0, {}), sut));                   // 12 bits on a standard ID
+  CHECK_FALSE(toCanFrame(makeFrame(0x20000000, FLAG_EXTENDED, {}), sut));  // 30 bits on an extended ID
   CHECK(toCanFrame(makeFrame(0x7FF, 0, {}), sut));
   CHECK(toCanFrame(makeFrame(0x1FFFFFFF, FLAG_EXTENDED, {}), sut));
 }
@@ -453,9 +453,9 @@ TEST_CASE("an error frame with every class set fills all event slots in the docu
   REQUIRE(decodeErrorFrame(frame, 0, sut) == MAX_ERROR_EVENTS);
 
   const std::array<BusEventKind, MAX_ERROR_EVENTS> expected{
-      BusEventKind::TxTimeout,     BusEventKind::RxOverflow,       BusEventKind::TxTimeout,
-      BusEventKind::ErrorPassive,  BusEventKind::ProtocolError,    BusEventKind::TransceiverError,
-      BusEventKind::NoAck,         BusEventKind::BusOff,           BusEventKind::Restarted};
+      BusEventKind::TxTimeout,    BusEventKind::RxOverflow,    BusEventKind::TxTimeout,
+      BusEventKind::ErrorPassive, BusEventKind::ProtocolError, BusEventKind::TransceiverError,
+      BusEventKind::NoAck,        BusEventKind::BusOff,        BusEventKind::Restarted};
   for (std::size_t i = 0; i < MAX_ERROR_EVENTS; ++i) {
     CAPTURE(i);
     CHECK(sut[i].kind == expected[i]);
@@ -700,7 +700,7 @@ TEST_CASE("a link that opens reports LinkUp first and a constant epoll wait hand
   const auto events = drainEvents(*sut);
   REQUIRE(events.size() == 1);
   CHECK(events[0].kind == BusEventKind::LinkUp);
-  CHECK(std::string(kernel.lastSetup.interface) == "vcan0");
+  CHECK(std::string(kernel.lastSetup.interfaceName) == "vcan0");
   CHECK(kernel.lastSetup.errorFrames);
   CHECK_FALSE(kernel.lastSetup.fd);
   CHECK_FALSE(kernel.lastSetup.kernelFilters);
@@ -812,10 +812,10 @@ TEST_CASE("more filters than the kernel takes are applied in user space and coun
   constexpr std::uint32_t FILTERS = 600;
   for (std::uint32_t i = 0; i < FILTERS; ++i) options.filters.push_back({0x100 + i, 0x7FF, false});
   auto sut = openFake(kernel, options);
-  kernel.write(makeCanFrame(0x100, {1}));                  // passes
-  kernel.write(makeCanFrame(0x7FF, {2}));                  // no filter for it
-  kernel.write(makeCanFrame(CAN_RTR_FLAG | 0x100, {}));    // remote: filters take data frames only
-  kernel.write(makeCanFrame(CAN_EFF_FLAG | 0x100, {3}));   // 29-bit ID, 11-bit filters
+  kernel.write(makeCanFrame(0x100, {1}));                 // passes
+  kernel.write(makeCanFrame(0x7FF, {2}));                 // no filter for it
+  kernel.write(makeCanFrame(CAN_RTR_FLAG | 0x100, {}));   // remote: filters take data frames only
+  kernel.write(makeCanFrame(CAN_EFF_FLAG | 0x100, {3}));  // 29-bit ID, 11-bit filters
   std::array<ReceivedFrame, 8> batch{};
 
   REQUIRE(sut->receive(batch) == 1);
@@ -841,7 +841,7 @@ TEST_CASE("send writes the can_frame or canfd_frame datagram the kernel expects"
   CHECK(classic[1] == 0xF1);
   CHECK(classic[2] == 0xFE);
   CHECK(classic[3] == 0x98);
-  CHECK(classic[4] == 2);     // len
+  CHECK(classic[4] == 2);  // len
   CHECK(classic[8] == 0xAA);
   CHECK(classic[9] == 0xBB);
   const std::vector<std::uint8_t> fd = kernel.read();

@@ -4,6 +4,7 @@
 #include <exception>
 #include <sstream>
 
+#include "bus_commands.hpp"
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
 #include "signal_commands.hpp"
@@ -63,6 +64,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerDbcCommands(app, context);
     registerSignalCommands(app, context);
     registerStatusCommands(app, context);
+    registerBusCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

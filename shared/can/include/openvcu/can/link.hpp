@@ -50,7 +50,8 @@ struct IdFilter {
   bool operator==(const IdFilter&) const = default;
 };
 
-/// true when `filters` is empty or one of them accepts `frame`. Error frames always pass.
+/// true when `filters` is empty or one of them accepts `frame`. Error frames always pass;
+/// remote (RTR) frames pass only when there are no filters (as the socketcan backend does).
 [[nodiscard]] bool passes(std::span<const IdFilter> filters, const Frame& frame) noexcept;
 
 /// Settings of one link, from the bus configuration. Each backend reads what concerns it.

@@ -115,7 +115,9 @@ std::size_t decodeErrorFrame(const Frame& frame, std::int64_t monotonicNs,
 
 /// true when the kernel takes `count` filters (CAN_RAW_FILTER_MAX, 512 in linux/can/raw.h);
 /// beyond that the link receives everything and applies acceptedByFilters() itself.
-constexpr bool fitsKernelFilters(std::size_t count) noexcept { return count <= CAN_RAW_FILTER_MAX; }
+constexpr bool fitsKernelFilters(std::size_t count) noexcept {
+  return count <= CAN_RAW_FILTER_MAX;
+}
 
 /// What the kernel filters from toKernelFilters() accept, in user space: can::passes()
 /// and, when there are filters, no remote frames. Error frames always pass.
@@ -153,7 +155,7 @@ constexpr std::int64_t realtimeToMonotonic(std::int64_t realtimeStampNs, std::in
 
 /// "socketcan:<interface>: [<what>: ]<reason> (<ERRNO>)", e.g.
 ///   ("can0", "", ENODEV) -> "socketcan:can0: no such interface (ENODEV)"
-///   ("can0", "cannot set CAN_RAW_FILTER", EINVAL) -> "socketcan:can0: cannot set CAN_RAW_FILTER: Invalid argument (EINVAL)"
+///   ("can0", "cannot bind", EINVAL) -> "socketcan:can0: cannot bind: Invalid argument (EINVAL)"
 [[nodiscard]] std::string openErrorMessage(std::string_view interface, std::string_view what, int errorNumber);
 
 // ---------------------------------------------------------------------------------------
@@ -162,18 +164,18 @@ constexpr std::int64_t realtimeToMonotonic(std::int64_t realtimeStampNs, std::in
 
 /// What the socket must be set up with; prepared once at open, valid for the life of the link.
 struct SocketSetup {
-  const char* interface{""};                ///< NUL terminated
-  bool fd{};                                ///< CAN_RAW_FD_FRAMES
-  bool errorFrames{};                       ///< CAN_RAW_ERR_FILTER = CAN_ERR_MASK
-  bool kernelFilters{};                     ///< set CAN_RAW_FILTER to `filters` (empty: no frames)
+  const char* interfaceName{""};  ///< NUL terminated
+  bool fd{};                      ///< CAN_RAW_FD_FRAMES
+  bool errorFrames{};             ///< CAN_RAW_ERR_FILTER = CAN_ERR_MASK
+  bool kernelFilters{};           ///< set CAN_RAW_FILTER to `filters` (empty: no frames)
   std::span<const can_filter> filters;
 };
 
 /// One attempt to open the socket.
 struct SocketAttempt {
-  int fd{-1};             ///< the bound, non-blocking socket, now owned by the caller; -1 on failure
-  int errorNumber{};      ///< errno when fd < 0; ENETDOWN: the interface exists but is down
-  const char* what{""};   ///< the step that failed ("cannot bind"); "" when the errno says it all
+  int fd{-1};            ///< the bound, non-blocking socket, now owned by the caller; -1 on failure
+  int errorNumber{};     ///< errno when fd < 0; ENETDOWN: the interface exists but is down
+  const char* what{""};  ///< the step that failed ("cannot bind"); "" when the errno says it all
 };
 
 /// Must not throw or allocate: it runs inside receive() when the link reopens.

@@ -39,7 +39,6 @@ namespace openvcu::can {
 /// in the kernel, no such interface, not a CAN interface, CAN FD configured on a classic-only
 /// interface, a refused socket option. An interface that exists but is down is not an error.
 /// @note start-up only: allocates; the returned link's receive()/send() do not.
-[[nodiscard]] Result<std::unique_ptr<Link>> openSocketCanLink(const std::string& interface,
-                                                              const LinkOptions& options);
+[[nodiscard]] Result<std::unique_ptr<Link>> openSocketCanLink(const std::string& interface, const LinkOptions& options);
 
 }  // namespace openvcu::can

@@ -1,0 +1,249 @@
+#!/usr/bin/env bash
+# can-rx benchmark (docs/benchmarks.md, section "can-rx"). Builds nothing: configure and
+# build a Release tree first (not under /tmp: the sandbox's /tmp is private), e.g.
+#   cmake -S . -B ../build-bench -G Ninja -DCMAKE_BUILD_TYPE=Release -DOPENVCU_BUILD_BENCH=ON
+#   ninja -C ../build-bench vcu vcu-can-rx bench_receiver bench_sim_sender
+#
+# usage: bench/can-rx/run_can_rx_bench.sh [BUILD_DIR]      (default: <repo>/build)
+#
+# Everything runs inside tests/harness/run_isolated.sh (private /dev/shm, /tmp, network and
+# PIDs: its own iox-roudi, LCM multicast on a private lo):
+#   1. bench_receiver: CPU time per frame of canrx::Receiver::onFrame, HHEA configuration;
+#   2. iox-roudi, then vcu-can-rx on a two-bus HHEA configuration written to the sandbox's
+#      /tmp (sim:battery carries the VIC, OBC and DC-DC messages, sim:vehicle the rest),
+#      started and waited for through its "ready" log line;
+#   3. idle: vcu-can-rx CPU with no traffic (IDLE_SECONDS);
+#   4. two buses: one bench_sim_sender per bus at TWO_BUS_RATE frames/s for TWO_BUS_SECONDS;
+#   5. steps on sim:vehicle alone: STEP_RATES frames/s, STEP_SECONDS each.
+# CPU of vcu-can-rx over each sending window (from the senders' "sending" line to their
+# final line): utime+stime of /proc/<pid>/stat (all threads, clock ticks) and the sum of
+# /proc/<pid>/task/*/schedstat run times (ns), in % of one core. After each window the
+# heartbeat counters (`vcu status`) must show frames = frames sent and dropped = 0 per bus.
+# environment: IDLE_SECONDS (10), TWO_BUS_RATE (4000), TWO_BUS_SECONDS (30),
+#              STEP_RATES ("8000 16000 32000 64000"), STEP_SECONDS (10), SKIP_INPROCESS (unset)
+set -euo pipefail
+
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+build="$(cd "${1:-$repo/build}" && pwd)"
+
+if [[ "${OPENVCU_ISOLATED:-}" != 1 ]]; then
+  for binary in bin/vcu bin/vcu-can-rx bench/bench_receiver bench/bench_sim_sender; do
+    if [[ ! -x "$build/$binary" ]]; then
+      echo "error: $build/$binary not built (ninja -C $build vcu vcu-can-rx bench_receiver bench_sim_sender)" >&2
+      exit 1
+    fi
+  done
+  keep=()
+  case "$build" in /tmp/*) keep=(--keep "$build") ;; esac
+  exec "$repo/tests/harness/run_isolated.sh" "${keep[@]}" -- "$0" "$build"
+fi
+
+# ---- inside the sandbox ---------------------------------------------------------------
+idleSeconds="${IDLE_SECONDS:-10}"
+twoBusRate="${TWO_BUS_RATE:-4000}"
+twoBusSeconds="${TWO_BUS_SECONDS:-30}"
+stepRates="${STEP_RATES:-8000 16000 32000 64000}"
+stepSeconds="${STEP_SECONDS:-10}"
+work=/tmp/can-rx-bench
+mkdir -p "$work"
+config="$work/vehicle.json"
+tick="$(getconf CLK_TCK)"
+vcu="$build/bin/vcu"
+summary=()
+
+machine() {
+  echo "== machine"
+  lscpu | grep -E '^(Model name|CPU family|Model|CPU\(s\)|Core\(s\) per socket|Thread\(s\) per core|Hypervisor vendor):' |
+    sed 's/  */ /g'
+  echo "RAM $(free -h | awk '/^Mem:/ {print $2}'), kernel $(uname -r), load $(cut -d' ' -f1-3 /proc/loadavg)"
+  grep -E '^CMAKE_(BUILD_TYPE|CXX_COMPILER|CXX_FLAGS_RELEASE):' "$build/CMakeCache.txt" 2>/dev/null || true
+  local compiler
+  compiler="$(sed -n 's/^CMAKE_CXX_COMPILER:FILEPATH=//p' "$build/CMakeCache.txt" 2>/dev/null)"
+  [[ -n "$compiler" ]] && "$compiler" --version | head -n 1
+  return 0
+}
+
+# Polls `test` (a command) every 50 ms for up to `seconds`; 1 on timeout.
+wait_until() {
+  local seconds="$1"; shift
+  local deadline=$(( $(date +%s%N) + seconds * 1000000000 ))
+  until "$@"; do
+    (( $(date +%s%N) < deadline )) || return 1
+    sleep 0.05
+  done
+}
+
+alive() { kill -0 "$1" 2>/dev/null; }
+
+# CPU of process $1: "<ticks> <schedstat ns>" (ticks: utime+stime, every thread that lived).
+cpu_sample() {
+  local pid="$1" ticks ns=0 task
+  ticks="$(awk '{print $14 + $15}' "/proc/$pid/stat")"
+  for task in /proc/"$pid"/task/*/schedstat; do
+    ns=$(( ns + $(cut -d' ' -f1 "$task" 2>/dev/null || echo 0) ))
+  done
+  echo "$ticks $ns"
+}
+
+# The latest heartbeat counters of vcu-can-rx as "name=value" words (one per line).
+heartbeat_counters() {
+  "$vcu" status --config "$config" --wait 1.2 2>/dev/null | grep -E '^vcu-can-rx ' | tr ' ' '\n' | grep '=' || true
+}
+
+# counter WORDS BUS NAME -> value (0 when absent)
+counter() {
+  local value
+  value="$(grep -E "^$2\.$3=" <<<"$1" | head -n 1 | cut -d= -f2)"
+  echo "${value:-0}"
+}
+
+# Heartbeat counters once vcu-can-rx has counted `expected` frames on every bus given as
+# BUS=EXPECTED, or once they stop changing (two equal beats), or after 20 s.
+settled_counters() {
+  local previous="" current deadline=$(( $(date +%s) + 20 )) done pair
+  while :; do
+    current="$(heartbeat_counters)"
+    done=1
+    for pair in "$@"; do
+      (( $(counter "$current" "${pair%%=*}" frames) >= ${pair#*=} )) || done=0
+    done
+    if (( done )) || [[ -n "$previous" && "$current" == "$previous" ]] || (( $(date +%s) > deadline )); then
+      echo "$current"
+      return
+    fi
+    previous="$current"
+  done
+}
+
+percent() { awk -v n="$1" -v d="$2" 'BEGIN { printf "%.3f", (d > 0 ? 100 * n / d : 0) }'; }
+
+# run_load LABEL SECONDS RATE BUS...: one sender per bus; CPU of vcu-can-rx over the window.
+run_load() {
+  local label="$1" seconds="$2" rate="$3"; shift 3
+  local buses=("$@") bus before after pids=() logs=() i
+  before="$(heartbeat_counters)"
+  for bus in "${buses[@]}"; do
+    local log="$work/sender-$label-$bus.log"
+    "$build/bench/bench_sim_sender" --config "$config" --bus "$bus" --rate "$rate" --seconds "$seconds" \
+      --seed "$(( ${#pids[@]} + 1 ))" >"$log" 2>&1 &
+    pids+=("$!")
+    logs+=("$log")
+  done
+  for log in "${logs[@]}"; do
+    wait_until 30 grep -q '^sending on' "$log" || { echo "error: sender did not start: $(cat "$log")" >&2; return 1; }
+  done
+  local load0 c0 t0 c1 t1
+  load0="$(cut -d' ' -f1 /proc/loadavg)"
+  c0="$(cpu_sample "$canRxPid")"; t0="$(date +%s%N)"
+  for log in "${logs[@]}"; do
+    wait_until $(( seconds + 60 )) grep -q '^bench_sim_sender: bus=' "$log" ||
+      { echo "error: sender did not finish: $(cat "$log")" >&2; return 1; }
+  done
+  c1="$(cpu_sample "$canRxPid")"; t1="$(date +%s%N)"
+  for i in "${!pids[@]}"; do wait "${pids[$i]}" || true; done
+
+  local wallNs=$(( t1 - t0 ))
+  local tickCpu tickNs=$(( (${c1%% *} - ${c0%% *}) * 1000000000 / tick ))
+  local schedNs=$(( ${c1#* } - ${c0#* } ))
+  tickCpu="$(percent "$tickNs" "$wallNs")"
+  local schedCpu
+  schedCpu="$(percent "$schedNs" "$wallNs")"
+  local expected=() sentTotal=0
+  for i in "${!buses[@]}"; do
+    local sent
+    sent="$(grep -o 'sent=[0-9]*' "${logs[$i]}" | cut -d= -f2)"
+    expected+=("${buses[$i]}=$(( $(counter "$before" "${buses[$i]}" frames) + sent ))")
+    sentTotal=$(( sentTotal + sent ))
+  done
+  after="$(settled_counters "${expected[@]}")"
+
+  local ok=1 line
+  echo "== $label: ${#buses[@]} bus(es) x $rate frames/s for $seconds s (load average at start $load0)"
+  echo "   vcu-can-rx CPU: $tickCpu % of one core (utime+stime) / $schedCpu % (schedstat), window $(awk -v w="$wallNs" 'BEGIN { printf "%.2f", w / 1e9 }') s"
+  awk -v ns="$schedNs" -v n="$sentTotal" 'BEGIN { if (n > 0) printf "   = %.2f us of CPU per frame (all of vcu-can-rx: wake-ups, iceoryx take, onFrame, rx publish)\n", ns / n / 1000 }'
+  for i in "${!buses[@]}"; do
+    bus="${buses[$i]}"
+    local sent busy frames dropped decoded requests unknown late
+    sent="$(grep -o 'sent=[0-9]*' "${logs[$i]}" | cut -d= -f2)"
+    busy="$(grep -o 'busy=[0-9]*' "${logs[$i]}" | cut -d= -f2)"
+    late="$(grep -o 'late_deadlines=[0-9]* max_late_us=[0-9]*' "${logs[$i]}")"
+    frames=$(( $(counter "$after" "$bus" frames) - $(counter "$before" "$bus" frames) ))
+    dropped=$(( $(counter "$after" "$bus" dropped) - $(counter "$before" "$bus" dropped) ))
+    decoded=$(( $(counter "$after" "$bus" decoded) - $(counter "$before" "$bus" decoded) ))
+    requests=$(( $(counter "$after" "$bus" requests) - $(counter "$before" "$bus" requests) ))
+    unknown=$(( $(counter "$after" "$bus" unknown_ids) - $(counter "$before" "$bus" unknown_ids) ))
+    line="   $bus: sent $sent (busy $busy; sender $late), can-rx frames $frames, dropped $dropped, decoded $decoded, requests $requests, unknown $unknown"
+    if (( frames != sent || dropped != 0 || busy != 0 )); then ok=0; line+="  <- MISMATCH"; fi
+    echo "$line"
+  done
+  summary+=("$(printf '%-10s %-16s %6s fr/s x %3s s  CPU %7s %% (ticks) %7s %% (schedstat)  %s' "$label" "${buses[*]}" "$rate" "$seconds" "$tickCpu" "$schedCpu" "$( ((ok)) && echo 'all frames counted, 0 dropped' || echo 'FRAMES LOST or not sent')")")
+  return $(( ok ? 0 : 2 ))
+}
+
+machine
+echo "sandbox: $(ls /dev/shm | wc -l) entries in /dev/shm; build $build"
+
+if [[ -z "${SKIP_INPROCESS:-}" ]]; then
+  echo "== bench_receiver (in process, config/hhea/vehicle.json)"
+  "$build/bench/bench_receiver" --config "$repo/config/hhea/vehicle.json"
+fi
+
+# The two-bus configuration: the VIC, charger and DC-DC traffic on "battery", the rest
+# (PDU, Editron, HVLP inverters and the VCU's own commands to them) on "vehicle".
+cat >"$config" <<EOF
+{
+  "comment": "can-rx benchmark: the HHEA messages split over two sim buses",
+  "instance": "canrxbench",
+  "node": "Vehicle_Control_Unit",
+  "dbc": ["$repo/config/hhea/hhea.dbc"],
+  "buses": [
+    {"name": "battery", "link": "sim:battery", "bitrate": 500000,
+     "messages": ["HVESSS1_PGN61590", "PropA_C3_PGN61184", "HVESSD1_PGN61584", "HVESSD2_PGN61585",
+                  "HVESSD3_PGN61586", "HVESSHIST_PGN64606", "RQST_VIC_PGN59904", "OBC", "DCDC",
+                  "HVESSC1_PGN6912", "S1_ES_PGN61427", "SHM_VCU_to_VIC", "PropA_C4_PGN61184",
+                  "RQST_ES_PGN59904", "BMS", "VCU"]},
+    {"name": "vehicle", "link": "sim:vehicle", "bitrate": 500000, "messages": "all"}
+  ]
+}
+EOF
+
+iox-roudi -c "$repo/config/iceoryx/roudi.toml" >"$work/roudi.log" 2>&1 &
+roudiPid=$!
+wait_until 10 test -S /tmp/roudi || { echo "error: iox-roudi did not start: $(cat "$work/roudi.log")" >&2; exit 1; }
+
+"$build/bin/vcu-can-rx" --config "$config" >"$work/can-rx.log" 2>&1 &
+canRxPid=$!
+if ! wait_until 30 grep -q ']: ready (' "$work/can-rx.log"; then
+  echo "error: vcu-can-rx not ready: $(cat "$work/can-rx.log")" >&2
+  exit 1
+fi
+echo "== vcu-can-rx ready (pid $canRxPid, $(ls /proc/$canRxPid/task | wc -l) threads)"
+wait_until 10 test -n "$(heartbeat_counters)" || { echo "error: no heartbeat from vcu-can-rx" >&2; exit 1; }
+
+c0="$(cpu_sample "$canRxPid")"; t0="$(date +%s%N)"
+sleep "$idleSeconds"  # a measurement window, not a readiness wait
+c1="$(cpu_sample "$canRxPid")"; t1="$(date +%s%N)"
+idleTicks="$(percent $(( (${c1%% *} - ${c0%% *}) * 1000000000 / tick )) $(( t1 - t0 )))"
+idleSched="$(percent $(( ${c1#* } - ${c0#* } )) $(( t1 - t0 )))"
+echo "== idle: vcu-can-rx CPU $idleTicks % (ticks) / $idleSched % (schedstat) over $idleSeconds s without traffic"
+summary+=("$(printf '%-10s %-16s %6s fr/s x %3s s  CPU %7s %% (ticks) %7s %% (schedstat)' idle - 0 "$idleSeconds" "$idleTicks" "$idleSched")")
+
+status=0
+run_load two-bus "$twoBusSeconds" "$twoBusRate" battery vehicle || status=1
+highest=0
+for rate in $stepRates; do
+  if run_load "step-$rate" "$stepSeconds" "$rate" vehicle; then
+    (( rate > highest )) && highest=$rate
+  fi
+done
+
+echo "== summary (load average now $(cut -d' ' -f1-3 /proc/loadavg))"
+printf '   %s\n' "${summary[@]}"
+echo "   highest step rate on one sim bus with every frame counted and 0 dropped: $highest frames/s"
+echo "== vcu-can-rx log (last lines)"
+tail -n 5 "$work/can-rx.log"
+kill -TERM "$canRxPid" 2>/dev/null || true
+wait "$canRxPid" 2>/dev/null || true
+kill -TERM "$roudiPid" 2>/dev/null || true
+wait "$roudiPid" 2>/dev/null || true
+exit "$status"
