@@ -142,7 +142,7 @@ struct ReceiverImpl {
           ++bus.counters.requests;
           outputs.request(busIndex, received);
         }
-        return;
+        // and decoded below when the DBC defines it (HHEA: RQST_VIC_PGN59904)
       }
       if (receive.dm1 && pgn == j1939::PGN_DM1) onDm1(busIndex, id.sourceAddress, frame.payload(), received.monotonicNs);
       if (checkSafetyHeader(frame, received.monotonicNs)) return;

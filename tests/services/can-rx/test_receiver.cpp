@@ -520,3 +520,10 @@ TEST_CASE("a BAM from one node and an RTS/CTS transfer from another, interleaved
   CHECK(f.outputs.transmitted[1].second.data[0] == 0x13);  // EndOfMsgAck to the BMS
   CHECK(f.sut->counters(BUS_A).tpCompleted == 2);
 }
+
+TEST_CASE("a request the DBC does not define is counted as an unknown ID after it is handed on") {
+  Fixture f;
+  f.sut->onFrame(BUS_A, frameOf(0x18EA21F3, {0xE6, 0xFE, 0x00}, START + MS));
+  CHECK(f.outputs.requests.size() == 1);
+  CHECK(f.sut->counters(BUS_A).unknownIds == 1);
+}
