@@ -20,7 +20,8 @@
 # /proc/<pid>/task/*/schedstat run times (ns), in % of one core. After each window the
 # heartbeat counters (`vcu status`) must show frames = frames sent and dropped = 0 per bus.
 # environment: IDLE_SECONDS (10), TWO_BUS_RATE (4000), TWO_BUS_SECONDS (30),
-#              STEP_RATES ("8000 16000 32000 64000"), STEP_SECONDS (10), SKIP_INPROCESS (unset)
+#              STEP_RATES ("8000 16000 32000 64000"), STEP_SECONDS (10), SKIP_INPROCESS (unset),
+#              PERF_SECONDS (unset: no profile; N: an extra two-bus window under `perf record`)
 set -euo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -75,15 +76,18 @@ wait_until() {
 
 alive() { kill -0 "$1" 2>/dev/null; }
 
-# CPU of process $1: "<ticks> <schedstat ns>" (ticks: utime+stime, every thread that lived).
+# CPU of process $1: "<ticks> <schedstat ns> <switches>" (ticks: utime+stime of every thread
+# that lived; schedstat ns and context switches, voluntary + not, summed over live threads).
 cpu_sample() {
-  local pid="$1" ticks ns=0 task
+  local pid="$1" ticks ns switches
   ticks="$(awk '{print $14 + $15}' "/proc/$pid/stat")"
-  for task in /proc/"$pid"/task/*/schedstat; do
-    ns=$(( ns + $(cut -d' ' -f1 "$task" 2>/dev/null || echo 0) ))
-  done
-  echo "$ticks $ns"
+  ns="$(cat /proc/"$pid"/task/*/schedstat 2>/dev/null | awk '{ sum += $1 } END { printf "%d", sum }')"
+  switches="$(cat /proc/"$pid"/task/*/status 2>/dev/null | awk '/ctxt_switches:/ { sum += $2 } END { printf "%d", sum }')"
+  echo "$ticks $ns $switches"
 }
+ticks_of() { echo "${1%% *}"; }
+ns_of() { local rest="${1#* }"; echo "${rest%% *}"; }
+switches_of() { echo "${1##* }"; }
 
 # The latest heartbeat counters of vcu-can-rx as "name=value" words (one per line).
 heartbeat_counters() {
@@ -143,8 +147,9 @@ run_load() {
   for i in "${!pids[@]}"; do wait "${pids[$i]}" || true; done
 
   local wallNs=$(( t1 - t0 ))
-  local tickCpu tickNs=$(( (${c1%% *} - ${c0%% *}) * 1000000000 / tick ))
-  local schedNs=$(( ${c1#* } - ${c0#* } ))
+  local tickCpu tickNs=$(( ($(ticks_of "$c1") - $(ticks_of "$c0")) * 1000000000 / tick ))
+  local schedNs=$(( $(ns_of "$c1") - $(ns_of "$c0") ))
+  local switches=$(( $(switches_of "$c1") - $(switches_of "$c0") ))
   tickCpu="$(percent "$tickNs" "$wallNs")"
   local schedCpu
   schedCpu="$(percent "$schedNs" "$wallNs")"
@@ -160,7 +165,7 @@ run_load() {
   local ok=1 line
   echo "== $label: ${#buses[@]} bus(es) x $rate frames/s for $seconds s (load average at start $load0)"
   echo "   vcu-can-rx CPU: $tickCpu % of one core (utime+stime) / $schedCpu % (schedstat), window $(awk -v w="$wallNs" 'BEGIN { printf "%.2f", w / 1e9 }') s"
-  awk -v ns="$schedNs" -v n="$sentTotal" 'BEGIN { if (n > 0) printf "   = %.2f us of CPU per frame (all of vcu-can-rx: wake-ups, iceoryx take, onFrame, rx publish)\n", ns / n / 1000 }'
+  awk -v ns="$schedNs" -v n="$sentTotal" -v sw="$switches" -v w="$wallNs" 'BEGIN { if (n > 0) printf "   = %.2f us of CPU per frame (all of vcu-can-rx: wake-ups, iceoryx take, onFrame, rx publish); %.0f context switches/s, %.2f frames per switch\n", ns / n / 1000, sw * 1e9 / w, (sw > 0 ? n / sw : 0) }'
   for i in "${!buses[@]}"; do
     bus="${buses[$i]}"
     local sent busy frames dropped decoded requests unknown late
@@ -223,9 +228,10 @@ wait_until 10 test -n "$(heartbeat_counters)" || { echo "error: no heartbeat fro
 c0="$(cpu_sample "$canRxPid")"; t0="$(date +%s%N)"
 sleep "$idleSeconds"  # a measurement window, not a readiness wait
 c1="$(cpu_sample "$canRxPid")"; t1="$(date +%s%N)"
-idleTicks="$(percent $(( (${c1%% *} - ${c0%% *}) * 1000000000 / tick )) $(( t1 - t0 )))"
-idleSched="$(percent $(( ${c1#* } - ${c0#* } )) $(( t1 - t0 )))"
-echo "== idle: vcu-can-rx CPU $idleTicks % (ticks) / $idleSched % (schedstat) over $idleSeconds s without traffic"
+idleTicks="$(percent $(( ($(ticks_of "$c1") - $(ticks_of "$c0")) * 1000000000 / tick )) $(( t1 - t0 )))"
+idleSched="$(percent $(( $(ns_of "$c1") - $(ns_of "$c0") )) $(( t1 - t0 )))"
+idleSwitches="$(awk -v s=$(( $(switches_of "$c1") - $(switches_of "$c0") )) -v w=$(( t1 - t0 )) 'BEGIN { printf "%.0f", s * 1e9 / w }')"
+echo "== idle: vcu-can-rx CPU $idleTicks % (ticks) / $idleSched % (schedstat) over $idleSeconds s without traffic; $idleSwitches context switches/s"
 summary+=("$(printf '%-10s %-16s %6s fr/s x %3s s  CPU %7s %% (ticks) %7s %% (schedstat)' idle - 0 "$idleSeconds" "$idleTicks" "$idleSched")")
 
 status=0
@@ -240,6 +246,20 @@ done
 echo "== summary (load average now $(cut -d' ' -f1-3 /proc/loadavg))"
 printf '   %s\n' "${summary[@]}"
 echo "   highest step rate on one sim bus with every frame counted and 0 dropped: $highest frames/s"
+if [[ -n "${PERF_SECONDS:-}" ]]; then
+  # Where vcu-can-rx spends its CPU (flat cpu-clock profile; the VM has no hardware counters).
+  # A separate window: sampling costs CPU, so it is not one of the figures above.
+  perf record -q -e cpu-clock -F 4000 -p "$canRxPid" -o "$work/perf.data" -- sleep $(( PERF_SECONDS + 4 )) \
+    >"$work/perf.log" 2>&1 &
+  perfPid=$!
+  run_load perf "$PERF_SECONDS" "$twoBusRate" battery vehicle || true
+  wait "$perfPid" || true
+  echo "== perf: vcu-can-rx by shared object, then the top symbols (two buses x $twoBusRate frames/s)"
+  perf report -i "$work/perf.data" --no-children --stdio --sort dso 2>/dev/null | grep '%' | sed 's/  */ /g' |
+    head -n 12 || true
+  perf report -i "$work/perf.data" --no-children --stdio --sort dso,symbol 2>/dev/null | grep '%' |
+    sed -e 's/  */ /g' -e 's/ - - *$//' | cut -c1-150 | head -n 40 || true
+fi
 echo "== vcu-can-rx log (last lines)"
 tail -n 5 "$work/can-rx.log"
 kill -TERM "$canRxPid" 2>/dev/null || true

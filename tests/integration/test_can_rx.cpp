@@ -281,3 +281,38 @@ TEST_CASE("a J1939-76 pair with a bad CRC is refused with a fault, good pairs ar
   auto table = attachTable(dir / "vehicle.json", catalog);
   CHECK(table->readBus(*catalog.indexOf("BMS.BMS_Safe.ContactorState"))->value == 3.0);  // pair 3, not 9
 }
+
+TEST_CASE("a frame sent on a sim bus is decoded by vcu-can-rx and forwarded to the other bus's send stream") {
+  SKIP_UNLESS_ISOLATED();
+  harness::Harness sut;
+  const fs::path dir = fs::temp_directory_path() / "can-rx-forward";
+  fs::create_directories(dir);
+  writeFile(dir / "receive.json",
+            R"({"forward": [{"from": "a", "to": "b", "id": "0x18FF1010", "rewriteId": "0x18FF1011"}]})");
+  writeFile(dir / "vehicle.json", R"({"instance": "fwd", "node": "VCU", "dbc": ")" + RX_DBC + R"(",
+    "receive": ")" + (dir / "receive.json").string() + R"(",
+    "buses": [{"name": "a", "link": "sim:fwda", "messages": ["ECU1_Status", "ECU1_Big", "BMS_Safe", "VCU_Cmd", "Std_Msg"]},
+              {"name": "b", "link": "sim:fwdb", "messages": ["GW_Info"]}]})");
+  const std::string config = (dir / "vehicle.json").string();
+  REQUIRE_STATUS(sut.startRoudi());
+  harness::Process& canRx = startCanRx(sut, dir / "vehicle.json");
+  auto dump = sut.start({.name = "dump",
+                         .argv = {VCU, "dump", "b", "--stream", "send", "--count", "1", "--timeout", "20", "--config",
+                                  config},
+                         .captureOutput = true});
+  REQUIRE_STATUS(dump);
+  REQUIRE_MESSAGE((*dump)->waitForLine("listening", 20s), (*dump)->output());
+
+  const auto sent = sut.run({VCU, "send", "--direct", "a", "18FF1010#E803020000000000", "--config", config});
+  REQUIRE_MESSAGE(sent.exitCode() == 0, sent.describe());
+
+  const auto forwarded = (*dump)->waitForLine("18FF1011#", 20s);
+  REQUIRE_MESSAGE(forwarded, ((*dump)->output() + "\n" + canRx.output()));
+  CHECK(contains(*forwarded, " b 18FF1011#E803020000000000"));
+  signals::Catalog catalog;
+  auto table = attachTable(dir / "vehicle.json", catalog);
+  const auto speed = table->readBus(*catalog.indexOf("ECU1.ECU1_Status.Speed"));
+  REQUIRE(speed);
+  CHECK(speed->value == doctest::Approx(100.0));
+  CHECK(speed->quality == signals::Quality::Valid);
+}

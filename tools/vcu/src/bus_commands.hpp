@@ -1,11 +1,13 @@
 #pragma once
 // `vcu send` and `vcu dump`: poke a bus of the configuration by hand.
 //
-//   vcu send vehicle 18FEF121#0102030405060708       through vcu-can-tx (its "send" stream)
-//   vcu send --direct vehicle 123#DEADBEEF 123#R     straight onto the bus's link
-//   vcu dump vehicle                                  frames can-rx received, as candump -L lines:
+//   vcu send vehicle 18FEF121#0102030405060708     through vcu-can-tx (its "send" stream)
+//   vcu send --direct vehicle 123#DEADBEEF 123#R   straight onto the bus's link
+//
+//   vcu dump vehicle                  frames can-rx received, as candump -L lines
 //   (1700000000.123456) vehicle 18FEF121#0102030405060708
-//   vcu dump vehicle --stream wire --decode --count 1 a simulated bus itself, with the DBC signals:
+//
+//   vcu dump vehicle --stream wire --decode      a simulated bus itself, with DBC signals
 //   (1700000000.123456) vehicle 18FEF221#0102030405060708  Status: SOC=0.5 %, Mode=2 "Fault"
 //
 // Frames use cansend's syntax (cansend_syntax.hpp). BUS is the logical bus name of the
