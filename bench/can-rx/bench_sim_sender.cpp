@@ -10,7 +10,9 @@
 // message's source address) and the DBC length, payloads random from --seed, drawn once into
 // a pool before sending. Pacing: absolute 1 ms deadlines (clock_nanosleep TIMER_ABSTIME on
 // CLOCK_MONOTONIC); at deadline k the frames due by then (rate x k / 1000, rounded down) are
-// sent in one batch, so a late wake-up is caught up at once and the long-run rate is exact.
+// sent in one batch, so a late wake-up is caught up at once and the long-run rate is exact
+// (the largest such batch is reported: a batch larger than a receiver's queue cannot all
+// arrive, whatever the receiver's speed).
 // No busy loop. A send that returns Busy (no iceoryx chunk) is counted and not retried.
 //
 // After opening the link it waits --connect-ms (default 1000) before the first frame:
@@ -20,7 +22,7 @@
 //
 // Output (stdout): a line "sending ..." when the first batch goes out (the run script starts
 // its CPU window there) and a final line of key=value pairs: sent, busy, failed, elapsed,
-// achieved rate, late deadlines. Exit 0, or 1 on a start-up error.
+// achieved rate, late deadlines, largest batch. Exit 0, or 1 on a start-up error.
 
 #include <time.h>
 #include <unistd.h>
@@ -104,6 +106,7 @@ struct Totals {
   std::uint64_t failed{};  ///< Down, Invalid, NotSupported
   std::uint64_t lateDeadlines{};  ///< woke more than one period after the deadline
   std::int64_t maxLateNs{};
+  std::uint64_t maxBatch{};  ///< most frames sent at one deadline (catching up after a late wake-up)
   std::int64_t elapsedNs{};
 };
 
@@ -120,6 +123,7 @@ Totals sendPaced(can::Link& link, const std::vector<can::Frame>& pool, std::uint
     if (late > NS_PER_MS) ++totals.lateDeadlines;
     if (late > totals.maxLateNs) totals.maxLateNs = late;
     const std::uint64_t due = tick == ticks ? total : rate * tick / 1000;
+    totals.maxBatch = std::max(totals.maxBatch, due - totals.attempted);
     while (totals.attempted < due) {
       const can::SendStatus status = link.send(pool[next]);
       next = next + 1 == pool.size() ? 0 : next + 1;
@@ -211,12 +215,12 @@ int main(int argc, char** argv) {
   const Totals totals = sendPaced(link, pool, rate, seconds);
   const double elapsed = static_cast<double>(totals.elapsedNs) / static_cast<double>(NS_PER_S);
   std::printf("bench_sim_sender: bus=%s rate=%llu seconds=%llu attempted=%llu sent=%llu busy=%llu failed=%llu "
-              "elapsed_s=%.3f achieved_fps=%.1f late_deadlines=%llu max_late_us=%lld\n",
+              "elapsed_s=%.3f achieved_fps=%.1f late_deadlines=%llu max_late_us=%lld max_batch=%llu\n",
               busName.c_str(), static_cast<unsigned long long>(rate), static_cast<unsigned long long>(seconds),
               static_cast<unsigned long long>(totals.attempted), static_cast<unsigned long long>(totals.sent),
               static_cast<unsigned long long>(totals.busy), static_cast<unsigned long long>(totals.failed), elapsed,
               static_cast<double>(totals.sent) / elapsed, static_cast<unsigned long long>(totals.lateDeadlines),
-              static_cast<long long>(totals.maxLateNs / 1000));
+              static_cast<long long>(totals.maxLateNs / 1000), static_cast<unsigned long long>(totals.maxBatch));
   std::fflush(stdout);
 
   const std::int64_t lingerEnd = monotonicNs() + lingerMs * NS_PER_MS;

@@ -81,8 +81,8 @@ alive() { kill -0 "$1" 2>/dev/null; }
 cpu_sample() {
   local pid="$1" ticks ns switches
   ticks="$(awk '{print $14 + $15}' "/proc/$pid/stat")"
-  ns="$(cat /proc/"$pid"/task/*/schedstat 2>/dev/null | awk '{ sum += $1 } END { printf "%d", sum }')"
-  switches="$(cat /proc/"$pid"/task/*/status 2>/dev/null | awk '/ctxt_switches:/ { sum += $2 } END { printf "%d", sum }')"
+  ns="$(cat /proc/"$pid"/task/*/schedstat 2>/dev/null | awk '{ sum += $1 } END { printf "%.0f", sum }')"
+  switches="$(cat /proc/"$pid"/task/*/status 2>/dev/null | awk '/ctxt_switches:/ { sum += $2 } END { printf "%.0f", sum }')"
   echo "$ticks $ns $switches"
 }
 ticks_of() { echo "${1%% *}"; }
@@ -128,6 +128,7 @@ run_load() {
   before="$(heartbeat_counters)"
   for bus in "${buses[@]}"; do
     local log="$work/sender-$label-$bus.log"
+    : >"$log"
     "$build/bench/bench_sim_sender" --config "$config" --bus "$bus" --rate "$rate" --seconds "$seconds" \
       --seed "$(( ${#pids[@]} + 1 ))" >"$log" 2>&1 &
     pids+=("$!")
@@ -171,7 +172,7 @@ run_load() {
     local sent busy frames dropped decoded requests unknown late
     sent="$(grep -o 'sent=[0-9]*' "${logs[$i]}" | cut -d= -f2)"
     busy="$(grep -o 'busy=[0-9]*' "${logs[$i]}" | cut -d= -f2)"
-    late="$(grep -o 'late_deadlines=[0-9]* max_late_us=[0-9]*' "${logs[$i]}")"
+    late="$(grep -o 'late_deadlines=[0-9]* max_late_us=[0-9]* max_batch=[0-9]*' "${logs[$i]}")"
     frames=$(( $(counter "$after" "$bus" frames) - $(counter "$before" "$bus" frames) ))
     dropped=$(( $(counter "$after" "$bus" dropped) - $(counter "$before" "$bus" dropped) ))
     decoded=$(( $(counter "$after" "$bus" decoded) - $(counter "$before" "$bus" decoded) ))

@@ -14,27 +14,9 @@ namespace {
 constexpr std::size_t BATCH = 64;
 
 can::LinkOptions linkOptions(const config::BusConfig& bus, std::vector<can::IdFilter> filters) {
-  can::LinkOptions options;
-  options.bitrate = bus.bitrate;
-  options.dataBitrate = bus.dataBitrate;
-  options.fd = bus.fd;
+  can::LinkOptions options = bus.linkOptions();
   if (bus.filter == config::BusFilter::Dbc) options.filters = std::move(filters);
-  options.replaySpeed = bus.replay.speed;
-  options.replayLoop = bus.replay.loop;
-  options.replayChannel = bus.replay.channel;
   return options;
-}
-
-can::LinkKind linkKind(config::LinkKind kind) {
-  switch (kind) {
-    case config::LinkKind::SocketCan:
-      return can::LinkKind::SocketCan;
-    case config::LinkKind::Sim:
-      return can::LinkKind::Sim;
-    case config::LinkKind::Replay:
-      return can::LinkKind::Replay;
-  }
-  return can::LinkKind::Sim;
 }
 
 void fill(ipc::FrameSample& sample, const can::Frame& frame, std::int64_t monotonicNs, std::size_t bus) noexcept {
@@ -162,7 +144,7 @@ struct CanRxAppImpl final : ReceiverOutputs {
     for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
       const config::BusConfig& bus = vehicle.buses[b];
       BusIo& io = buses.emplace_back();
-      auto linkResult = can::openLink(linkKind(bus.link.kind), bus.link.target, linkOptions(bus, receiver->filters(b)));
+      auto linkResult = can::openLink(bus.link.kind, bus.link.target, linkOptions(bus, receiver->filters(b)));
       if (!linkResult) return Error{"bus '" + bus.name + "': " + linkResult.error().message};
       io.link = std::move(*linkResult);
       for (auto [stream, slot] : {std::pair{ipc::FrameStream::Received, &io.received},

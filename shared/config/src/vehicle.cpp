@@ -66,6 +66,17 @@ Result<Link> parseLink(std::string_view text, const std::string& baseDirectory) 
   return usage;
 }
 
+can::LinkOptions BusConfig::linkOptions() const {
+  can::LinkOptions options;
+  options.bitrate = bitrate;
+  options.dataBitrate = dataBitrate;
+  options.fd = fd;
+  options.replaySpeed = replay.speed;
+  options.replayLoop = replay.loop;
+  options.replayChannel = replay.channel;
+  return options;
+}
+
 const BusConfig* VehicleConfig::busOf(std::size_t messageIndex) const noexcept {
   for (const BusConfig& bus : buses) {
     if (std::find(bus.messages.begin(), bus.messages.end(), messageIndex) != bus.messages.end()) return &bus;

@@ -17,6 +17,7 @@
 #include "cansend_syntax.hpp"
 #include "decode_output.hpp"
 #include "diagnostics.hpp"
+#include "stop_signal.hpp"
 #include "openvcu/can/log_writer.hpp"
 #include "openvcu/can/open_link.hpp"
 #include "openvcu/core/text.hpp"
@@ -149,18 +150,6 @@ bool initRuntime(std::string_view command, Sink& err) {
   return true;
 }
 
-can::LinkKind linkKind(config::LinkKind kind) noexcept {
-  switch (kind) {
-    case config::LinkKind::SocketCan:
-      return can::LinkKind::SocketCan;
-    case config::LinkKind::Sim:
-      return can::LinkKind::Sim;
-    case config::LinkKind::Replay:
-      return can::LinkKind::Replay;
-  }
-  return can::LinkKind::Sim;
-}
-
 std::string plural(std::uint64_t count, std::string_view noun) {
   return std::to_string(count) + " " + std::string(noun) + (count == 1 ? "" : "s");
 }
@@ -266,12 +255,9 @@ ExitCode sendDirect(const SendOptions& options, const config::BusConfig& bus, co
     return ExitCode::Failure;
   }
   if (bus.link.kind == config::LinkKind::Sim && !initRuntime("send", streams.err)) return ExitCode::Failure;
-  can::LinkOptions linkOptions;
-  linkOptions.bitrate = bus.bitrate;
-  linkOptions.dataBitrate = bus.dataBitrate;
-  linkOptions.fd = bus.fd;
+  can::LinkOptions linkOptions = bus.linkOptions();
   linkOptions.errorFrames = false;
-  auto linkResult = can::openLink(linkKind(bus.link.kind), bus.link.target, linkOptions);
+  auto linkResult = can::openLink(bus.link.kind, bus.link.target, linkOptions);
   if (!linkResult) {
     reportError(streams.err, linkResult.error().message);
     return ExitCode::Failure;
@@ -323,35 +309,6 @@ ExitCode sendThroughCanTx(const SendOptions& options, const config::VehicleConfi
 }
 
 // ---- dump -------------------------------------------------------------------------------
-
-volatile std::sig_atomic_t g_stopDump = 0;
-
-void onStopSignal(int /*signal*/) {
-  g_stopDump = 1;
-}
-
-/// SIGINT/SIGTERM end the dump cleanly while it runs; the previous handlers come back after.
-class StopSignalScope {
- public:
-  StopSignalScope() {
-    g_stopDump = 0;
-    struct sigaction action {};
-    action.sa_handler = onStopSignal;
-    sigemptyset(&action.sa_mask);
-    ::sigaction(SIGINT, &action, &m_previousInt);
-    ::sigaction(SIGTERM, &action, &m_previousTerm);
-  }
-  StopSignalScope(const StopSignalScope&) = delete;
-  StopSignalScope& operator=(const StopSignalScope&) = delete;
-  ~StopSignalScope() {
-    ::sigaction(SIGINT, &m_previousInt, nullptr);
-    ::sigaction(SIGTERM, &m_previousTerm, nullptr);
-  }
-
- private:
-  struct sigaction m_previousInt {};
-  struct sigaction m_previousTerm {};
-};
 
 /// The topics `--stream` names, or empty after reporting why not.
 std::vector<ipc::FrameTopic> dumpTopics(const std::string& stream, const config::VehicleConfig& config,
@@ -532,7 +489,7 @@ ExitCode runDump(const DumpOptions& options, Streams streams) {
   std::uint64_t printed = 0;
   std::string out;
   bool timedOut = false;
-  while (g_stopDump == 0) {
+  while (!stopRequested()) {
     std::chrono::nanoseconds wait = DUMP_TICK;
     if (options.timeoutSeconds > 0) {
       const auto left = lastFrame + timeout - std::chrono::steady_clock::now();

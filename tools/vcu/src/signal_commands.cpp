@@ -15,6 +15,7 @@
 #include <random>
 
 #include "diagnostics.hpp"
+#include "stop_signal.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/signals/table.hpp"
@@ -182,35 +183,6 @@ void appendPlanes(std::string& out, const signals::SignalInfo& signal, const sig
 }
 
 // ---- watch -------------------------------------------------------------------------------
-
-volatile std::sig_atomic_t g_stopWatching = 0;
-
-void onStopSignal(int /*signal*/) {
-  g_stopWatching = 1;
-}
-
-/// SIGINT/SIGTERM end the watch cleanly while it runs; the previous handlers come back after.
-class StopSignalScope {
- public:
-  StopSignalScope() {
-    g_stopWatching = 0;
-    struct sigaction action {};
-    action.sa_handler = onStopSignal;
-    sigemptyset(&action.sa_mask);
-    ::sigaction(SIGINT, &action, &m_previousInt);
-    ::sigaction(SIGTERM, &action, &m_previousTerm);
-  }
-  StopSignalScope(const StopSignalScope&) = delete;
-  StopSignalScope& operator=(const StopSignalScope&) = delete;
-  ~StopSignalScope() {
-    ::sigaction(SIGINT, &m_previousInt, nullptr);
-    ::sigaction(SIGTERM, &m_previousTerm, nullptr);
-  }
-
- private:
-  struct sigaction m_previousInt {};
-  struct sigaction m_previousTerm {};
-};
 
 /// What a watcher last saw of one signal's planes.
 struct SeenPlanes {
@@ -481,7 +453,7 @@ ExitCode runSignalWatch(const SignalWatchOptions& options, Streams streams) {
       std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(options.forSeconds));
   std::uint64_t printed = 0;
   std::vector<std::pair<std::int64_t, std::string>> changes;
-  while (g_stopWatching == 0) {
+  while (!stopRequested()) {
     std::chrono::nanoseconds wait =
         complete ? std::chrono::nanoseconds{WATCH_TICK} : std::chrono::nanoseconds{WATCH_RETRY};
     if (options.forSeconds > 0) {

@@ -7,8 +7,8 @@
 // (CLOCK_MONOTONIC in the sample, CLOCK_REALTIME in frame.timestampNs) and published;
 // every other attached link receives it, in one order per sender; the sender's own
 // frames are dropped by sender id, like a SocketCAN socket with loopback on and
-// CAN_RAW_RECV_OWN_MSGS off. Frames sent before a peer is connected (RouDi connects new
-// ports within ~100 ms) are not delivered to it: like a node joining a bus late.
+// CAN_RAW_RECV_OWN_MSGS off. Frames sent before a peer's link exists are not delivered to
+// it: like a node joining a bus late.
 // The sim bus does not arbitrate: it moves frames as fast as they are sent. Bus load is
 // computed by receivers from each frame's wire time at the configured bit rate
 // (wire_time.hpp), so an overloaded sim bus shows up as a load above 100 %.

@@ -14,6 +14,7 @@
 //   }
 // Reference: docs/config.md.
 
+#include "openvcu/can/link.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/model.hpp"
 
@@ -24,7 +25,8 @@
 
 namespace openvcu::config {
 
-enum class LinkKind : std::uint8_t { SocketCan, Sim, Replay };
+/// The link kinds are the CAN links' own (shared/can/link.hpp).
+using LinkKind = can::LinkKind;
 
 /// "socketcan:can0", "sim:vehicle" or "replay:FILE".
 struct Link {
@@ -55,6 +57,10 @@ struct BusConfig {
   BusFilter filter{BusFilter::Dbc};
   ReplaySettings replay;
   std::vector<std::size_t> messages;     ///< indices into VehicleConfig::database.messages
+
+  /// The link settings this bus gives every service that opens it (no filters: the
+  /// receiver adds its own).
+  [[nodiscard]] can::LinkOptions linkOptions() const;
 };
 
 struct InternalSignal {
