@@ -9,10 +9,10 @@
 // transmitter is not the configured node, with the DBC identifier as is (29-bit IDs carry the
 // message's source address) and the DBC length, payloads random from --seed, drawn once into
 // a pool before sending. Pacing: absolute 1 ms deadlines (clock_nanosleep TIMER_ABSTIME on
-// CLOCK_MONOTONIC); at deadline k the frames due by then (rate x k / 1000, rounded down) are
-// sent in one batch, so a late wake-up is caught up at once and the long-run rate is exact
-// (the largest such batch is reported: a batch larger than a receiver's queue cannot all
-// arrive, whatever the receiver's speed).
+// CLOCK_MONOTONIC); at each wake-up the frames due by then (rate x whole milliseconds since
+// the start / 1000) go out in one batch, so a late wake-up is caught up at once and the
+// long-run rate is exact. The largest batch is reported: a batch larger than a receiver's
+// queue (256 samples on a sim link) cannot all arrive, whatever the receiver's speed.
 // No busy loop. A send that returns Busy (no iceoryx chunk) is counted and not retried.
 //
 // After opening the link it waits --connect-ms (default 1000) before the first frame:
@@ -106,7 +106,7 @@ struct Totals {
   std::uint64_t failed{};  ///< Down, Invalid, NotSupported
   std::uint64_t lateDeadlines{};  ///< woke more than one period after the deadline
   std::int64_t maxLateNs{};
-  std::uint64_t maxBatch{};  ///< most frames sent at one deadline (catching up after a late wake-up)
+  std::uint64_t maxBatch{};  ///< most frames sent in one batch (catching up after a late wake-up)
   std::int64_t elapsedNs{};
 };
 
@@ -116,13 +116,17 @@ Totals sendPaced(can::Link& link, const std::vector<can::Frame>& pool, std::uint
   const std::uint64_t total = rate * seconds;
   std::size_t next = 0;
   const std::int64_t start = monotonicNs();
-  for (std::uint64_t tick = 0; tick <= ticks; ++tick) {
+  std::uint64_t tick = 0;
+  for (;;) {
     const std::int64_t deadline = start + static_cast<std::int64_t>(tick) * NS_PER_MS;
     sleepUntil(deadline);
-    const std::int64_t late = monotonicNs() - deadline;
+    const std::int64_t now = monotonicNs();
+    const std::int64_t late = now - deadline;
     if (late > NS_PER_MS) ++totals.lateDeadlines;
-    if (late > totals.maxLateNs) totals.maxLateNs = late;
-    const std::uint64_t due = tick == ticks ? total : rate * tick / 1000;
+    totals.maxLateNs = std::max(totals.maxLateNs, late);
+    // Everything due by now goes out in this batch (one batch even after a late wake-up).
+    const std::uint64_t elapsedTicks = std::min(ticks, static_cast<std::uint64_t>((now - start) / NS_PER_MS));
+    const std::uint64_t due = elapsedTicks == ticks ? total : rate * elapsedTicks / 1000;
     totals.maxBatch = std::max(totals.maxBatch, due - totals.attempted);
     while (totals.attempted < due) {
       const can::SendStatus status = link.send(pool[next]);
@@ -137,6 +141,8 @@ Totals sendPaced(can::Link& link, const std::vector<can::Frame>& pool, std::uint
       }
     }
     drain(link);
+    if (elapsedTicks == ticks) break;
+    tick = elapsedTicks + 1;
   }
   totals.elapsedNs = monotonicNs() - start;
   return totals;

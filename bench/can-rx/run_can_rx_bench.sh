@@ -21,7 +21,10 @@
 # heartbeat counters (`vcu status`) must show frames = frames sent and dropped = 0 per bus.
 # environment: IDLE_SECONDS (10), TWO_BUS_RATE (4000), TWO_BUS_SECONDS (30),
 #              STEP_RATES ("8000 16000 32000 64000"), STEP_SECONDS (10), SKIP_INPROCESS (unset),
-#              PERF_SECONDS (unset: no profile; N: an extra two-bus window under `perf record`)
+#              PERF_SECONDS (unset: no profile; N: an extra two-bus window under `perf record`),
+#              BATCH_WINDOW_US (1000: vcu-can-rx's receive-file batch window)
+# exit: 0; 1 when the two-bus run lost or miscounted a frame or something failed to start
+# (a step that loses frames is reported and does not count toward the highest rate).
 set -euo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -194,6 +197,9 @@ if [[ -z "${SKIP_INPROCESS:-}" ]]; then
   "$build/bench/bench_receiver" --config "$repo/config/hhea/vehicle.json"
 fi
 
+# can-rx's batch window (receive file "batchWindowUs"; 1000 is the default).
+echo "{\"batchWindowUs\": ${BATCH_WINDOW_US:-1000}}" >"$work/receive.json"
+
 # The two-bus configuration: the VIC, charger and DC-DC traffic on "battery", the rest
 # (PDU, Editron, HVLP inverters and the VCU's own commands to them) on "vehicle".
 cat >"$config" <<EOF
@@ -202,6 +208,7 @@ cat >"$config" <<EOF
   "instance": "canrxbench",
   "node": "Vehicle_Control_Unit",
   "dbc": ["$repo/config/hhea/hhea.dbc"],
+  "receive": "$work/receive.json",
   "buses": [
     {"name": "battery", "link": "sim:battery", "bitrate": 500000,
      "messages": ["HVESSS1_PGN61590", "PropA_C3_PGN61184", "HVESSD1_PGN61584", "HVESSD2_PGN61585",

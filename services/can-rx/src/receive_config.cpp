@@ -53,7 +53,8 @@ class Loader {
 
   void run(const config::Json& root) {
     if (!m_check.isObject(root, "")) return;
-    m_check.onlyKeys(root, "", {"timeoutFactor", "messages", "safety", "forward", "transport", "dm1", "comment"});
+    m_check.onlyKeys(root, "", {"timeoutFactor", "messages", "safety", "forward", "transport", "dm1", "batchWindowUs",
+                                "comment"});
     if (auto factor = m_check.number(root, "", "timeoutFactor", false)) {
       if (!(*factor >= 1.0 && *factor <= 100.0)) {
         m_check.error("/timeoutFactor", "must be between 1 and 100 (times the DBC cycle)");
@@ -78,6 +79,13 @@ class Loader {
       }
     }
     if (auto dm1 = m_check.boolean(root, "", "dm1", false)) m_config.dm1 = *dm1;
+    if (auto window = m_check.number(root, "", "batchWindowUs", false)) {
+      if (!(*window >= 0 && *window <= 20'000) || *window != std::floor(*window)) {
+        m_check.error("/batchWindowUs", "must be a whole number of microseconds from 0 (off) to 20000");
+      } else {
+        m_config.batchWindowUs = static_cast<std::uint32_t>(*window);
+      }
+    }
   }
 
   ReceiveConfig& config() { return m_config; }

@@ -9,7 +9,8 @@
 //     "forward": [{"from": "vehicle", "to": "battery", "id": "0x18FF5071", "rewriteId": "0x18FF5021"},
 //                 {"from": "vehicle", "to": "battery", "pgn": 65280, "source": "0x71"}],
 //     "transport": {"maxPacketsPerCts": 16},
-//     "dm1": true
+//     "dm1": true,
+//     "batchWindowUs": 1000
 //   }
 // Reference: services/can-rx/README.md.
 
@@ -51,6 +52,9 @@ struct ReceiveConfig {
   std::vector<ForwardRule> forward;
   std::uint8_t maxPacketsPerCts{16};
   bool dm1{true};
+  /// After handling what woke it, vcu-can-rx lets frames gather this long before it waits
+  /// again (Loop::setBatchWindow): fewer wake-ups at high rates, at most this much latency.
+  std::uint32_t batchWindowUs{1000};
 };
 
 /// The defaults for `vehicle` (timeouts = factor x GenMsgCycleTime of received messages).

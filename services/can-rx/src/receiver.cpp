@@ -108,6 +108,8 @@ struct ReceiverImpl {
   std::array<bool, 256> ownAddress{};              ///< addresses this node answers requests on
   std::uint8_t tpAddress{j1939::NULL_ADDRESS};
   MessageCounters noCounters;
+  std::int64_t startNs{};
+  std::int64_t lastTickNs{};
 
   ReceiverImpl(const config::VehicleConfig& vehicleConfig, ReceiveConfig receiveConfig,
                signals::SignalTable& signalTable, ReceiverOutputs& receiverOutputs)
@@ -381,6 +383,7 @@ struct ReceiverImpl {
   // ---- time -----------------------------------------------------------------------------
 
   void onTick(std::int64_t nowNs) noexcept {
+    lastTickNs = nowNs;
     for (MessageState& message : messages) {
       if (message.timeoutNs <= 0 || message.counters.stale) continue;
       if (nowNs - message.lastNs <= message.timeoutNs) continue;
@@ -406,7 +409,9 @@ struct ReceiverImpl {
       }
     }
     for (SafetyState& group : safety) {
-      const bool overdue = group.checker.headerOverdue(nowNs);
+      // From the start, a group gets one SHM cycle before its first SHM is overdue.
+      const bool overdue =
+          group.checker.headerOverdue(nowNs) && nowNs - startNs > group.checker.config().maxHeaderCycleNs;
       if (overdue == group.headerOverdue) continue;
       group.headerOverdue = overdue;
       raise(group.fault + ".header", overdue, ipc::FaultSeverity::Error,
@@ -463,6 +468,8 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, ReceiveC
                                   const signals::Catalog& catalog, signals::SignalTable& table,
                                   ReceiverOutputs& outputs, std::int64_t startNs) {
   auto impl = std::make_unique<ReceiverImpl>(vehicle, std::move(receive), table, outputs);
+  impl->startNs = startNs;
+  impl->lastTickNs = startNs;
   const dbc::Database& database = vehicle.database;
   impl->trackedByMessage.assign(database.messages.size(), -1);
   impl->busByMessage.assign(database.messages.size(), -1);
@@ -563,12 +570,19 @@ void Receiver::onBusEvent(std::size_t bus, const can::BusEvent& event) noexcept 
 }
 void Receiver::onTick(std::int64_t nowNs) noexcept { m_impl->onTick(nowNs); }
 
-std::int64_t Receiver::tickPeriodNs() const noexcept {
-  std::int64_t shortest = 400 * MS;
+std::int64_t Receiver::nextDeadlineNs() const noexcept {
+  std::int64_t next = m_impl->lastTickNs + LOAD_UPDATE_NS;
   for (const MessageState& message : m_impl->messages) {
-    if (message.timeoutNs > 0) shortest = std::min(shortest, message.timeoutNs);
+    if (message.timeoutNs > 0 && !message.counters.stale) next = std::min(next, message.lastNs + message.timeoutNs + 1);
   }
-  return std::clamp<std::int64_t>(shortest / 4, 5 * MS, 100 * MS);
+  for (const BusSlot& bus : m_impl->buses) {
+    if (const auto maybeDeadline = bus.transport->nextDeadlineNs()) next = std::min(next, *maybeDeadline);
+  }
+  for (const SafetyState& group : m_impl->safety) {
+    // The checker keeps its last SHM time to itself: look again every quarter cycle.
+    next = std::min(next, m_impl->lastTickNs + std::max<std::int64_t>(group.checker.config().maxHeaderCycleNs / 4, MS));
+  }
+  return next;
 }
 
 void Receiver::rollPeriodWindow() noexcept {
@@ -581,6 +595,8 @@ void Receiver::rollPeriodWindow() noexcept {
     message.windowIntervals = 0;
   }
 }
+
+std::uint32_t Receiver::batchWindowUs() const noexcept { return m_impl->receive.batchWindowUs; }
 
 std::size_t Receiver::busCount() const noexcept { return m_impl->buses.size(); }
 const BusCounters& Receiver::counters(std::size_t bus) const noexcept { return m_impl->buses[bus].counters; }

@@ -97,11 +97,17 @@ class Receiver {
 
   void onFrame(std::size_t bus, const can::ReceivedFrame& frame) noexcept;
   void onBusEvent(std::size_t bus, const can::BusEvent& event) noexcept;
-  /// Staleness, TP timeouts, J1939-76 header cycles, bus load. Call at least every
-  /// tickPeriod(); more often is harmless.
+  /// Staleness, TP timeouts, J1939-76 header cycles, bus load. Call it at
+  /// nextDeadlineNs() (and after frames arrived, when that moved earlier); more often is
+  /// harmless.
   void onTick(std::int64_t nowNs) noexcept;
-  /// How often onTick should run: a quarter of the shortest timeout, 5..100 ms.
-  [[nodiscard]] std::int64_t tickPeriodNs() const noexcept;
+  /// When onTick must run next: the earliest receive timeout still running, TP deadline
+  /// or J1939-76 check, and at least every LOAD_UPDATE_NS for the bus-load slots.
+  /// @note noexcept, allocation-free; O(tracked messages).
+  [[nodiscard]] std::int64_t nextDeadlineNs() const noexcept;
+  static constexpr std::int64_t LOAD_UPDATE_NS = 250'000'000;
+  /// The receive file's batch window (for the service loop).
+  [[nodiscard]] std::uint32_t batchWindowUs() const noexcept;
   /// Closes the heartbeat window of the per-message period statistics.
   void rollPeriodWindow() noexcept;
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <ctime>
 #include <cstring>
 #include <optional>
 #include <vector>
@@ -75,6 +76,7 @@ struct LoopImpl {
   std::atomic<int> exitCode{0};
   std::vector<pollfd> pollFds;  // reused between waits
   std::vector<std::uint64_t> pollIds;
+  std::chrono::nanoseconds batchWindow{0};
 };
 
 Status LoopImpl::add(std::unique_ptr<Source> source) {
@@ -214,8 +216,25 @@ Status Loop::addSubscriber(ipc::FrameSubscriber& subscriber, std::function<void(
 }
 
 int Loop::run() {
-  while (!m_impl->stopRequested) m_impl->waitAndDispatch(std::nullopt);
+  while (!m_impl->stopRequested) {
+    m_impl->waitAndDispatch(std::nullopt);
+    if (m_impl->batchWindow.count() > 0 && !m_impl->stopRequested) {
+      // Let what arrives next gather for one window: one wake-up handles a batch.
+      // Absolute deadline from the end of this dispatch (the wait itself is not batched).
+      timespec deadline{};
+      ::clock_gettime(CLOCK_MONOTONIC, &deadline);
+      const std::int64_t ns = deadline.tv_nsec + m_impl->batchWindow.count();
+      deadline.tv_sec += static_cast<time_t>(ns / 1'000'000'000);
+      deadline.tv_nsec = static_cast<long>(ns % 1'000'000'000);
+      while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &deadline, nullptr) == EINTR) {
+      }
+    }
+  }
   return m_impl->exitCode;
+}
+
+void Loop::setBatchWindow(std::chrono::nanoseconds window) noexcept {
+  m_impl->batchWindow = std::max(window, std::chrono::nanoseconds{0});
 }
 
 bool Loop::runOnce(std::chrono::nanoseconds timeout) {

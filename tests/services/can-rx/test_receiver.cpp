@@ -494,9 +494,17 @@ TEST_CASE("the DBC filters of a bus accept its messages and the J1939 protocol P
   CHECK_FALSE(accepts(0x123, true));
 }
 
-TEST_CASE("the tick period is a quarter of the shortest timeout, within 5..100 ms") {
+TEST_CASE("the next deadline is the earliest running receive timeout, or the next bus-load update") {
   Fixture f;
-  CHECK(f.sut->tickPeriodNs() == 15 * MS);  // ECU1_Status: 60 ms
+  // Safety group BMS_Safe (SCT 100 ms) is looked at every 25 ms from the last tick.
+  CHECK(f.sut->nextDeadlineNs() == START + 25 * MS);
+  f.sut->onTick(START + 61 * MS);  // everything timed out ("never received")
+  CHECK(f.sut->nextDeadlineNs() == START + 61 * MS + 25 * MS);
+  f.sut->onFrame(BUS_A, frameOf(0x18FF1010, {1, 0, 1, 0, 0, 0, 0, 0}, START + 70 * MS));
+  f.sut->onTick(START + 71 * MS);
+  CHECK(f.sut->nextDeadlineNs() == START + 96 * MS);  // the safety look, before ECU1_Status' timeout
+  f.sut->onTick(START + 110 * MS);
+  CHECK(f.sut->nextDeadlineNs() == START + 70 * MS + 60 * MS + 1);  // ECU1_Status: 60 ms after its frame
 }
 
 TEST_CASE("a BAM from one node and an RTS/CTS transfer from another, interleaved, both complete") {

@@ -120,6 +120,7 @@ class SafetyPairChecker {
 
   [[nodiscard]] std::uint32_t headerCanId() const noexcept { return m_headerCanId; }
   [[nodiscard]] std::uint32_t dataCanId() const noexcept { return m_config.dataCanId; }
+  [[nodiscard]] const SafetyPairConfig& config() const noexcept { return m_config; }
 
   /// Stores an SHM until its SDM arrives. An SHM still waiting for its SDM is replaced
   /// and counted in droppedHeaders().

@@ -69,6 +69,11 @@ class Loop {
   /// Makes run() return `exitCode` after the callback in progress (if any) finishes.
   void stop(int exitCode = 0) noexcept;
   [[nodiscard]] bool stopped() const noexcept;
+  /// run(): after each dispatch, wait `window` before waiting for events again, so that
+  /// frames arriving meanwhile are handled in one batch (fewer wake-ups and context
+  /// switches at high frame rates; every event waits at most `window` longer). 0: off
+  /// (default).
+  void setBatchWindow(std::chrono::nanoseconds window) noexcept;
   /// true when the iceoryx back end (ipc::Waiter) is in use.
   [[nodiscard]] bool usesWaiter() const noexcept;
 
