@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <thread>
+#include <vector>
 
 #include "openvcu/service/loop.hpp"
 
@@ -138,4 +139,36 @@ TEST_CASE("a callback that throws stops the loop with exit code 1 instead of unw
   const int exitCode = sut.run();
 
   CHECK(exitCode == 1);
+}
+
+TEST_CASE("with a batch window, what arrives during the window is handled in one dispatch") {
+  service::Loop sut = makeLoop();
+  sut.setBatchWindow(200ms);
+  Pipe pipe;
+  std::vector<int> batches;
+  std::thread writer;
+  REQUIRE(sut.addFd(pipe.readEnd(),
+                    [&] {
+                      char bytes[16];
+                      const ssize_t got = ::read(pipe.readEnd(), bytes, sizeof bytes);
+                      batches.push_back(static_cast<int>(got));
+                      if (batches.size() == 1) {
+                        // Three more bytes arrive while the loop sits out its window.
+                        writer = std::thread([&pipe] {
+                          for (int i = 0; i < 3; ++i) pipe.put();
+                        });
+                      } else {
+                        sut.stop(0);
+                      }
+                    })
+              .ok());
+  pipe.put();
+  const auto start = std::chrono::steady_clock::now();
+  CHECK(sut.run() == 0);
+  const auto elapsed = std::chrono::steady_clock::now() - start;
+  writer.join();
+  REQUIRE(batches.size() == 2);
+  CHECK(batches[0] == 1);
+  CHECK(batches[1] == 3);  // one wake-up for the three bytes written during the window
+  CHECK(elapsed >= 200ms);
 }
