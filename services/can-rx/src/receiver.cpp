@@ -124,11 +124,17 @@ struct ReceiverImpl {
 
   void onFrame(std::size_t busIndex, const can::ReceivedFrame& received) noexcept {
     BusSlot& bus = buses[busIndex];
-    const can::Frame& frame = received.frame;
     ++bus.counters.frames;
-    bus.load->add(frame, received.monotonicNs);
+    bus.load->add(received.frame, received.monotonicNs);
+    handle(busIndex, received);
+    // After the table writes: whoever sees the frame on a stream finds its values written.
     outputs.received(busIndex, received);
-    forward(busIndex, frame);
+    forward(busIndex, received.frame);
+  }
+
+  void handle(std::size_t busIndex, const can::ReceivedFrame& received) noexcept {
+    BusSlot& bus = buses[busIndex];
+    const can::Frame& frame = received.frame;
     if (frame.extended()) {
       const j1939::Id id = j1939::Id::fromCanId(frame.id);
       const std::uint32_t pgn = id.pgn();
@@ -279,14 +285,6 @@ struct ReceiverImpl {
       state->label = "SA " + hex(source, 2);
     }
     const j1939::Dm1& now = *maybeDm1;
-    static const j1939::Dm1 NONE{};
-    const j1939::Dm1& before = state->has ? state->last : NONE;
-    j1939::diffDtcs(
-        before, now,
-        [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, true); },
-        [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, false); });
-    state->last = now;
-    state->has = true;
     const double values[config::DM1_FIELDS.size()] = {
         static_cast<double>(now.dtcCount),
         static_cast<double>(now.lamps.protect),
@@ -302,6 +300,15 @@ struct ReceiverImpl {
                        signals::Quality::Valid);
       }
     }
+    // The table first, then the events: whoever reacts to a fault finds the slots written.
+    static const j1939::Dm1 NONE{};
+    const j1939::Dm1& before = state->has ? state->last : NONE;
+    j1939::diffDtcs(
+        before, now,
+        [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, true); },
+        [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, false); });
+    state->last = now;
+    state->has = true;
     ++buses[busIndex].counters.dm1Messages;
   }
 
