@@ -30,6 +30,10 @@ static_assert(static_cast<std::int8_t>(CommandKind::SetOverride) == openvcu_lcm:
 static_assert(static_cast<std::int8_t>(CommandKind::ClearOverride) == openvcu_lcm::command_request_t::CLEAR_OVERRIDE);
 static_assert(static_cast<std::int8_t>(CommandKind::OperatorSwitch) == openvcu_lcm::command_request_t::OPERATOR_SWITCH);
 static_assert(static_cast<std::int8_t>(CommandKind::FaultReset) == openvcu_lcm::command_request_t::FAULT_RESET);
+static_assert(static_cast<std::int8_t>(CommandKind::ScheduleCycle) == openvcu_lcm::command_request_t::SCHEDULE_CYCLE);
+static_assert(static_cast<std::int8_t>(CommandKind::ScheduleEnable) == openvcu_lcm::command_request_t::SCHEDULE_ENABLE);
+static_assert(static_cast<std::int8_t>(CommandKind::ScheduleDefault) ==
+              openvcu_lcm::command_request_t::SCHEDULE_DEFAULT);
 static_assert(static_cast<std::int8_t>(FaultSeverity::Info) == openvcu_lcm::fault_event_t::INFO);
 static_assert(static_cast<std::int8_t>(FaultSeverity::Warning) == openvcu_lcm::fault_event_t::WARNING);
 static_assert(static_cast<std::int8_t>(FaultSeverity::Error) == openvcu_lcm::fault_event_t::ERROR);

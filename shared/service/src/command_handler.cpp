@@ -4,6 +4,7 @@
 #include <array>
 #include <charconv>
 #include <cmath>
+#include <exception>
 #include <limits>
 
 #include "openvcu/ipc/event_bus.hpp"
@@ -20,14 +21,22 @@ bool knownKind(ipc::CommandKind kind) noexcept {
     case ipc::CommandKind::ClearOverride:
     case ipc::CommandKind::OperatorSwitch:
     case ipc::CommandKind::FaultReset:
+    case ipc::CommandKind::ScheduleCycle:
+    case ipc::CommandKind::ScheduleEnable:
+    case ipc::CommandKind::ScheduleDefault:
       return true;
   }
   return false;
 }
 
+bool isCustom(const CommandPolicy& policy, ipc::CommandKind kind) noexcept {
+  return std::find(policy.customKinds.begin(), policy.customKinds.end(), kind) != policy.customKinds.end();
+}
+
 bool carriesValue(ipc::CommandKind kind) noexcept {
   return kind == ipc::CommandKind::SetSignal || kind == ipc::CommandKind::SetOverride ||
-         kind == ipc::CommandKind::OperatorSwitch;
+         kind == ipc::CommandKind::OperatorSwitch || kind == ipc::CommandKind::ScheduleCycle ||
+         kind == ipc::CommandKind::ScheduleEnable || kind == ipc::CommandKind::ScheduleDefault;
 }
 
 /// Shortest text that reads back as the same double ("0.1", "100", "1e+20").
@@ -71,12 +80,22 @@ std::string commandKindName(ipc::CommandKind kind) {
       return "OperatorSwitch";
     case ipc::CommandKind::FaultReset:
       return "FaultReset";
+    case ipc::CommandKind::ScheduleCycle:
+      return "ScheduleCycle";
+    case ipc::CommandKind::ScheduleEnable:
+      return "ScheduleEnable";
+    case ipc::CommandKind::ScheduleDefault:
+      return "ScheduleDefault";
   }
   return "kind " + std::to_string(static_cast<int>(kind));
 }
 
 CommandVerdict checkCommand(const ipc::CommandRequest& request, const signals::Catalog& catalog,
                             const CommandPolicy& policy) {
+  if (isCustom(policy, request.kind)) {
+    if (!policy.custom) return refuse(commandKindName(request.kind) + " has no handler in this service");
+    return CommandVerdict{CommandDecision::Accepted, {}, {}};
+  }
   if (!policy.owns || !policy.owns(request.key)) return CommandVerdict{};
   const auto found = catalog.find(request.key);
   if (!found) return refuse(found.error().message);
@@ -137,7 +156,10 @@ bool CommandHandler::apply(const ipc::CommandRequest& request, signals::SignalIn
     case ipc::CommandKind::ClearOverride:
       return m_table.clearOverride(index, now, m_writer);
     case ipc::CommandKind::FaultReset:
-      return false;  // not a table operation: a service that permits it handles it in its veto
+    case ipc::CommandKind::ScheduleCycle:
+    case ipc::CommandKind::ScheduleEnable:
+    case ipc::CommandKind::ScheduleDefault:
+      return false;  // not table operations: a service handles them as custom kinds (or in its veto)
   }
   return false;
 }
@@ -148,8 +170,18 @@ CommandVerdict CommandHandler::handle(const ipc::CommandRequest& request) {
     ++m_ignored;
     return verdict;
   }
-  if (verdict.decision == CommandDecision::Accepted && !apply(request, *verdict.index)) {
+  if (verdict.decision == CommandDecision::Accepted && isCustom(m_policy, request.kind)) {
+    std::optional<std::string> refusal;
+    try {
+      refusal = m_policy.custom(request);
+    } catch (const std::exception& error) {
+      refusal = std::string("internal error: ") + error.what();
+    }
+    if (refusal) verdict = CommandVerdict{CommandDecision::Refused, std::move(*refusal), {}};
+  } else if (verdict.decision == CommandDecision::Accepted && !apply(request, *verdict.index)) {
     verdict = CommandVerdict{CommandDecision::Refused, "the signal table did not take the write", verdict.index};
+  } else if (verdict.decision == CommandDecision::Accepted && m_policy.applied) {
+    m_policy.applied(request, *verdict.index);
   }
   const bool accepted = verdict.decision == CommandDecision::Accepted;
   ++(accepted ? m_accepted : m_refused);

@@ -43,6 +43,10 @@ enum class CommandKind : std::int8_t {
   ClearOverride = 3,   ///< remove the override of `key`
   OperatorSwitch = 4,  ///< operator intent (Start, Connect Driving, ...): switch `key` to `value`
   FaultReset = 5,      ///< reset latched fault `key` (empty: all)
+  // can-tx's transmit schedule (services/can-tx): effective at once, kept across restarts.
+  ScheduleCycle = 6,    ///< cycle time of the message named `key` to `value` ms
+  ScheduleEnable = 7,   ///< message `key` transmitted (`value` 1) or not (0)
+  ScheduleDefault = 8,  ///< value sent for signal `key` while nothing commands it
 };
 
 struct CommandRequest {

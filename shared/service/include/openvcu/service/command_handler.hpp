@@ -49,6 +49,14 @@ struct CommandPolicy {
                                       ipc::CommandKind::ClearOverride, ipc::CommandKind::OperatorSwitch};
   /// Last check: a reason to refuse, or empty to accept. Optional.
   std::function<std::optional<std::string>(const ipc::CommandRequest&, const signals::SignalInfo&)> veto;
+  /// Kinds that are not table operations and that this service alone answers, whatever
+  /// the key (can-tx: ScheduleCycle, ScheduleEnable, ScheduleDefault). Such a request skips
+  /// checks 1-5: `custom` checks and applies it and returns a refusal reason, or empty
+  /// when it was applied.
+  std::vector<ipc::CommandKind> customKinds;
+  std::function<std::optional<std::string>(const ipc::CommandRequest&)> custom;
+  /// Called after an accepted table command was applied (e.g. to persist it). Optional.
+  std::function<void(const ipc::CommandRequest&, signals::SignalIndex)> applied;
 
   /// Owns every key that starts with `prefix` ("internal.operator.").
   static CommandPolicy byPrefix(std::string prefix);
@@ -66,10 +74,12 @@ struct CommandVerdict {
   std::optional<signals::SignalIndex> index;  ///< the key's index when known
 };
 
-/// "SetSignal", "SetOverride", "ClearOverride", "OperatorSwitch", "FaultReset", "kind N".
+/// "SetSignal", "SetOverride", "ClearOverride", "OperatorSwitch", "FaultReset",
+/// "ScheduleCycle", "ScheduleEnable", "ScheduleDefault", "kind N".
 [[nodiscard]] std::string commandKindName(ipc::CommandKind kind);
 
-/// The checks alone (no table, no bus): what CommandHandler::handle would decide.
+/// The checks alone (no table, no bus): what CommandHandler::handle would decide. For a
+/// custom kind it only says Accepted (with no index) when the policy has a `custom` hook.
 [[nodiscard]] CommandVerdict checkCommand(const ipc::CommandRequest& request, const signals::Catalog& catalog,
                                           const CommandPolicy& policy);
 

@@ -1,0 +1,26 @@
+// vcu-can-tx: sends this VCU's schedule (cyclic messages, J1939-76 safety pairs, send
+// groups, computed fields), answers J1939 requests, sends one-shot frames for other
+// processes and commands safe values when a command writer dies. README.md.
+
+#include "can_tx_app.hpp"
+#include "openvcu/service/service.hpp"
+#include "scheduler.hpp"
+
+namespace service = openvcu::service;
+
+int main(int argc, char** argv) {
+  const service::ServiceInfo info{.name = "can-tx",
+                                  .program = {},
+                                  .description = "CAN transmit: the schedule, J1939-76 pairs, requests, one-shots",
+                                  .version = {},
+                                  .writerId = openvcu::cantx::CAN_TX_WRITER,
+                                  .usesFrameStreams = true};
+  service::CommandLine commandLine(info);
+  if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
+  auto serviceResult = service::Service::open(info, commandLine.options());
+  if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
+  service::Service& runtime = **serviceResult;
+  auto appResult = openvcu::cantx::CanTxApp::create(runtime);
+  if (!appResult) return service::reportStartupError(info, appResult.error());
+  return runtime.run();
+}

@@ -1,0 +1,423 @@
+#include "can_tx_app.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <deque>
+#include <filesystem>
+#include <optional>
+
+#include "openvcu/can/open_link.hpp"
+#include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/j1939/id.hpp"
+#include "openvcu/j1939/request.hpp"
+#include "openvcu/service/timer.hpp"
+#include "scheduler.hpp"
+#include "tx_thread.hpp"
+
+namespace openvcu::cantx {
+namespace {
+
+constexpr std::string_view GROUP_KEYS = "internal.tx.";
+constexpr std::chrono::milliseconds WATCH_PERIOD{100};
+constexpr std::int64_t NS_PER_MS = 1'000'000;
+
+std::string number(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+}  // namespace
+
+struct BusIo {
+  std::unique_ptr<can::Link> link;
+  std::optional<ipc::FramePublisher> sent;
+  std::optional<ipc::FrameSubscriber> sendRequests;
+  std::optional<ipc::FrameSubscriber> requests;
+  std::atomic<std::uint64_t> publishFailures{};
+  std::atomic<std::uint64_t> framesSent{};
+};
+
+struct WriterState {
+  bool lost{};
+};
+
+struct CanTxAppImpl final : TxPort, Clock {
+  service::Service& runtime;
+  const config::VehicleConfig& vehicle;
+  Schedule schedule;  ///< the loop thread's view: checks and persistence
+  Overlay overlay;
+  std::deque<BusIo> buses;  // deque: stable addresses (atomics, the loop's callbacks)
+  std::unique_ptr<Scheduler> scheduler;
+  std::optional<TxThread> thread;
+  std::optional<service::PeriodicTimer> watchTimer;
+  std::vector<WriterState> writers;
+  std::int64_t startNs{};
+  std::uint64_t writersLost{};
+
+  explicit CanTxAppImpl(service::Service& service) : runtime(service), vehicle(service.config()) {}
+  ~CanTxAppImpl() override {
+    if (thread) thread->stop();  // before the links, streams and the scheduler it uses
+    if (watchTimer) runtime.loop().removeFd(watchTimer->fd());
+  }
+
+  // ---- TxPort and Clock (transmit thread) -------------------------------------------------
+
+  can::SendStatus send(std::size_t bus, const can::Frame& frame) noexcept override {
+    BusIo& io = buses[bus];
+    const can::SendStatus status = io.link->send(frame);
+    if (status != can::SendStatus::Sent) return status;
+    io.framesSent.fetch_add(1, std::memory_order_relaxed);
+    ipc::FramePublisher& publisher = *io.sent;
+    if (!publisher.hasSubscribers()) return status;
+    std::optional<ipc::FrameLoan> maybeLoan = publisher.loan();
+    if (!maybeLoan) {
+      io.publishFailures.fetch_add(1, std::memory_order_relaxed);
+      return status;
+    }
+    ipc::FrameSample& sample = maybeLoan->sample();
+    sample.frame = frame;
+    sample.monotonicNs = signals::monotonicNowNs();
+    sample.hardwareNs = 0;
+    sample.busIndex = static_cast<std::uint16_t>(bus);
+    if (!publisher.publish(std::move(*maybeLoan))) io.publishFailures.fetch_add(1, std::memory_order_relaxed);
+    return status;
+  }
+
+  std::int64_t monotonicNs() noexcept override { return signals::monotonicNowNs(); }
+  std::int64_t realtimeNs() noexcept override {
+    timespec now{};
+    ::clock_gettime(CLOCK_REALTIME, &now);
+    return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+  }
+
+  // ---- start-up ---------------------------------------------------------------------------
+
+  void fault(const std::string& name, ipc::FaultSeverity severity, bool active, const std::string& text) {
+    runtime.events().publish(ipc::FaultEvent{0, name, runtime.program(), severity, active, text});
+    const std::string line = std::string(active ? "fault raised: " : "fault cleared: ") + name + ": " + text;
+    if (active) {
+      runtime.log().error(line);
+    } else {
+      runtime.log().info(line);
+    }
+  }
+
+  /// The overlay over the schedule; a bad overlay is set aside whole (never half applied).
+  void loadOverlayOrSetAside() {
+    auto overlayResult = loadOverlay(schedule.overlay);
+    Result<Schedule> applied = overlayResult ? applyOverlay(schedule, *overlayResult, vehicle, runtime.catalog())
+                                             : Result<Schedule>(overlayResult.error());
+    if (applied) {
+      schedule = std::move(*applied);
+      overlay = std::move(*overlayResult);
+      if (!overlay.empty()) runtime.log().info("runtime changes from " + schedule.overlay + " applied");
+      return;
+    }
+    const std::string rejected = schedule.overlay + ".rejected";
+    std::error_code renameError;
+    std::filesystem::rename(schedule.overlay, rejected, renameError);
+    fault("schedule_overlay_rejected", ipc::FaultSeverity::Warning, true,
+          applied.error().message + "; ignored whole, moved to " + rejected +
+              (renameError ? " (move failed: " + renameError.message() + ")" : ""));
+  }
+
+  void applyOverrides() {
+    const std::int64_t now = signals::monotonicNowNs();
+    for (const auto& [key, value] : overlay.overrides) {
+      if (const auto index = runtime.catalog().indexOf(key)) {
+        runtime.table().setOverride(*index, value, now, CAN_TX_WRITER);
+        runtime.log().warning("override " + key + " = " + number(value) + " restored from " + schedule.overlay);
+      }
+    }
+  }
+
+  Status open() {
+    auto scheduleResult = loadSchedule(vehicle, runtime.catalog());
+    if (!scheduleResult) return scheduleResult.error();
+    schedule = std::move(*scheduleResult);
+    loadOverlayOrSetAside();
+    applyOverrides();
+
+    const std::string& instance = runtime.instance();
+    for (const config::BusConfig& bus : vehicle.buses) {
+      BusIo& io = buses.emplace_back();
+      auto linkResult = can::openLink(bus.link.kind, bus.link.target, bus.linkOptions());
+      if (!linkResult) return Error{"bus '" + bus.name + "': " + linkResult.error().message};
+      io.link = std::move(*linkResult);
+      auto sentResult = ipc::FramePublisher::create({instance, bus.name, ipc::FrameStream::Sent});
+      if (!sentResult) return Error{"bus '" + bus.name + "': " + sentResult.error().message};
+      io.sent.emplace(std::move(*sentResult));
+      for (auto [stream, slot] : {std::pair{ipc::FrameStream::SendRequest, &io.sendRequests},
+                                  std::pair{ipc::FrameStream::Request, &io.requests}}) {
+        auto subscriberResult = ipc::FrameSubscriber::create({instance, bus.name, stream});
+        if (!subscriberResult) return Error{"bus '" + bus.name + "': " + subscriberResult.error().message};
+        slot->emplace(std::move(*subscriberResult));
+      }
+    }
+    startNs = signals::monotonicNowNs();
+    auto schedulerResult = Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *this, *this,
+                                             startNs);
+    if (!schedulerResult) return schedulerResult.error();
+    scheduler = std::move(*schedulerResult);
+
+    for (std::size_t b = 0; b < buses.size(); ++b) {
+      ipc::FrameSubscriber& sendRequests = *buses[b].sendRequests;
+      if (Status added = runtime.loop().addSubscriber(sendRequests, [this, b] { takeSendRequests(b); }); !added)
+        return added.error();
+      ipc::FrameSubscriber& requests = *buses[b].requests;
+      if (Status added = runtime.loop().addSubscriber(requests, [this, b] { takeRequests(b); }); !added)
+        return added.error();
+    }
+    if (Status answering = runtime.answerCommands(commandPolicy()); !answering) return answering.error();
+
+    writers.assign(schedule.writers.size(), WriterState{});
+    auto timerResult = service::PeriodicTimer::create(WATCH_PERIOD);
+    if (!timerResult) return timerResult.error();
+    watchTimer.emplace(std::move(*timerResult));
+    if (Status added = runtime.loop().addTimer(*watchTimer, [this](const service::TimerTick&) { watchWriters(); });
+        !added)
+      return added.error();
+
+    std::vector<can::Link*> links;
+    for (BusIo& io : buses) links.push_back(io.link.get());
+    thread.emplace(*scheduler, std::move(links), [this](std::size_t bus, const can::BusEvent& event) {
+      // transmit thread: logging is thread-safe
+      if (event.kind == can::BusEventKind::LinkUp || event.kind == can::BusEventKind::LinkDown ||
+          event.kind == can::BusEventKind::BusOff || event.kind == can::BusEventKind::Restarted) {
+        runtime.log().warning("bus " + vehicle.buses[bus].name + ": " + std::string(can::busEventName(event.kind)));
+      }
+    });
+    registerCounters();
+    if (const std::string warning = thread->start(schedule.realtimePriority); !warning.empty()) {
+      runtime.log().warning(warning);
+    }
+    runtime.log().info(std::to_string(schedule.messages.size()) + " messages scheduled" +
+                       (schedule.file.empty() ? " (defaults: every message " + vehicle.node + " transmits)"
+                                              : " from " + schedule.file));
+    return {};
+  }
+
+  // ---- streams in (loop thread) -----------------------------------------------------------
+
+  void takeSendRequests(std::size_t bus) {
+    while (const auto maybeSample = buses[bus].sendRequests->take()) {
+      TxCommand command;
+      command.kind = TxCommand::Kind::OneShot;
+      command.bus = bus;
+      command.frame = maybeSample->frame;
+      (void)thread->post(command);
+    }
+  }
+
+  void takeRequests(std::size_t bus) {
+    while (const auto maybeSample = buses[bus].requests->take()) {
+      const can::Frame& frame = maybeSample->frame;
+      if (!frame.extended()) continue;
+      const j1939::Id id = j1939::Id::fromCanId(frame.id);
+      if (id.pduFormat != (j1939::PGN_REQUEST >> 8)) continue;
+      const auto pgn = j1939::decodeRequest(frame.payload());
+      if (!pgn) continue;
+      TxCommand command;
+      command.kind = TxCommand::Kind::Request;
+      command.bus = bus;
+      command.pgn = *pgn;
+      command.requester = id.sourceAddress;
+      command.global = id.destination() == j1939::GLOBAL_ADDRESS;
+      (void)thread->post(command);
+    }
+  }
+
+  // ---- commands (loop thread) ---------------------------------------------------------------
+
+  bool scheduledSignal(std::string_view key) const {
+    return static_cast<bool>(findScheduledSignal(schedule, vehicle, runtime.catalog(), key));
+  }
+
+  service::CommandPolicy commandPolicy() {
+    service::CommandPolicy policy;
+    policy.owns = [this](std::string_view key) { return key.starts_with(GROUP_KEYS) || scheduledSignal(key); };
+    policy.veto = [this](const ipc::CommandRequest& request,
+                         const signals::SignalInfo& info) -> std::optional<std::string> {
+      if (info.key.starts_with(GROUP_KEYS)) return std::nullopt;
+      if (request.kind == ipc::CommandKind::SetSignal || request.kind == ipc::CommandKind::OperatorSwitch) {
+        return "transmitted signals are commanded by the FSM; an operator sets an override (vcu signal set "
+               "--override) or the schedule default (vcu schedule default)";
+      }
+      Overlay changed = overlay;
+      std::erase_if(changed.overrides, [&](const auto& item) { return item.first == info.key; });
+      if (request.kind == ipc::CommandKind::SetOverride) changed.overrides.emplace_back(info.key, request.value);
+      return persist(std::move(changed));
+    };
+    policy.customKinds = {ipc::CommandKind::ScheduleCycle, ipc::CommandKind::ScheduleEnable,
+                          ipc::CommandKind::ScheduleDefault};
+    policy.custom = [this](const ipc::CommandRequest& request) { return scheduleCommand(request); };
+    return policy;
+  }
+
+  /// Saves `changed` as the overlay; the reason when that failed (nothing changed then).
+  std::optional<std::string> persist(Overlay changed) {
+    if (Status saved = saveOverlay(schedule.overlay, changed); !saved) {
+      return "not applied: " + saved.error().message;
+    }
+    overlay = std::move(changed);
+    return std::nullopt;
+  }
+
+  MessageChange& changeOf(Overlay& target, const std::string& name) {
+    for (MessageChange& change : target.messages) {
+      if (change.message == name) return change;
+    }
+    return target.messages.emplace_back(MessageChange{name, std::nullopt, std::nullopt});
+  }
+
+  std::optional<std::string> scheduleCommand(const ipc::CommandRequest& request) {
+    if (!std::isfinite(request.value)) return "the value must be a finite number";
+    const Overlay previous = overlay;
+    TxCommand command;
+    if (request.kind == ipc::CommandKind::ScheduleDefault) {
+      auto found = findScheduledSignal(schedule, vehicle, runtime.catalog(), request.key);
+      if (!found) return found.error().message;
+      ScheduledMessage& entry = schedule.messages[found->scheduled];
+      const dbc::Signal& signal = vehicle.database.messages[entry.message].signals[found->signal];
+      for (const ComputedField& field : entry.computed) {
+        if (field.signal == found->signal) {
+          return "'" + request.key + "' is computed (" + std::string(fieldAlgorithmName(field.algorithm)) +
+                 ") for every frame";
+        }
+      }
+      if (signal.minimum < signal.maximum && (request.value < signal.minimum || request.value > signal.maximum)) {
+        return "value " + number(request.value) + " is outside the range [" + number(signal.minimum) + ", " +
+               number(signal.maximum) + "] of '" + request.key + "'";
+      }
+      Overlay changed = overlay;
+      std::erase_if(changed.defaults, [&](const auto& item) { return item.first == request.key; });
+      changed.defaults.emplace_back(request.key, request.value);
+      if (auto refusal = persist(std::move(changed))) return refusal;
+      entry.defaults[found->signal] = request.value;
+      command = TxCommand{.kind = TxCommand::Kind::Default, .scheduled = found->scheduled, .signal = found->signal,
+                          .value = request.value};
+    } else {
+      auto found = findScheduled(schedule, vehicle, request.key);
+      if (!found) return found.error().message;
+      ScheduledMessage& entry = schedule.messages[*found];
+      if (request.kind == ipc::CommandKind::ScheduleCycle) {
+        if (auto problem = checkCycle(entry, request.value)) return problem;
+        Overlay changed = overlay;
+        changeOf(changed, request.key).cycleMs = request.value;
+        if (auto refusal = persist(std::move(changed))) return refusal;
+        entry.cycleNs = static_cast<std::int64_t>(std::llround(request.value * NS_PER_MS));
+        command = TxCommand{.kind = TxCommand::Kind::Cycle, .scheduled = *found, .cycleNs = entry.cycleNs};
+      } else {
+        if (request.value != 0.0 && request.value != 1.0) return "the value is 1 (enable) or 0 (disable)";
+        Overlay changed = overlay;
+        changeOf(changed, request.key).enabled = request.value == 1.0;
+        if (auto refusal = persist(std::move(changed))) return refusal;
+        entry.enabled = request.value == 1.0;
+        command = TxCommand{.kind = TxCommand::Kind::Enable, .scheduled = *found, .enabled = entry.enabled};
+      }
+    }
+    if (!thread->post(command)) {
+      (void)persist(previous);
+      return "the transmit thread's inbox is full; try again";
+    }
+    return std::nullopt;
+  }
+
+  // ---- writer heartbeats (loop thread) ------------------------------------------------------
+
+  void watchWriters() {
+    const std::int64_t now = signals::monotonicNowNs();
+    for (std::size_t w = 0; w < schedule.writers.size(); ++w) {
+      const WatchedWriter& writer = schedule.writers[w];
+      std::int64_t since = startNs;
+      if (const auto beat = runtime.table().readBus(writer.heartbeat);
+          beat && beat->quality != signals::Quality::NeverReceived) {
+        since = std::max(since, beat->timestampNs);
+      }
+      const bool lost = now - since > writer.timeoutNs;
+      if (lost && !writers[w].lost) {
+        writers[w].lost = true;
+        ++writersLost;
+        for (const SafeValue& safe : schedule.safeValues) {
+          runtime.table().writeCommand(safe.signal, safe.value, now, CAN_TX_WRITER);
+        }
+        fault("writer_lost." + writer.service, ipc::FaultSeverity::Critical, true,
+              "no heartbeat from " + writer.service + " for " + std::to_string(writer.timeoutNs / NS_PER_MS) +
+                  " ms: " + std::to_string(schedule.safeValues.size()) +
+                  " safe values commanded; keep-alive and safety messages continue");
+        runtime.setStatus("writer " + writer.service + " lost: safe values commanded");
+      } else if (!lost && writers[w].lost) {
+        writers[w].lost = false;
+        fault("writer_lost." + writer.service, ipc::FaultSeverity::Critical, false,
+              writer.service + " is back; the safe values stay until it commands otherwise");
+        if (std::none_of(writers.begin(), writers.end(), [](const WriterState& state) { return state.lost; })) {
+          runtime.setStatus("ready");
+        }
+      }
+    }
+  }
+
+  // ---- heartbeat ----------------------------------------------------------------------------
+
+  void registerCounters() {
+    service::HeartbeatPublisher& heartbeat = runtime.heartbeat();
+    heartbeat.addCounterSource("wakeups", [this] { return static_cast<std::int64_t>(thread->wakeups()); });
+    heartbeat.addCounterSource("inbox_refused", [this] { return static_cast<std::int64_t>(thread->refusedPosts()); });
+    heartbeat.addCounterSource("one_shots", [this] {
+      return static_cast<std::int64_t>(scheduler->counters().oneShots.load(std::memory_order_relaxed));
+    });
+    heartbeat.addCounterSource("one_shot_failures", [this] {
+      return static_cast<std::int64_t>(scheduler->counters().oneShotFailures.load(std::memory_order_relaxed));
+    });
+    heartbeat.addCounterSource("requests_answered", [this] {
+      return static_cast<std::int64_t>(scheduler->counters().requestsAnswered.load(std::memory_order_relaxed));
+    });
+    heartbeat.addCounterSource("requests_nacked", [this] {
+      return static_cast<std::int64_t>(scheduler->counters().requestsNacked.load(std::memory_order_relaxed));
+    });
+    heartbeat.addCounterSource("writers_lost", [this] { return static_cast<std::int64_t>(writersLost); });
+    for (std::size_t b = 0; b < buses.size(); ++b) {
+      const std::string prefix = vehicle.buses[b].name + ".";
+      heartbeat.addCounterSource(prefix + "frames_sent", [this, b] {
+        return static_cast<std::int64_t>(buses[b].framesSent.load(std::memory_order_relaxed));
+      });
+      heartbeat.addCounterSource(prefix + "send_failures",
+                                 [this, b] { return static_cast<std::int64_t>(buses[b].link->stats().sendFailures); });
+      heartbeat.addCounterSource(prefix + "publish_failures", [this, b] {
+        return static_cast<std::int64_t>(buses[b].publishFailures.load(std::memory_order_relaxed));
+      });
+    }
+    for (std::size_t s = 0; s < schedule.messages.size(); ++s) {
+      const std::string prefix = "tx." + vehicle.database.messages[schedule.messages[s].message].name + ".";
+      const MessageStats& stats = scheduler->stats(s);
+      auto add = [&](const std::string& name, auto read) {
+        heartbeat.addCounterSource(prefix + name, [&stats, read] { return static_cast<std::int64_t>(read(stats)); });
+      };
+      add("frames", [](const MessageStats& m) { return m.frames.load(std::memory_order_relaxed); });
+      add("missed", [](const MessageStats& m) { return m.missed.load(std::memory_order_relaxed); });
+      add("send_failures", [](const MessageStats& m) { return m.sendFailures.load(std::memory_order_relaxed); });
+      add("encode_errors", [](const MessageStats& m) { return m.encodeErrors.load(std::memory_order_relaxed); });
+      add("period_err_p50_us", [](const MessageStats& m) { return m.periodError.summary().p50Us; });
+      add("period_err_p99_us", [](const MessageStats& m) { return m.periodError.summary().p99Us; });
+      add("period_err_max_us", [](const MessageStats& m) { return m.periodError.summary().maxUs; });
+      if (schedule.messages[s].safetyDeltaNs) {
+        add("delta_err_p50_us", [](const MessageStats& m) { return m.deltaError.summary().p50Us; });
+        add("delta_err_p99_us", [](const MessageStats& m) { return m.deltaError.summary().p99Us; });
+        add("delta_err_max_us", [](const MessageStats& m) { return m.deltaError.summary().maxUs; });
+      }
+    }
+  }
+};
+
+Result<std::unique_ptr<CanTxApp>> CanTxApp::create(service::Service& runtime) {
+  auto impl = std::make_unique<CanTxAppImpl>(runtime);
+  if (Status opened = impl->open(); !opened) return opened.error();
+  return std::unique_ptr<CanTxApp>(new CanTxApp(std::move(impl)));
+}
+
+CanTxApp::CanTxApp(std::unique_ptr<CanTxAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
+CanTxApp::~CanTxApp() = default;
+
+}  // namespace openvcu::cantx

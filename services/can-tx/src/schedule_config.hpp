@@ -1,0 +1,127 @@
+#pragma once
+// can-tx's schedule: the file named by "schedule" in the vehicle configuration
+// (config/hhea/schedule.json), resolved against the DBC, plus the overlay of runtime changes.
+// Format and rules: docs/design/can-tx.md.
+//
+//   auto scheduleResult = cantx::loadSchedule(vehicle, catalog);
+//   if (!scheduleResult) return scheduleResult.error();   // "schedule.json: /messages/X/cycleMs: ..."
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "openvcu/config/vehicle.hpp"
+#include "openvcu/core/result.hpp"
+#include "openvcu/signals/catalog.hpp"
+
+namespace openvcu::cantx {
+
+enum class FieldAlgorithm : std::uint8_t { Counter, Sum8, Xor8, Crc8SaeJ1850, J1939Checksum4 };
+
+/// "counter", "sum8", ...
+[[nodiscard]] std::string_view fieldAlgorithmName(FieldAlgorithm algorithm) noexcept;
+
+struct ComputedField {
+  std::uint32_t signal{};  ///< index into the DBC message's signals
+  FieldAlgorithm algorithm{FieldAlgorithm::Counter};
+  std::uint64_t modulo{};  ///< counter: wraps here (0: 2^bits)
+  std::uint64_t start{};   ///< counter: the first value
+};
+
+struct ScheduledMessage {
+  std::size_t message{};           ///< index into the database's messages
+  std::size_t bus{};               ///< index into VehicleConfig::buses
+  std::uint32_t canId{};           ///< after destination/source substitution
+  bool extended{};
+  std::int64_t cycleNs{};          ///< 0: not cyclic
+  std::int64_t offsetNs{};
+  bool enabled{true};
+  std::optional<std::size_t> group;  ///< index into Schedule::groups
+  /// Per DBC signal (same order as the message's signals): the value sent while nothing
+  /// commands it, or empty to keep the initial payload's bits.
+  std::vector<std::optional<double>> defaults;
+  /// Per DBC signal: its catalog index (empty for signals the catalog does not hold).
+  std::vector<std::optional<signals::SignalIndex>> keys;
+  std::vector<ComputedField> computed;
+  bool onChange{};
+  std::int64_t minIntervalNs{10'000'000};
+  std::optional<std::int64_t> safetyDeltaNs;  ///< J1939-76 SDM: SHM first, SDM this much later
+};
+
+struct SendGroup {
+  std::string name;
+  signals::SignalIndex signal{};
+  double initial{};  ///< the signal's initial value (catalog)
+};
+
+struct WatchedWriter {
+  std::string service;  ///< "fsm"
+  signals::SignalIndex heartbeat{};
+  std::int64_t timeoutNs{};
+};
+
+struct SafeValue {
+  signals::SignalIndex signal{};
+  double value{};
+};
+
+struct Schedule {
+  std::string file;     ///< the schedule file ("" = defaults only)
+  std::string overlay;  ///< the overlay file path
+  std::vector<ScheduledMessage> messages;
+  std::vector<SendGroup> groups;
+  std::vector<WatchedWriter> writers;
+  std::vector<SafeValue> safeValues;
+  std::int8_t localHourOffset{};
+  std::int8_t localMinuteOffset{};
+  int realtimePriority{};
+
+  /// The scheduled entry of a DBC message, or nullptr.
+  [[nodiscard]] const ScheduledMessage* find(std::size_t messageIndex) const noexcept;
+  [[nodiscard]] ScheduledMessage* find(std::size_t messageIndex) noexcept;
+};
+
+/// The runtime changes kept across restarts (docs/design/can-tx.md, "The overlay").
+struct MessageChange {
+  std::string message;
+  std::optional<double> cycleMs;
+  std::optional<bool> enabled;
+};
+struct Overlay {
+  std::vector<MessageChange> messages;
+  std::vector<std::pair<std::string, double>> defaults;   ///< signal key -> value
+  std::vector<std::pair<std::string, double>> overrides;  ///< signal key -> value
+  [[nodiscard]] bool empty() const noexcept { return messages.empty() && defaults.empty() && overrides.empty(); }
+};
+
+/// The schedule of `vehicle` (its "schedule" file, or the defaults). Errors name the file
+/// and the JSON path; nothing is partially applied.
+Result<Schedule> loadSchedule(const config::VehicleConfig& vehicle, const signals::Catalog& catalog);
+
+/// Parses the overlay file; empty when it does not exist. Errors name the file and path.
+Result<Overlay> loadOverlay(const std::string& path);
+/// Checks every entry of `overlay` against `schedule` and applies it to a copy, which is
+/// returned (all or nothing). Overrides are only checked here (the caller sets them).
+Result<Schedule> applyOverlay(const Schedule& schedule, const Overlay& overlay, const config::VehicleConfig& vehicle,
+                              const signals::Catalog& catalog);
+/// Writes `overlay` atomically (temporary file, fsync, rename, fsync of the folder).
+Status saveOverlay(const std::string& path, const Overlay& overlay);
+
+/// Check of one runtime change, shared by commands and overlay loading: empty when fine,
+/// else the reason. `cycleMs` must be 1..3600000 and longer than the safety delta.
+std::optional<std::string> checkCycle(const ScheduledMessage& message, double cycleMs);
+
+/// The scheduled message named `name`, or a reason ("unknown message 'X' (did you mean
+/// 'Y'?)", "'X' is not in the schedule").
+Result<std::size_t> findScheduled(const Schedule& schedule, const config::VehicleConfig& vehicle,
+                                  std::string_view name);
+/// The scheduled message and signal position of signal key `key`, or a reason.
+struct SignalRef {
+  std::size_t scheduled{};  ///< index into Schedule::messages
+  std::uint32_t signal{};   ///< index into the message's signals
+};
+Result<SignalRef> findScheduledSignal(const Schedule& schedule, const config::VehicleConfig& vehicle,
+                                      const signals::Catalog& catalog, std::string_view key);
+
+}  // namespace openvcu::cantx

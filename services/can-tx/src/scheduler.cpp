@@ -1,0 +1,491 @@
+#include "scheduler.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/j1939/id.hpp"
+#include "openvcu/j1939/request.hpp"
+#include "openvcu/j1939/safety.hpp"
+#include "openvcu/j1939/time_date.hpp"
+
+namespace openvcu::cantx {
+namespace {
+
+using Payload = std::array<std::uint8_t, can::MAX_DATA_LENGTH>;
+
+constexpr std::uint32_t PGN_ACKNOWLEDGEMENT = 0xE800;  ///< J1939-21 PGN 59392
+constexpr std::uint8_t ACK_NEGATIVE = 1;
+constexpr std::int64_t NEVER = INT64_MAX;
+
+std::int64_t absolute(std::int64_t value) noexcept { return value < 0 ? -value : value; }
+
+}  // namespace
+
+// ---- ErrorHistogram -------------------------------------------------------------------------
+
+void ErrorHistogram::record(std::int64_t errorNs) noexcept {
+  const std::int64_t error = absolute(errorNs);
+  const auto bucket = static_cast<std::size_t>(std::min<std::int64_t>(error / 1000, BUCKETS));
+  m_buckets[bucket].store(m_buckets[bucket].load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  m_count.store(m_count.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  if (error > m_maxNs.load(std::memory_order_relaxed)) m_maxNs.store(error, std::memory_order_relaxed);
+}
+
+ErrorHistogram::Summary ErrorHistogram::summary() const noexcept {
+  Summary summary;
+  std::array<std::uint32_t, BUCKETS + 1> copy{};
+  std::uint64_t total = 0;
+  for (std::size_t b = 0; b <= BUCKETS; ++b) {
+    copy[b] = m_buckets[b].load(std::memory_order_relaxed);
+    total += copy[b];
+  }
+  summary.count = total;
+  summary.maxUs = m_maxNs.load(std::memory_order_relaxed) / 1000;
+  if (total == 0) return summary;
+  auto percentile = [&](double fraction) {
+    const auto rank = static_cast<std::uint64_t>(std::ceil(fraction * static_cast<double>(total)));
+    std::uint64_t seen = 0;
+    for (std::size_t b = 0; b <= BUCKETS; ++b) {
+      seen += copy[b];
+      if (seen >= rank) return b == BUCKETS ? summary.maxUs : static_cast<std::int64_t>(b);
+    }
+    return summary.maxUs;
+  };
+  summary.p50Us = percentile(0.50);
+  summary.p99Us = percentile(0.99);
+  return summary;
+}
+
+// ---- computed fields ------------------------------------------------------------------------
+
+std::uint8_t crc8SaeJ1850(std::span<const std::uint8_t> data) noexcept {
+  std::uint8_t crc = 0xFF;
+  for (const std::uint8_t byte : data) {
+    crc = static_cast<std::uint8_t>(crc ^ byte);
+    for (int bit = 0; bit < 8; ++bit) {
+      crc = static_cast<std::uint8_t>((crc & 0x80) != 0 ? (crc << 1) ^ 0x1D : crc << 1);
+    }
+  }
+  return static_cast<std::uint8_t>(crc ^ 0xFF);
+}
+
+std::uint8_t j1939Checksum4(std::span<const std::uint8_t> payload, std::uint32_t canId) noexcept {
+  std::uint32_t sum = 0;
+  for (const std::uint8_t byte : payload) sum += byte;
+  for (int shift = 0; shift < 32; shift += 8) sum += (canId >> shift) & 0xFF;
+  return static_cast<std::uint8_t>((((sum >> 4) & 0x0F) + sum) & 0x0F);
+}
+
+// ---- Scheduler ------------------------------------------------------------------------------
+
+struct FieldState {
+  ComputedField config;
+  Payload mask{};            ///< the field's own bits
+  std::uint64_t counter{};   ///< the counter's next value
+};
+
+struct Entry {
+  ScheduledMessage config;
+  const dbc::MessageCodec* codec{};
+  std::uint32_t length{};
+  std::uint8_t sourceAddress{};
+  std::vector<FieldState> fields;
+  std::optional<j1939::SafetyPairBuilder> pair;
+  std::optional<std::size_t> headerMessage;  ///< the DBC message describing the SHM, if any
+  std::vector<std::optional<signals::SignalIndex>> headerKeys;
+  std::int64_t nextNs{NEVER};                ///< next cyclic deadline
+  std::int64_t nextCheckNs{NEVER};           ///< next on-change check
+  std::int64_t lastCyclicSendNs{};
+  bool consecutive{};                        ///< the previous cycle was sent: measure the period
+  bool sdmPending{};
+  std::int64_t sdmDueNs{NEVER};
+  std::int64_t shmSentNs{};
+  Payload sdm{};
+  Payload last{};
+  bool hasLast{};
+  MessageStats stats;
+};
+
+struct Scheduler::Impl {
+  const config::VehicleConfig& vehicle;
+  const signals::Catalog& catalog;
+  signals::SignalTable& table;
+  TxPort& port;
+  Clock& clock;
+  dbc::DatabaseCodec codecs;
+  std::vector<SendGroup> groups;
+  std::vector<std::unique_ptr<Entry>> entries;  // unique_ptr: atomics are not movable
+  SchedulerCounters counters;
+  std::uint8_t ownAddress{j1939::NULL_ADDRESS};
+  std::optional<std::size_t> timeDateMessage;  ///< DBC message with PGN 65254 this node sends
+  std::int8_t localHourOffset{};
+  std::int8_t localMinuteOffset{};
+
+  Impl(const config::VehicleConfig& v, const signals::Catalog& c, signals::SignalTable& t, TxPort& p, Clock& k)
+      : vehicle(v), catalog(c), table(t), port(p), clock(k), codecs(v.database) {}
+
+  // ---- building frames ------------------------------------------------------------------
+
+  bool groupOn(const Entry& entry) const noexcept {
+    if (!entry.config.group) return true;
+    const SendGroup& group = groups[*entry.config.group];
+    double value = group.initial;
+    if (const auto snapshot = table.read(group.signal)) {
+      if (const auto effective = signals::effectiveCommand(*snapshot)) value = effective->value;
+    }
+    return value != 0.0;
+  }
+
+  void build(Entry& entry, Payload& payload) noexcept {
+    const auto initial = entry.codec->initialPayload();
+    std::copy(initial.begin(), initial.end(), payload.begin());
+    const std::span<std::uint8_t> buffer(payload.data(), entry.length);
+    const dbc::Message& message = vehicle.database.messages[entry.config.message];
+    for (std::uint32_t s = 0; s < entry.config.keys.size(); ++s) {
+      if (message.signals[s].muxRole == dbc::MuxRole::Multiplexed) continue;  // docs/design/can-tx.md
+      std::optional<double> value = entry.config.defaults[s];
+      if (const auto key = entry.config.keys[s]) {
+        if (const auto snapshot = table.read(*key)) {
+          if (const auto effective = signals::effectiveCommand(*snapshot)) value = effective->value;
+        }
+      }
+      if (!value) continue;
+      if (entry.codec->encode(s, *value, buffer) != dbc::EncodeStatus::Ok) {
+        entry.stats.encodeErrors.store(entry.stats.encodeErrors.load(std::memory_order_relaxed) + 1,
+                                       std::memory_order_relaxed);
+      }
+    }
+  }
+
+  void compute(Entry& entry, Payload& payload) noexcept {
+    const std::span<std::uint8_t> buffer(payload.data(), entry.length);
+    for (FieldState& field : entry.fields) {
+      for (std::uint32_t b = 0; b < entry.length; ++b) payload[b] = static_cast<std::uint8_t>(payload[b] & ~field.mask[b]);
+      std::uint64_t value = 0;
+      switch (field.config.algorithm) {
+        case FieldAlgorithm::Counter: {
+          value = field.counter;
+          const std::uint64_t modulo = field.config.modulo;
+          field.counter = modulo != 0 ? (field.counter + 1) % modulo : field.counter + 1;
+          break;
+        }
+        case FieldAlgorithm::Sum8:
+        case FieldAlgorithm::Xor8:
+        case FieldAlgorithm::Crc8SaeJ1850: {
+          std::uint8_t sum = 0;
+          std::uint8_t crc = 0xFF;
+          for (std::uint32_t b = 0; b < entry.length; ++b) {
+            if (field.mask[b] == 0xFF) continue;  // a byte that is all field
+            if (field.config.algorithm == FieldAlgorithm::Sum8) sum = static_cast<std::uint8_t>(sum + payload[b]);
+            if (field.config.algorithm == FieldAlgorithm::Xor8) sum = static_cast<std::uint8_t>(sum ^ payload[b]);
+            if (field.config.algorithm == FieldAlgorithm::Crc8SaeJ1850) {
+              crc = static_cast<std::uint8_t>(crc ^ payload[b]);
+              for (int bit = 0; bit < 8; ++bit) {
+                crc = static_cast<std::uint8_t>((crc & 0x80) != 0 ? (crc << 1) ^ 0x1D : crc << 1);
+              }
+            }
+          }
+          value = field.config.algorithm == FieldAlgorithm::Crc8SaeJ1850 ? static_cast<std::uint8_t>(crc ^ 0xFF) : sum;
+          break;
+        }
+        case FieldAlgorithm::J1939Checksum4:
+          value = j1939Checksum4(std::span<const std::uint8_t>(payload.data(), entry.length), entry.config.canId);
+          break;
+      }
+      dbc::DecodedValue raw;
+      raw.kind = dbc::RawKind::Unsigned;
+      const std::uint32_t bits = vehicle.database.messages[entry.config.message].signals[field.config.signal].size;
+      raw.rawUnsigned = bits >= 64 ? value : value & ((std::uint64_t{1} << bits) - 1);
+      (void)entry.codec->encodeRaw(field.config.signal, raw, buffer);
+    }
+  }
+
+  can::Frame frameOf(std::uint32_t id, bool extended, std::span<const std::uint8_t> payload) const noexcept {
+    can::Frame frame;
+    frame.id = id;
+    frame.flags = extended ? can::FLAG_EXTENDED : 0;
+    if (payload.size() > 8) frame.flags = static_cast<std::uint8_t>(frame.flags | can::FLAG_FD | can::FLAG_BRS);
+    frame.length = static_cast<std::uint8_t>(payload.size());
+    std::copy(payload.begin(), payload.end(), frame.data.begin());
+    return frame;
+  }
+
+  using Keys = std::vector<std::optional<signals::SignalIndex>>;
+
+  /// Writes what went out to the bus plane (`keys`: catalog index per DBC signal).
+  void record(std::size_t messageIndex, const Keys& keys, std::span<const std::uint8_t> payload, std::uint8_t source,
+              std::int64_t nowNs) noexcept {
+    codecs[messageIndex].decode(payload, [&](std::uint32_t signalIndex, const dbc::DecodedValue& value) {
+      if (signalIndex < keys.size() && keys[signalIndex]) {
+        table.writeBus(*keys[signalIndex], value.physical, nowNs, source, signals::Quality::Valid);
+      }
+    });
+  }
+
+  Keys keysOf(std::size_t messageIndex) const {
+    const dbc::Message& message = vehicle.database.messages[messageIndex];
+    Keys keys;
+    for (const dbc::Signal& signal : message.signals) keys.push_back(catalog.indexOf(config::signalKey(message, signal)));
+    return keys;
+  }
+  Keys timeDateKeys;
+
+  void countFailure(std::atomic<std::uint64_t>& counter) noexcept {
+    counter.store(counter.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  }
+
+  /// Builds and sends one instance of the message (its SHM when it is a safety SDM).
+  void transmit(Entry& entry, Payload& payload) noexcept {
+    const std::span<const std::uint8_t> bytes(payload.data(), entry.length);
+    if (entry.pair) {
+      if (entry.sdmPending) send(entry, entry.sdm);  // never leave an SHM without its SDM
+      const j1939::SafetyPayload header =
+          entry.pair->nextHeader(j1939::SafetyDataView(payload.data(), j1939::SAFETY_MESSAGE_LENGTH));
+      const std::int64_t now = clock.monotonicNs();
+      if (port.send(entry.config.bus, frameOf(entry.pair->headerCanId(), true, header)) != can::SendStatus::Sent) {
+        countFailure(entry.stats.sendFailures);
+      }
+      if (entry.headerMessage) record(*entry.headerMessage, entry.headerKeys, header, entry.sourceAddress, now);
+      entry.sdm = payload;
+      entry.sdmPending = true;
+      entry.shmSentNs = now;
+      entry.sdmDueNs = now + *entry.config.safetyDeltaNs;
+      return;
+    }
+    const std::int64_t now = clock.monotonicNs();
+    if (port.send(entry.config.bus, frameOf(entry.config.canId, entry.config.extended, bytes)) !=
+        can::SendStatus::Sent) {
+      countFailure(entry.stats.sendFailures);
+    }
+    countFailure(entry.stats.frames);
+    record(entry.config.message, entry.config.keys, bytes, entry.sourceAddress, now);
+  }
+
+  /// The SDM of a pair whose SHM went out.
+  void send(Entry& entry, const Payload& payload) noexcept {
+    const std::int64_t now = clock.monotonicNs();
+    const std::span<const std::uint8_t> bytes(payload.data(), entry.length);
+    if (port.send(entry.config.bus, frameOf(entry.config.canId, true, bytes)) != can::SendStatus::Sent) {
+      countFailure(entry.stats.sendFailures);
+    }
+    countFailure(entry.stats.frames);
+    entry.stats.deltaError.record(now - entry.shmSentNs - *entry.config.safetyDeltaNs);
+    entry.sdmPending = false;
+    entry.sdmDueNs = NEVER;
+    record(entry.config.message, entry.config.keys, bytes, entry.sourceAddress, now);
+  }
+
+  void cyclic(Entry& entry, std::int64_t nowNs) noexcept {
+    const std::int64_t cycle = entry.config.cycleNs;
+    const std::int64_t late = nowNs - entry.nextNs;
+    const std::int64_t skipped = late / cycle;  // whole cycles already past: not sent
+    entry.nextNs += (skipped + 1) * cycle;
+    if (!entry.config.enabled || !groupOn(entry)) {
+      entry.consecutive = false;
+      return;
+    }
+    if (skipped > 0) {
+      entry.stats.missed.store(entry.stats.missed.load(std::memory_order_relaxed) + static_cast<std::uint64_t>(skipped),
+                               std::memory_order_relaxed);
+      entry.consecutive = false;
+    }
+    Payload payload;
+    build(entry, payload);
+    compute(entry, payload);
+    const std::int64_t sendNs = clock.monotonicNs();
+    if (entry.consecutive) entry.stats.periodError.record(sendNs - entry.lastCyclicSendNs - cycle);
+    entry.lastCyclicSendNs = sendNs;
+    entry.consecutive = true;
+    transmit(entry, payload);
+    entry.last = payload;
+    entry.hasLast = true;
+  }
+
+  void changeCheck(Entry& entry, std::int64_t nowNs) noexcept {
+    const std::int64_t interval = entry.config.minIntervalNs;
+    entry.nextCheckNs += ((nowNs - entry.nextCheckNs) / interval + 1) * interval;
+    if (!entry.config.enabled || !groupOn(entry)) return;
+    Payload payload;
+    build(entry, payload);
+    // compare before the computed fields: counters change every frame by design
+    Payload previous = entry.last;
+    if (entry.hasLast) {
+      Payload masked = payload;
+      for (const FieldState& field : entry.fields) {
+        for (std::uint32_t b = 0; b < entry.length; ++b) {
+          masked[b] = static_cast<std::uint8_t>(masked[b] & ~field.mask[b]);
+          previous[b] = static_cast<std::uint8_t>(previous[b] & ~field.mask[b]);
+        }
+      }
+      if (std::equal(masked.begin(), masked.begin() + entry.length, previous.begin())) return;
+    }
+    compute(entry, payload);
+    transmit(entry, payload);
+    entry.last = payload;
+    entry.hasLast = true;
+  }
+};
+
+Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig& vehicle, const Schedule& schedule,
+                                                     const signals::Catalog& catalog, signals::SignalTable& table,
+                                                     TxPort& port, Clock& clock, std::int64_t startNs) {
+  auto impl = std::make_unique<Impl>(vehicle, catalog, table, port, clock);
+  impl->groups = schedule.groups;
+  impl->localHourOffset = schedule.localHourOffset;
+  impl->localMinuteOffset = schedule.localMinuteOffset;
+  for (const dbc::Node& node : vehicle.database.nodes) {
+    if (node.name == vehicle.node) {
+      if (auto address = config::nodeAddress(vehicle.database, node)) impl->ownAddress = *address;
+    }
+  }
+  for (std::size_t m = 0; m < vehicle.database.messages.size(); ++m) {
+    const dbc::Message& message = vehicle.database.messages[m];
+    if (!message.extended || message.pseudo) continue;
+    const auto senders = message.transmitters();
+    if (std::find(senders.begin(), senders.end(), vehicle.node) == senders.end()) continue;
+    if (j1939::pgnOf(message.id) == j1939::PGN_TIME_DATE && !impl->timeDateMessage) {
+      impl->timeDateMessage = m;
+      impl->timeDateKeys = impl->keysOf(m);
+    }
+  }
+  for (const ScheduledMessage& config : schedule.messages) {
+    auto entry = std::make_unique<Entry>();
+    entry->config = config;
+    entry->codec = &impl->codecs[config.message];
+    entry->length = entry->codec->length();
+    if (entry->length > can::MAX_DATA_LENGTH) {
+      return Error{"message '" + vehicle.database.messages[config.message].name + "' is " +
+                   std::to_string(entry->length) + " bytes: longer than a CAN frame (transport protocol sending is "
+                   "not supported)"};
+    }
+    entry->sourceAddress = config.extended ? j1939::Id::fromCanId(config.canId).sourceAddress : 0;
+    for (const ComputedField& field : config.computed) {
+      FieldState state;
+      state.config = field;
+      state.counter = field.start;
+      dbc::DecodedValue ones;
+      ones.kind = dbc::RawKind::Unsigned;
+      ones.rawUnsigned = ~std::uint64_t{0};
+      const std::uint32_t bits = vehicle.database.messages[config.message].signals[field.signal].size;
+      ones.rawUnsigned = bits >= 64 ? ones.rawUnsigned : (std::uint64_t{1} << bits) - 1;
+      (void)entry->codec->encodeRaw(field.signal, ones, std::span<std::uint8_t>(state.mask.data(), entry->length));
+      entry->fields.push_back(state);
+    }
+    if (config.safetyDeltaNs) {
+      entry->pair.emplace(config.canId, 0);
+      const std::uint32_t header = entry->pair->headerCanId();
+      for (std::size_t m = 0; m < vehicle.database.messages.size(); ++m) {
+        const dbc::Message& candidate = vehicle.database.messages[m];
+        if (candidate.extended && (candidate.id & 0x03FFFFFFu) == (header & 0x03FFFFFFu)) {
+          entry->headerMessage = m;
+          entry->headerKeys = impl->keysOf(m);
+          break;
+        }
+      }
+    }
+    if (config.cycleNs > 0) entry->nextNs = startNs + config.offsetNs;
+    if (config.onChange) entry->nextCheckNs = startNs + config.offsetNs;
+    impl->entries.push_back(std::move(entry));
+  }
+  return std::unique_ptr<Scheduler>(new Scheduler(std::move(impl)));
+}
+
+Scheduler::Scheduler(std::unique_ptr<Impl> impl) noexcept : m_impl(std::move(impl)) {}
+Scheduler::~Scheduler() = default;
+
+void Scheduler::run(std::int64_t nowNs) noexcept {
+  Impl& impl = *m_impl;
+  // SDMs first: their deltas are the tightest deadlines.
+  for (auto& entry : impl.entries) {
+    if (entry->sdmPending && entry->sdmDueNs <= nowNs) impl.send(*entry, entry->sdm);
+  }
+  for (auto& entry : impl.entries) {
+    if (entry->config.cycleNs > 0 && entry->nextNs <= nowNs) impl.cyclic(*entry, nowNs);
+    if (entry->config.onChange && entry->nextCheckNs <= nowNs) impl.changeCheck(*entry, nowNs);
+  }
+}
+
+std::int64_t Scheduler::nextDeadlineNs() const noexcept {
+  std::int64_t next = NEVER;
+  for (const auto& entry : m_impl->entries) {
+    if (entry->sdmPending) next = std::min(next, entry->sdmDueNs);
+    if (entry->config.cycleNs > 0) next = std::min(next, entry->nextNs);
+    if (entry->config.onChange) next = std::min(next, entry->nextCheckNs);
+  }
+  return next;
+}
+
+void Scheduler::setCycle(std::size_t scheduled, std::int64_t cycleNs, std::int64_t nowNs) noexcept {
+  Entry& entry = *m_impl->entries[scheduled];
+  const std::int64_t previous = entry.config.cycleNs;
+  entry.config.cycleNs = cycleNs;
+  entry.consecutive = false;
+  if (cycleNs <= 0) {
+    entry.nextNs = NEVER;
+    return;
+  }
+  // keep the phase of the last deadline when there was one; otherwise start now
+  const std::int64_t lastDue = previous > 0 ? entry.nextNs - previous : nowNs - cycleNs;
+  entry.nextNs = std::max(nowNs, lastDue + cycleNs);
+}
+
+void Scheduler::setEnabled(std::size_t scheduled, bool enabled) noexcept {
+  m_impl->entries[scheduled]->config.enabled = enabled;
+}
+
+void Scheduler::setDefault(std::size_t scheduled, std::uint32_t signal, double value) noexcept {
+  Entry& entry = *m_impl->entries[scheduled];
+  if (signal < entry.config.defaults.size()) entry.config.defaults[signal] = value;
+}
+
+void Scheduler::sendOnce(std::size_t bus, const can::Frame& frame) noexcept {
+  Impl& impl = *m_impl;
+  const bool sent = impl.port.send(bus, frame) == can::SendStatus::Sent;
+  impl.countFailure(sent ? impl.counters.oneShots : impl.counters.oneShotFailures);
+}
+
+void Scheduler::answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t requester, bool global) noexcept {
+  Impl& impl = *m_impl;
+  const std::int64_t now = impl.clock.monotonicNs();
+  if (pgn == j1939::PGN_TIME_DATE) {
+    const std::int64_t realtime = impl.clock.realtimeNs();
+    const j1939::UtcInstant instant{realtime / 1'000'000'000, static_cast<std::uint32_t>(realtime % 1'000'000'000),
+                                    impl.localMinuteOffset, impl.localHourOffset};
+    if (const auto payload = j1939::encodeTimeDate(instant)) {
+      const std::uint32_t id = impl.timeDateMessage
+                                   ? impl.vehicle.database.messages[*impl.timeDateMessage].id
+                                   : j1939::Id::fromPgn(j1939::PGN_TIME_DATE, 6, impl.ownAddress, j1939::GLOBAL_ADDRESS)
+                                         .toCanId();
+      if (impl.port.send(bus, impl.frameOf(id, true, *payload)) == can::SendStatus::Sent) {
+        impl.countFailure(impl.counters.requestsAnswered);
+        if (impl.timeDateMessage) impl.record(*impl.timeDateMessage, impl.timeDateKeys, *payload, impl.ownAddress, now);
+      }
+      return;
+    }
+  }
+  for (auto& entry : impl.entries) {
+    if (entry->config.bus != bus || !entry->config.extended) continue;
+    if (j1939::pgnOf(entry->config.canId) != pgn) continue;
+    Payload payload;
+    impl.build(*entry, payload);
+    impl.compute(*entry, payload);
+    impl.transmit(*entry, payload);
+    impl.countFailure(impl.counters.requestsAnswered);
+    return;
+  }
+  if (global) return;  // J1939-21: no NACK to a global request
+  std::array<std::uint8_t, 8> nack{ACK_NEGATIVE, 0xFF, 0xFF, 0xFF, requester, static_cast<std::uint8_t>(pgn & 0xFF),
+                                   static_cast<std::uint8_t>((pgn >> 8) & 0xFF), static_cast<std::uint8_t>(pgn >> 16)};
+  const std::uint32_t id = j1939::Id::fromPgn(PGN_ACKNOWLEDGEMENT, 6, impl.ownAddress, j1939::GLOBAL_ADDRESS).toCanId();
+  if (impl.port.send(bus, impl.frameOf(id, true, nack)) == can::SendStatus::Sent) {
+    impl.countFailure(impl.counters.requestsNacked);
+  }
+}
+
+std::size_t Scheduler::size() const noexcept { return m_impl->entries.size(); }
+const MessageStats& Scheduler::stats(std::size_t scheduled) const noexcept { return m_impl->entries[scheduled]->stats; }
+const SchedulerCounters& Scheduler::counters() const noexcept { return m_impl->counters; }
+
+}  // namespace openvcu::cantx

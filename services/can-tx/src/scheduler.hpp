@@ -1,0 +1,140 @@
+#pragma once
+// The transmit engine of vcu-can-tx, free of threads and clocks so that tests drive it
+// with a fake clock: run(now) sends what is due, nextDeadlineNs() says when to call again.
+//
+//   cantx::Scheduler scheduler = *cantx::Scheduler::create(vehicle, schedule, catalog, table, port, clock);
+//   for (;;) { scheduler.run(clock.monotonicNs()); sleepUntil(scheduler.nextDeadlineNs()); }
+//
+// Rules (docs/design/can-tx.md):
+//   - each cyclic message is due at start + offset + k x cycle (absolute deadlines, no
+//     drift); after a stall the cycles that passed are skipped and counted as missed,
+//     never sent in a burst;
+//   - a J1939-76 SDM: its SHM goes out when the message is due, the SDM (the same bytes the
+//     SHM's CRC covers) deltaNs after the SHM; the sequence number starts at 0 when the
+//     process starts, advances by one per pair and wraps at 32 (receivers resynchronise);
+//   - the value of each signal: override, else command (signal table), else the schedule's
+//     default, else the DBC initial payload's bits; computed fields after that;
+//   - a message whose send group's signal is 0, or that is disabled, keeps its phase but
+//     sends nothing (not counted as missed);
+//   - every sent frame's values go to the table's bus plane (source = its J1939 SA).
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "openvcu/can/frame.hpp"
+#include "openvcu/can/link.hpp"
+#include "openvcu/config/vehicle.hpp"
+#include "openvcu/core/result.hpp"
+#include "openvcu/dbc/codec.hpp"
+#include "openvcu/signals/catalog.hpp"
+#include "openvcu/signals/table.hpp"
+#include "schedule_config.hpp"
+
+namespace openvcu::cantx {
+
+inline constexpr signals::WriterId CAN_TX_WRITER = 2;
+
+/// Where frames go (the links and the "tx" stream in the service; a recorder in tests).
+class TxPort {
+ public:
+  virtual ~TxPort() = default;
+  /// Sends one frame on bus `bus` now. Called on the scheduler's thread.
+  virtual can::SendStatus send(std::size_t bus, const can::Frame& frame) noexcept = 0;
+};
+
+/// The scheduler's clocks (monotonic for timing, realtime for the Time/Date answer).
+class Clock {
+ public:
+  virtual ~Clock() = default;
+  [[nodiscard]] virtual std::int64_t monotonicNs() noexcept = 0;
+  [[nodiscard]] virtual std::int64_t realtimeNs() noexcept = 0;
+};
+
+/// |error| histogram: 1 us buckets up to 2 ms, then one overflow bucket; the maximum is exact.
+/// Written by one thread, read by another (relaxed atomics: a reader sees each counter whole).
+class ErrorHistogram {
+ public:
+  static constexpr std::size_t BUCKETS = 2000;
+  void record(std::int64_t errorNs) noexcept;
+  struct Summary {
+    std::uint64_t count{};
+    std::int64_t p50Us{};
+    std::int64_t p99Us{};
+    std::int64_t maxUs{};
+  };
+  [[nodiscard]] Summary summary() const noexcept;
+
+ private:
+  std::array<std::atomic<std::uint32_t>, BUCKETS + 1> m_buckets{};
+  std::atomic<std::uint64_t> m_count{};
+  std::atomic<std::int64_t> m_maxNs{};
+};
+
+/// Per scheduled message; written by the scheduler's thread, readable from any thread.
+struct MessageStats {
+  std::atomic<std::uint64_t> frames{};        ///< frames of this message sent (SDMs, not their SHMs)
+  std::atomic<std::uint64_t> missed{};        ///< cycles skipped because they were already past
+  std::atomic<std::uint64_t> sendFailures{};  ///< the link refused the frame (or its SHM)
+  std::atomic<std::uint64_t> encodeErrors{};  ///< a value the signal cannot carry (its bits kept)
+  ErrorHistogram periodError;                 ///< |measured period - cycle| of consecutive cyclic sends
+  ErrorHistogram deltaError;                  ///< |SHM->SDM time - delta| (safety pairs)
+};
+
+struct SchedulerCounters {
+  std::atomic<std::uint64_t> oneShots{};       ///< frames from the send-request stream
+  std::atomic<std::uint64_t> oneShotFailures{};
+  std::atomic<std::uint64_t> requestsAnswered{};
+  std::atomic<std::uint64_t> requestsNacked{};
+};
+
+/// @note not thread-safe: one thread runs it. run() and every change are noexcept and
+///       allocation-free.
+class Scheduler {
+ public:
+  /// `port`, `clock`, `table` and `catalog` must outlive the scheduler. `startNs` is the
+  /// origin of every message's phase.
+  static Result<std::unique_ptr<Scheduler>> create(const config::VehicleConfig& vehicle, const Schedule& schedule,
+                                                   const signals::Catalog& catalog, signals::SignalTable& table,
+                                                   TxPort& port, Clock& clock, std::int64_t startNs);
+  ~Scheduler();
+  Scheduler(const Scheduler&) = delete;
+  Scheduler& operator=(const Scheduler&) = delete;
+
+  /// Sends everything due at `nowNs` (SHMs, SDMs, cyclic and on-change messages).
+  void run(std::int64_t nowNs) noexcept;
+  /// The earliest time run() has something to do (INT64_MAX: nothing scheduled).
+  [[nodiscard]] std::int64_t nextDeadlineNs() const noexcept;
+
+  // ---- changes (by index into Schedule::messages; checked by the caller) ----------------
+  void setCycle(std::size_t scheduled, std::int64_t cycleNs, std::int64_t nowNs) noexcept;
+  void setEnabled(std::size_t scheduled, bool enabled) noexcept;
+  void setDefault(std::size_t scheduled, std::uint32_t signal, double value) noexcept;
+
+  /// Sends a frame other processes asked for, once, now.
+  void sendOnce(std::size_t bus, const can::Frame& frame) noexcept;
+  /// Answers a J1939 request for `pgn` from `requester` on `bus`: the Time/Date from the
+  /// clock, a scheduled message's current frame, else (destination-specific requests) a NACK.
+  void answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t requester, bool global) noexcept;
+
+  [[nodiscard]] std::size_t size() const noexcept;
+  [[nodiscard]] const MessageStats& stats(std::size_t scheduled) const noexcept;
+  [[nodiscard]] const SchedulerCounters& counters() const noexcept;
+
+ private:
+  struct Impl;
+  explicit Scheduler(std::unique_ptr<Impl> impl) noexcept;
+  std::unique_ptr<Impl> m_impl;
+};
+
+// ---- computed fields (exposed for tests) ----------------------------------------------------
+
+/// CRC-8 SAE J1850: polynomial 0x1D, initial 0xFF, final XOR 0xFF. "123456789" -> 0x4B.
+[[nodiscard]] std::uint8_t crc8SaeJ1850(std::span<const std::uint8_t> data) noexcept;
+/// J1939-71 4-bit message checksum over `payload` (field bits already zero) and the ID.
+[[nodiscard]] std::uint8_t j1939Checksum4(std::span<const std::uint8_t> payload, std::uint32_t canId) noexcept;
+
+}  // namespace openvcu::cantx

@@ -1,0 +1,148 @@
+#include "tx_thread.hpp"
+
+#include <linux/futex.h>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/prctl.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cstring>
+#include <ctime>
+
+namespace openvcu::cantx {
+namespace {
+
+constexpr std::int64_t SERVICE_PERIOD_NS = 100'000'000;  ///< link housekeeping every 100 ms
+
+std::int64_t monotonicNs() noexcept {
+  timespec now{};
+  ::clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+/// Sleeps while *word == expected, at most until the absolute CLOCK_MONOTONIC `deadlineNs`.
+void futexWaitUntil(std::atomic<std::uint32_t>& word, std::uint32_t expected, std::int64_t deadlineNs) noexcept {
+  timespec deadline{};
+  deadline.tv_sec = static_cast<time_t>(deadlineNs / 1'000'000'000);
+  deadline.tv_nsec = static_cast<long>(deadlineNs % 1'000'000'000);
+  // FUTEX_WAIT_BITSET takes an absolute timeout (CLOCK_MONOTONIC without FUTEX_CLOCK_REALTIME).
+  ::syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAIT_BITSET_PRIVATE, expected,
+            deadlineNs == INT64_MAX ? nullptr : &deadline, nullptr, FUTEX_BITSET_MATCH_ANY);
+}
+
+void futexWake(std::atomic<std::uint32_t>& word) noexcept {
+  ::syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAKE_PRIVATE, 1, nullptr, nullptr, 0);
+}
+
+}  // namespace
+
+bool TxInbox::push(const TxCommand& command) noexcept {
+  const std::uint64_t tail = m_tail.load(std::memory_order_relaxed);
+  if (tail - m_head.load(std::memory_order_acquire) >= CAPACITY) return false;
+  m_ring[tail % CAPACITY] = command;
+  m_tail.store(tail + 1, std::memory_order_release);
+  return true;
+}
+
+bool TxInbox::pop(TxCommand& command) noexcept {
+  const std::uint64_t head = m_head.load(std::memory_order_relaxed);
+  if (head == m_tail.load(std::memory_order_acquire)) return false;
+  command = m_ring[head % CAPACITY];
+  m_head.store(head + 1, std::memory_order_release);
+  return true;
+}
+
+TxThread::TxThread(Scheduler& scheduler, std::vector<can::Link*> links,
+                   std::function<void(std::size_t, const can::BusEvent&)> onBusEvent)
+    : m_scheduler(scheduler), m_links(std::move(links)), m_onBusEvent(std::move(onBusEvent)) {}
+
+TxThread::~TxThread() { stop(); }
+
+std::string TxThread::start(int realtimePriority) {
+  m_thread = std::thread([this] { run(); });
+  if (realtimePriority <= 0) return {};
+  sched_param parameters{};
+  parameters.sched_priority = realtimePriority;
+  const int error = ::pthread_setschedparam(m_thread.native_handle(), SCHED_FIFO, &parameters);
+  if (error == 0) return {};
+  return "realtimePriority " + std::to_string(realtimePriority) + ": SCHED_FIFO refused (" + std::strerror(error) +
+         "); the transmit thread runs with normal scheduling";
+}
+
+void TxThread::stop() noexcept {
+  if (!m_thread.joinable()) return;
+  m_stopping.store(true, std::memory_order_release);
+  m_wake.fetch_add(1, std::memory_order_release);
+  futexWake(m_wake);
+  m_thread.join();
+}
+
+bool TxThread::post(const TxCommand& command) noexcept {
+  if (!m_inbox.push(command)) {
+    m_refused.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+  m_wake.fetch_add(1, std::memory_order_seq_cst);
+  if (m_sleeping.load(std::memory_order_seq_cst)) futexWake(m_wake);
+  return true;
+}
+
+void TxThread::apply(const TxCommand& command, std::int64_t nowNs) noexcept {
+  switch (command.kind) {
+    case TxCommand::Kind::OneShot:
+      m_scheduler.sendOnce(command.bus, command.frame);
+      break;
+    case TxCommand::Kind::Request:
+      m_scheduler.answerRequest(command.bus, command.pgn, command.requester, command.global);
+      break;
+    case TxCommand::Kind::Cycle:
+      m_scheduler.setCycle(command.scheduled, command.cycleNs, nowNs);
+      break;
+    case TxCommand::Kind::Enable:
+      m_scheduler.setEnabled(command.scheduled, command.enabled);
+      break;
+    case TxCommand::Kind::Default:
+      m_scheduler.setDefault(command.scheduled, command.signal, command.value);
+      break;
+  }
+}
+
+void TxThread::service(std::int64_t nowNs) noexcept {
+  m_nextServiceNs = nowNs + SERVICE_PERIOD_NS;
+  for (std::size_t bus = 0; bus < m_links.size(); ++bus) {
+    while (m_links[bus]->receive(m_scratch) == m_scratch.size()) {
+    }
+    while (const auto maybeEvent = m_links[bus]->nextEvent()) {
+      if (m_onBusEvent) m_onBusEvent(bus, *maybeEvent);
+    }
+  }
+}
+
+void TxThread::run() noexcept {
+  // The timer slack of a normal thread (50 us) would land in every period: ask for 1 ns.
+  ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+  m_nextServiceNs = monotonicNs();
+  while (!m_stopping.load(std::memory_order_acquire)) {
+    const std::uint32_t seen = m_wake.load(std::memory_order_acquire);
+    std::int64_t now = monotonicNs();
+    TxCommand command;
+    while (m_inbox.pop(command)) apply(command, now);
+    m_scheduler.run(now);
+    now = monotonicNs();
+    if (now >= m_nextServiceNs) service(now);
+    const std::int64_t deadline = std::min(m_scheduler.nextDeadlineNs(), m_nextServiceNs);
+    if (deadline > monotonicNs()) {
+      m_sleeping.store(true, std::memory_order_seq_cst);
+      // a post between the load of `seen` and here changed the word: the wait returns at once
+      futexWaitUntil(m_wake, seen, deadline);
+      m_sleeping.store(false, std::memory_order_relaxed);
+    }
+    m_wakeups.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+}  // namespace openvcu::cantx

@@ -1,0 +1,102 @@
+#pragma once
+// The transmit thread of vcu-can-tx: the only thread that touches the Scheduler and the
+// links. It sleeps on a futex with an absolute CLOCK_MONOTONIC deadline (the scheduler's
+// next one), so it wakes exactly when a frame is due, or at once when the service's loop
+// thread posts something (a one-shot frame, a request to answer, a schedule change).
+//
+//   cantx::TxThread thread(scheduler, links, log);
+//   thread.start(priority);                       // SCHED_FIFO when priority > 0
+//   thread.post(cantx::TxCommand::oneShot(bus, frame));   // from the loop thread
+//   thread.stop();
+//
+// The inbox is a single-producer single-consumer ring (the loop thread produces): no lock,
+// no allocation per command; a full ring refuses the post (counted).
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "openvcu/can/frame.hpp"
+#include "openvcu/can/link.hpp"
+#include "scheduler.hpp"
+
+namespace openvcu::cantx {
+
+struct TxCommand {
+  enum class Kind : std::uint8_t { OneShot, Request, Cycle, Enable, Default };
+  Kind kind{Kind::OneShot};
+  std::size_t bus{};
+  can::Frame frame{};          ///< OneShot
+  std::uint32_t pgn{};         ///< Request
+  std::uint8_t requester{};    ///< Request: the requester's source address
+  bool global{};               ///< Request: sent to the global address
+  std::size_t scheduled{};     ///< Cycle, Enable, Default: index into Schedule::messages
+  std::uint32_t signal{};      ///< Default
+  double value{};              ///< Default
+  std::int64_t cycleNs{};      ///< Cycle
+  bool enabled{};              ///< Enable
+};
+
+/// Single-producer single-consumer ring of TxCommands.
+class TxInbox {
+ public:
+  static constexpr std::size_t CAPACITY = 1024;
+  /// Producer side. false when full.
+  bool push(const TxCommand& command) noexcept;
+  /// Consumer side. false when empty.
+  bool pop(TxCommand& command) noexcept;
+
+ private:
+  std::array<TxCommand, CAPACITY> m_ring{};
+  alignas(64) std::atomic<std::uint64_t> m_head{};  ///< next to pop (consumer)
+  alignas(64) std::atomic<std::uint64_t> m_tail{};  ///< next to push (producer)
+};
+
+/// @note post() from one thread (the service loop); everything else on the owner's thread.
+class TxThread {
+ public:
+  /// `links[bus]` send the scheduler's frames (the caller's port forwards to them); the
+  /// thread also services them every 100 ms (reopening, bus events), which it reports
+  /// through `onBusEvent` (called on the transmit thread).
+  TxThread(Scheduler& scheduler, std::vector<can::Link*> links,
+           std::function<void(std::size_t bus, const can::BusEvent&)> onBusEvent);
+  ~TxThread();
+  TxThread(const TxThread&) = delete;
+  TxThread& operator=(const TxThread&) = delete;
+
+  /// Starts the thread; `realtimePriority` > 0 asks for SCHED_FIFO. Returns a warning text
+  /// when that was refused (the thread then runs with normal scheduling), else empty.
+  std::string start(int realtimePriority);
+  /// Stops and joins the thread (idempotent).
+  void stop() noexcept;
+
+  /// Queues a command and wakes the thread. false when the inbox is full (counted).
+  bool post(const TxCommand& command) noexcept;
+  [[nodiscard]] std::uint64_t refusedPosts() const noexcept { return m_refused.load(std::memory_order_relaxed); }
+  /// Wake-ups of the thread (deadlines and posts), for the heartbeat.
+  [[nodiscard]] std::uint64_t wakeups() const noexcept { return m_wakeups.load(std::memory_order_relaxed); }
+
+ private:
+  void run() noexcept;
+  void apply(const TxCommand& command, std::int64_t nowNs) noexcept;
+  void service(std::int64_t nowNs) noexcept;
+
+  Scheduler& m_scheduler;
+  std::vector<can::Link*> m_links;
+  std::function<void(std::size_t, const can::BusEvent&)> m_onBusEvent;
+  TxInbox m_inbox;
+  std::atomic<std::uint32_t> m_wake{};   ///< the futex word: bumped by every post and by stop()
+  std::atomic<bool> m_sleeping{};
+  std::atomic<bool> m_stopping{};
+  std::atomic<std::uint64_t> m_refused{};
+  std::atomic<std::uint64_t> m_wakeups{};
+  std::int64_t m_nextServiceNs{};
+  std::array<can::ReceivedFrame, 16> m_scratch{};
+  std::thread m_thread;
+};
+
+}  // namespace openvcu::cantx
