@@ -1,0 +1,190 @@
+// The schedule file and the overlay: defaults from the DBC, every refusal with its JSON
+// path and reason, the overlay applied all-or-nothing and written atomically.
+
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "openvcu/config/catalog.hpp"
+#include "schedule_config.hpp"
+
+using namespace openvcu;
+
+namespace {
+
+const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
+
+struct Fixture {
+  config::VehicleConfig vehicle;
+  signals::Catalog catalog;
+  std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / ("openvcu-txconfig-" + std::to_string(::getpid()));
+
+  Fixture() {
+    auto vehicleResult = config::loadVehicleConfig(HHEA);
+    REQUIRE(vehicleResult);
+    vehicle = std::move(*vehicleResult);
+    auto catalogResult = config::buildCatalog(vehicle);
+    REQUIRE(catalogResult);
+    catalog = std::move(*catalogResult);
+    std::filesystem::create_directories(folder);
+  }
+  ~Fixture() {
+    std::error_code ignored;
+    std::filesystem::remove_all(folder, ignored);
+  }
+  std::string write(const std::string& name, const std::string& text) {
+    const auto path = (folder / name).string();
+    std::ofstream(path) << text;
+    return path;
+  }
+  Result<cantx::Schedule> load(const std::string& json) {
+    vehicle.scheduleFile = write("schedule.json", json);
+    return cantx::loadSchedule(vehicle, catalog);
+  }
+  std::string error(const std::string& json) {
+    auto result = load(json);
+    REQUIRE_MESSAGE(!result, json);
+    return result.error().toString();
+  }
+  const cantx::ScheduledMessage& entry(const cantx::Schedule& schedule, const std::string& name) {
+    auto found = cantx::findScheduled(schedule, vehicle, name);
+    REQUIRE_MESSAGE(found, name);
+    return schedule.messages[*found];
+  }
+};
+
+}  // namespace
+
+TEST_CASE("without a file: every message the node transmits, at its DBC cycle, safety headers left out") {
+  Fixture f;
+  f.vehicle.scheduleFile.clear();
+  auto schedule = cantx::loadSchedule(f.vehicle, f.catalog);
+  REQUIRE_MESSAGE(schedule, (schedule ? "" : schedule.error().toString()));
+  CHECK(schedule->messages.size() == 36);  // 38 VCU messages minus the two SHM definitions
+  CHECK(f.entry(*schedule, "S1_ES_PGN61427").cycleNs == 20'000'000);
+  CHECK(f.entry(*schedule, "CMD_SYS_1").cycleNs == 10'000'000);
+  CHECK(f.entry(*schedule, "TD_PGN65254").cycleNs == 0);  // on request only
+  CHECK(!f.entry(*schedule, "S1_ES_PGN61427").safetyDeltaNs);
+  CHECK(!cantx::findScheduled(*schedule, f.vehicle, "SHM_VCU_to_VIC"));
+  CHECK(schedule->overlay == f.vehicle.directory + "/schedule.overlay.json");
+}
+
+TEST_CASE("the HHEA schedule: keep-alive group, five safety pairs, HVLP computed fields, writer and safe values") {
+  Fixture f;
+  auto schedule = cantx::loadSchedule(f.vehicle, f.catalog);
+  REQUIRE_MESSAGE(schedule, (schedule ? "" : schedule.error().toString()));
+  const auto& s1 = f.entry(*schedule, "S1_ES_PGN61427");
+  REQUIRE(s1.safetyDeltaNs);
+  CHECK(*s1.safetyDeltaNs == 292'000);
+  REQUIRE(s1.group);
+  CHECK(schedule->groups[*s1.group].name == "keepAlive");
+  CHECK(f.entry(*schedule, "HC3_Battery_Demands_4").computed.size() == 2);
+  CHECK(f.entry(*schedule, "HC3_Battery_Demands_4").computed[0].algorithm == cantx::FieldAlgorithm::Counter);
+  CHECK(f.entry(*schedule, "PDU_Rx_1").onChange);
+  REQUIRE(schedule->writers.size() == 1);
+  CHECK(schedule->writers[0].service == "fsm");
+  CHECK(schedule->safeValues.size() == 15);
+  CHECK(schedule->overlay.ends_with("config/hhea/schedule.overlay.json"));
+}
+
+TEST_CASE("settings: cycle, offset, values, destination substitution") {
+  Fixture f;
+  auto schedule = f.load(R"({"include": ["RQST_ES_PGN59904", "CMD_SYS_0"],
+    "messages": {"CMD_SYS_0": {"cycleMs": 50, "offsetMs": 5, "values": {"cmd_sys_request": 1}},
+                 "RQST_ES_PGN59904": {"destination": "0x40"}}})");
+  REQUIRE_MESSAGE(schedule, (schedule ? "" : schedule.error().toString()));
+  REQUIRE(schedule->messages.size() == 2);
+  const auto& sys0 = f.entry(*schedule, "CMD_SYS_0");
+  CHECK(sys0.cycleNs == 50'000'000);
+  CHECK(sys0.offsetNs == 5'000'000);
+  REQUIRE(sys0.defaults[0]);
+  CHECK(*sys0.defaults[0] == 1);
+  CHECK(f.entry(*schedule, "RQST_ES_PGN59904").canId == 0x18EA4021);  // DA 0xF3 -> 0x40
+}
+
+TEST_CASE("refusals name the JSON path and the reason") {
+  Fixture f;
+  CHECK(f.error(R"({"mesages": {}})").find("/mesages") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"S1_ES_PGN6142": {}}})")
+            .ends_with("/messages/S1_ES_PGN6142: unknown message 'S1_ES_PGN6142' (did you mean 'S1_ES_PGN61427'?)"));
+  CHECK(f.error(R"({"messages": {"S1_ES_PGN61427": {"safety": {"deltaUs": 20000}}}})")
+            .ends_with("/messages/S1_ES_PGN61427/safety/deltaUs: must be shorter than the cycle (20000 us)"));
+  CHECK(f.error(R"({"messages": {"SHM_VCU_to_VIC": {}}})").find("safety header") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"HC1_Demands": {"computed": [{"signal": "SEQ_Command1", "algorithm": "crc9"}]}}})")
+            .find("/messages/HC1_Demands/computed/0/algorithm: unknown algorithm 'crc9'") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"HC1_Demands": {"computed": [{"signal": "Torque_Request", "algorithm": "sum8"}]}}})")
+            .find("unsigned integer signal") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"HC1_Demands": {"values": {"ControlWrd": 6}}}})")
+            .ends_with("/messages/HC1_Demands/values/ControlWrd: unknown signal 'ControlWrd' in message 'HC1_Demands' "
+                       "(did you mean 'ControlWord'?)"));
+  CHECK(f.error(R"({"messages": {"HC1_Demands": {"values": {"ControlWord": 70000}}}})")
+            .find("outside the range") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"HC1_Demands": {"group": "keepAlive"}}})")
+            .find("unknown send group 'keepAlive'") != std::string::npos);
+  CHECK(f.error(R"({"groups": {"g": {"signal": "internal.tx.keepAliv"}}})")
+            .find("(did you mean 'internal.tx.keepAlive'?)") != std::string::npos);
+  CHECK(f.error(R"({"writers": [{"service": "fsm", "timeoutMs": 500}]})")
+            .ends_with("/writers/0/timeoutMs: must be above 1000 (the heartbeat period) and at most 600000 ms"));
+  CHECK(f.error(R"({"writers": [{"service": "fms", "timeoutMs": 3000}]})")
+            .find("unknown service 'fms'") != std::string::npos);
+  CHECK(f.error(R"({"safeValues": {"Vehicle_Control_Unit.PDU_Rx_1.Close_GroupA_Contactors": 0}})")
+            .find("list the writers") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"CCVS1_PGN65265": {"destination": "0x10"}}})").find("PDU2") != std::string::npos);
+  CHECK(f.error(R"({"exclude": ["CMD_SYS_0"], "messages": {"CMD_SYS_0": {}}})").find("excluded") != std::string::npos);
+  CHECK(f.error(R"({"realtimePriority": 120})").find("/realtimePriority") != std::string::npos);
+  CHECK(f.error("{\"messages\": {\n}").find("schedule.json") != std::string::npos);  // syntax: file, line
+}
+
+TEST_CASE("the overlay: applied over the schedule all or nothing, saved atomically, read back") {
+  Fixture f;
+  auto schedule = f.load(R"({"overlay": "runtime.json"})");
+  REQUIRE(schedule);
+  CHECK(schedule->overlay == (f.folder / "runtime.json").string());
+  auto missing = cantx::loadOverlay(schedule->overlay);
+  REQUIRE(missing);
+  CHECK(missing->empty());
+
+  cantx::Overlay overlay;
+  overlay.messages.push_back({"CCVS1_PGN65265", 50.0, false});
+  overlay.defaults.emplace_back("Vehicle_Control_Unit.CCVS1_PGN65265.Wheel_Based_Veh_Spd", 12.5);
+  overlay.overrides.emplace_back("Vehicle_Control_Unit.HC1_Demands.ControlWord", 6);
+  REQUIRE(cantx::saveOverlay(schedule->overlay, overlay));
+  for (const auto& item : std::filesystem::directory_iterator(f.folder)) {
+    CHECK(item.path().filename().string().find(".tmp") == std::string::npos);  // no temporary left
+  }
+  auto loaded = cantx::loadOverlay(schedule->overlay);
+  REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
+  auto applied = cantx::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
+  REQUIRE_MESSAGE(applied, (applied ? "" : applied.error().toString()));
+  const auto& ccvs = f.entry(*applied, "CCVS1_PGN65265");
+  CHECK(ccvs.cycleNs == 50'000'000);
+  CHECK(!ccvs.enabled);
+  REQUIRE(ccvs.defaults[4]);  // Wheel_Based_Veh_Spd
+  CHECK(*ccvs.defaults[4] == 12.5);
+
+  // one bad entry refuses the whole overlay, naming it
+  loaded->defaults.emplace_back("Vehicle_Control_Unit.HC1_Demands.ControlWord", 1e9);
+  auto refused = cantx::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("/defaults/Vehicle_Control_Unit.HC1_Demands.ControlWord: value") !=
+        std::string::npos);
+  CHECK(f.entry(*schedule, "CCVS1_PGN65265").cycleNs == 100'000'000);  // the original is untouched
+
+  f.write("runtime.json", R"({"format": 1, "messages": {"CCVS1_PGN65265": {"cycle": 5}}})");
+  auto unknownKey = cantx::loadOverlay(schedule->overlay);
+  REQUIRE(!unknownKey);
+  CHECK(unknownKey.error().toString().find("/messages/CCVS1_PGN65265") != std::string::npos);
+}
+
+TEST_CASE("checkCycle: 1..3600000 ms and longer than the safety delta") {
+  cantx::ScheduledMessage message;
+  message.safetyDeltaNs = 2'000'000;
+  CHECK(cantx::checkCycle(message, 0.5));
+  CHECK(cantx::checkCycle(message, 2.0));
+  CHECK(!cantx::checkCycle(message, 2.5));
+  CHECK(cantx::checkCycle(message, 4e6));
+}

@@ -1,0 +1,332 @@
+// cantx::Scheduler with a fake clock on the HHEA configuration: the J1939-76 worked
+// example byte for byte, SHM-before-SDM with the configured delta, absolute deadlines
+// without catch-up, send groups, computed fields, value precedence, requests, runtime
+// changes and the bus plane.
+
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <climits>
+#include <string>
+#include <vector>
+
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/j1939/safety.hpp"
+#include "openvcu/j1939/time_date.hpp"
+#include "scheduler.hpp"
+
+using namespace openvcu;
+
+namespace {
+
+constexpr std::int64_t US = 1'000;
+constexpr std::int64_t MS = 1'000'000;
+constexpr std::int64_t START = 5'000 * MS;
+const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
+
+constexpr std::uint32_t S1_ES = 0x0CEFF321;
+constexpr std::uint32_t S1_ES_SHM = 0x0C0EF321;
+constexpr std::uint32_t CMD_SYS_1 = 0x0CFF1127;  // 10 ms, no group
+
+struct Sent {
+  std::size_t bus;
+  can::Frame frame;
+  std::int64_t atNs;
+};
+
+struct FakeClock final : cantx::Clock {
+  std::int64_t now{START};
+  std::int64_t realtime{1'795'268'730'750'000'000};  // time_date.hpp's example instant
+  std::int64_t monotonicNs() noexcept override { return now; }
+  std::int64_t realtimeNs() noexcept override { return realtime; }
+};
+
+struct Recorder final : cantx::TxPort {
+  FakeClock* clock{};
+  std::vector<Sent> sent;
+  can::SendStatus send(std::size_t bus, const can::Frame& frame) noexcept override {
+    sent.push_back(Sent{bus, frame, clock->now});
+    return can::SendStatus::Sent;
+  }
+  [[nodiscard]] std::vector<Sent> withId(std::uint32_t id) const {
+    std::vector<Sent> matching;
+    for (const Sent& item : sent) {
+      if (item.frame.id == id) matching.push_back(item);
+    }
+    return matching;
+  }
+};
+
+std::vector<std::uint8_t> bytes(const can::Frame& frame) { return {frame.data.begin(), frame.data.begin() + frame.length}; }
+
+struct Fixture {
+  config::VehicleConfig vehicle;
+  signals::Catalog catalog;
+  std::optional<signals::SignalTable> table;
+  cantx::Schedule schedule;
+  FakeClock clock;
+  Recorder port;
+  std::unique_ptr<cantx::Scheduler> sut;
+  std::string instance = "txunit-" + std::to_string(::getpid());
+
+  Fixture() {
+    auto vehicleResult = config::loadVehicleConfig(HHEA);
+    REQUIRE_MESSAGE(vehicleResult, (vehicleResult ? "" : vehicleResult.error().toString()));
+    vehicle = std::move(*vehicleResult);
+    auto catalogResult = config::buildCatalog(vehicle);
+    REQUIRE(catalogResult);
+    catalog = std::move(*catalogResult);
+    (void)signals::SignalTable::remove(instance);
+    auto tableResult = signals::SignalTable::open(catalog, instance);
+    REQUIRE(tableResult);
+    table.emplace(std::move(*tableResult));
+    auto scheduleResult = cantx::loadSchedule(vehicle, catalog);
+    REQUIRE_MESSAGE(scheduleResult, (scheduleResult ? "" : scheduleResult.error().toString()));
+    schedule = std::move(*scheduleResult);
+    port.clock = &clock;
+  }
+  ~Fixture() { (void)signals::SignalTable::remove(instance); }
+
+  void start() {
+    auto created = cantx::Scheduler::create(vehicle, schedule, catalog, *table, port, clock, START);
+    REQUIRE_MESSAGE(created, (created ? "" : created.error().toString()));
+    sut = std::move(*created);
+  }
+  signals::SignalIndex key(const std::string& name) {
+    const auto index = catalog.indexOf(name);
+    REQUIRE_MESSAGE(index, name);
+    return *index;
+  }
+  void command(const std::string& name, double value) { table->writeCommand(key(name), value, clock.now, 3); }
+  /// Runs the scheduler at each of its deadlines up to `untilNs` (a perfect clock).
+  void runUntil(std::int64_t untilNs) {
+    for (;;) {
+      const std::int64_t next = std::max(sut->nextDeadlineNs(), clock.now);
+      if (next > untilNs) break;
+      clock.now = next;
+      sut->run(clock.now);
+    }
+    clock.now = untilNs;
+  }
+  std::size_t scheduledIndex(const std::string& message) {
+    auto found = cantx::findScheduled(schedule, vehicle, message);
+    REQUIRE(found);
+    return *found;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the S1_ES pair reproduces the thesis' worked example byte for byte (sequence 15)") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.command("Vehicle_Control_Unit.S1_ES_PGN61427.Control_Es_Relay", 3);
+  f.start();
+  f.runUntil(START + 15 * 20 * MS + 1 * MS);  // pairs 0..15
+  const auto headers = f.port.withId(S1_ES_SHM);
+  const auto data = f.port.withId(S1_ES);
+  REQUIRE(headers.size() == 16);
+  REQUIRE(data.size() == 16);
+  CHECK(bytes(data[15].frame) == std::vector<std::uint8_t>{0xEF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF});
+  CHECK(bytes(headers[15].frame) == std::vector<std::uint8_t>{0x7F, 0xDE, 0x0C, 0x10, 0xA3, 0xEF, 0x00, 0x81});
+  // the first pair carries sequence 0: byte 0 = 0 << 3 | 0b111, same CRC
+  CHECK(bytes(headers[0].frame) == std::vector<std::uint8_t>{0x07, 0xDE, 0x0C, 0x10, 0xA3, 0xEF, 0x00, 0x81});
+  CHECK(headers[0].frame.extended());
+}
+
+TEST_CASE("each SHM goes out first and its SDM exactly the configured delta later, on absolute deadlines") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.start();
+  f.runUntil(START + 999 * MS);
+  const auto headers = f.port.withId(S1_ES_SHM);
+  const auto data = f.port.withId(S1_ES);
+  REQUIRE(headers.size() == 50);
+  REQUIRE(data.size() == 50);
+  for (std::size_t i = 0; i < headers.size(); ++i) {
+    CHECK(headers[i].atNs == START + static_cast<std::int64_t>(i) * 20 * MS);  // no drift
+    CHECK(data[i].atNs - headers[i].atNs == 292 * US);                       // schedule.json deltaUs
+  }
+  // the SHM precedes its SDM in the sent order
+  const auto firstHeader = std::find_if(f.port.sent.begin(), f.port.sent.end(),
+                                        [](const Sent& s) { return s.frame.id == S1_ES_SHM; });
+  const auto firstData = std::find_if(f.port.sent.begin(), f.port.sent.end(),
+                                      [](const Sent& s) { return s.frame.id == S1_ES; });
+  CHECK(firstHeader < firstData);
+  const auto& stats = f.sut->stats(f.scheduledIndex("S1_ES_PGN61427"));
+  CHECK(stats.frames.load() == 50);
+  CHECK(stats.periodError.summary().maxUs == 0);
+  CHECK(stats.deltaError.summary().maxUs == 0);
+  CHECK(stats.missed.load() == 0);
+}
+
+TEST_CASE("the sequence number advances per pair and wraps at 32") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.start();
+  f.runUntil(START + 34 * 20 * MS);
+  const auto headers = f.port.withId(S1_ES_SHM);
+  REQUIRE(headers.size() >= 34);
+  for (std::size_t i = 0; i < 34; ++i) {
+    const auto header = j1939::parseSafetyHeader(headers[i].frame.payload());
+    REQUIRE(header);
+    CHECK(header->sequence == i % 32);
+  }
+}
+
+TEST_CASE("after a stall the past cycles are skipped and counted, never sent in a burst") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.start();
+  f.runUntil(START);  // first cycle at START
+  f.port.sent.clear();
+  f.clock.now = START + 125 * MS;  // stalled through the deadlines at 20, 40, 60, 80, 100, 120 ms
+  f.sut->run(f.clock.now);
+  CHECK(f.port.withId(S1_ES_SHM).size() == 1);
+  const auto& stats = f.sut->stats(f.scheduledIndex("S1_ES_PGN61427"));
+  CHECK(stats.missed.load() == 5);  // 20..100 skipped; the one at 120 goes out late, once
+  CHECK(f.sut->nextDeadlineNs() <= START + 125 * MS + 292 * US);  // the SDM
+  f.runUntil(START + 150 * MS);
+  const auto headers = f.port.withId(S1_ES_SHM);
+  REQUIRE(headers.size() == 2);
+  CHECK(headers[1].atNs == START + 140 * MS);  // back on the original grid
+}
+
+TEST_CASE("a send group switched off keeps the messages silent; ungrouped messages go on") {
+  Fixture f;
+  f.start();  // internal.tx.keepAlive never commanded: its initial value 0
+  f.runUntil(START + 100 * MS);
+  CHECK(f.port.withId(S1_ES).empty());
+  CHECK(f.port.withId(S1_ES_SHM).empty());
+  CHECK(f.port.withId(CMD_SYS_1).size() == 11);
+  f.command("internal.tx.keepAlive", 1);
+  f.runUntil(START + 200 * MS);
+  CHECK(f.port.withId(S1_ES_SHM).size() == 5);  // 120, 140, 160, 180, 200 (phase kept)
+  CHECK(f.port.withId(S1_ES).size() == 4);      // the fifth SDM is due 292 us after 200 ms
+  CHECK(f.port.withId(S1_ES_SHM).front().atNs == START + 120 * MS);
+  CHECK(f.sut->stats(f.scheduledIndex("S1_ES_PGN61427")).missed.load() == 0);
+}
+
+TEST_CASE("override wins over command, command over the schedule default, default over the DBC start value") {
+  Fixture f;
+  const std::size_t hc1 = f.scheduledIndex("HC1_Demands");
+  const std::uint32_t controlWord = 1;  // HC1_Demands signal order: Torque_Request, ControlWord, ...
+  REQUIRE(f.vehicle.database.messages[f.schedule.messages[hc1].message].signals[controlWord].name == "ControlWord");
+  const std::uint32_t hc1Id = f.schedule.messages[hc1].canId;
+  f.start();
+  auto controlWordSent = [&] {
+    const auto frames = f.port.withId(hc1Id);
+    REQUIRE(!frames.empty());
+    return frames.back().frame.data[2] | (frames.back().frame.data[3] << 8);
+  };
+  f.runUntil(START);
+  CHECK(controlWordSent() == 6);  // DBC GenSigStartValue
+  f.sut->setDefault(hc1, controlWord, 3);
+  f.runUntil(START + 20 * MS);
+  CHECK(controlWordSent() == 3);
+  f.command("Vehicle_Control_Unit.HC1_Demands.ControlWord", 5);
+  f.runUntil(START + 40 * MS);
+  CHECK(controlWordSent() == 5);
+  f.table->setOverride(f.key("Vehicle_Control_Unit.HC1_Demands.ControlWord"), 6, f.clock.now, 9);
+  f.runUntil(START + 60 * MS);
+  CHECK(controlWordSent() == 6);
+  // what went out is on the bus plane, with the frame's source address
+  const auto bus = f.table->readBus(f.key("Vehicle_Control_Unit.HC1_Demands.ControlWord"));
+  REQUIRE(bus);
+  CHECK(bus->value == 6);
+  CHECK(bus->source == 0x71);  // the low byte of HC1_Demands 0x19107171 (H-protocol node ID)
+  CHECK(bus->quality == signals::Quality::Valid);
+}
+
+TEST_CASE("computed fields: the HVLP SEQ counts per frame and CS is the sum of the other bytes") {
+  Fixture f;
+  const std::size_t hc1 = f.scheduledIndex("HC1_Demands");
+  const std::uint32_t hc1Id = f.schedule.messages[hc1].canId;
+  f.start();
+  f.runUntil(START + 260 * MS * 5);  // 66 frames at 20 ms: the 8-bit counter goes past 63
+  const auto frames = f.port.withId(hc1Id);
+  REQUIRE(frames.size() > 64);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const auto& data = frames[i].frame.data;
+    CHECK(data[7] == i % 256);  // SEQ_Command1: byte 7
+    std::uint8_t sum = 0;
+    for (std::size_t b = 0; b < 8; ++b) {
+      if (b != 6) sum = static_cast<std::uint8_t>(sum + data[b]);
+    }
+    CHECK(data[6] == sum);  // CS_Command1: byte 6, covers the counter
+  }
+}
+
+TEST_CASE("CRC-8 SAE J1850 and the J1939-71 4-bit checksum") {
+  const std::string check = "123456789";
+  CHECK(cantx::crc8SaeJ1850(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(check.data()),
+                                                          check.size())) == 0x4B);
+  // s = 0x01 + 0x02 + (ID bytes 0x18 + 0xFE + 0xF1 + 0x21) = 0x22B; (0x22 + 0x22B) & 0xF = 0xD
+  const std::array<std::uint8_t, 2> payload{0x01, 0x02};
+  CHECK(cantx::j1939Checksum4(payload, 0x18FEF121) == 0x0D);
+}
+
+TEST_CASE("requests: Time/Date from the clock, a scheduled PGN at once, a NACK for an unknown specific one") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.start();
+  f.sut->answerRequest(0, j1939::PGN_TIME_DATE, 0xF3, false);
+  const auto timeDate = f.port.withId(0x18FEE621);
+  REQUIRE(timeDate.size() == 1);
+  CHECK(bytes(timeDate[0].frame) == std::vector<std::uint8_t>{0x7B, 0x2D, 0x0D, 0x0B, 0x54, 0x29, 0x7D, 0x7D});
+  const auto seconds = f.table->readBus(f.key("Vehicle_Control_Unit.TD_PGN65254.TD_Seconds"));
+  REQUIRE(seconds);
+  CHECK(seconds->value == doctest::Approx(30.75));
+
+  f.sut->answerRequest(0, 0xFEF1, 0xF3, true);  // CCVS1: a safety SDM, so its SHM first
+  REQUIRE(f.port.sent.size() == 2);
+  CHECK(f.port.sent[1].frame.id == 0x180EFF21);
+  f.runUntil(START + 3 * MS);
+  CHECK(f.port.withId(0x18FEF121).size() >= 1);
+
+  f.port.sent.clear();
+  f.sut->answerRequest(0, 0xFECA, 0xF3, true);  // unknown, global: silence
+  CHECK(f.port.sent.empty());
+  f.sut->answerRequest(0, 0xFECA, 0xF3, false);  // unknown, to us: NACK
+  REQUIRE(f.port.sent.size() == 1);
+  CHECK(f.port.sent[0].frame.id == 0x18E8FF21);
+  CHECK(bytes(f.port.sent[0].frame) == std::vector<std::uint8_t>{0x01, 0xFF, 0xFF, 0xFF, 0xF3, 0xCA, 0xFE, 0x00});
+  CHECK(f.sut->counters().requestsNacked.load() == 1);
+}
+
+TEST_CASE("runtime changes: a new cycle keeps the phase, a disabled message stops, a one-shot goes out once") {
+  Fixture f;
+  const std::size_t sys1 = f.scheduledIndex("CMD_SYS_1");
+  f.start();
+  f.runUntil(START + 50 * MS);
+  f.port.sent.clear();
+  f.sut->setCycle(sys1, 25 * MS, f.clock.now);  // last deadline 50 ms -> next 75 ms
+  f.runUntil(START + 130 * MS);
+  auto frames = f.port.withId(CMD_SYS_1);
+  REQUIRE(frames.size() == 3);
+  CHECK(frames[0].atNs == START + 75 * MS);
+  CHECK(frames[2].atNs == START + 125 * MS);
+  f.sut->setEnabled(sys1, false);
+  f.port.sent.clear();
+  f.runUntil(START + 300 * MS);
+  CHECK(f.port.withId(CMD_SYS_1).empty());
+  can::Frame oneShot;
+  oneShot.id = 0x123;
+  oneShot.length = 2;
+  f.sut->sendOnce(0, oneShot);
+  CHECK(f.port.withId(0x123).size() == 1);
+  CHECK(f.sut->counters().oneShots.load() == 1);
+}
+
+TEST_CASE("ErrorHistogram: percentiles in microseconds, exact maximum, overflow bucket") {
+  cantx::ErrorHistogram histogram;
+  for (int i = 0; i < 98; ++i) histogram.record(10 * US);
+  histogram.record(-150 * US);  // the sign does not matter
+  histogram.record(5 * MS);     // beyond the 2 ms buckets
+  const auto summary = histogram.summary();
+  CHECK(summary.count == 100);
+  CHECK(summary.p50Us == 10);
+  CHECK(summary.p99Us == 150);
+  CHECK(summary.maxUs == 5000);
+}
