@@ -38,10 +38,15 @@ int main(int argc, char** argv) {
                             .writerId = FIXTURE_WRITER,
                             .usesFrameStreams = true};
   bool noFrames = false;
+  bool quiet = false;
+  std::string as;
   service::CommandLine commandLine(info);
   commandLine.addFlag("--no-frames", noFrames, "do not register with iox-roudi (no frame streams)");
+  commandLine.addFlag("--quiet", quiet, "answer no commands (e.g. with --as, when the real owner answers)");
+  commandLine.addOption("--as", as, "heartbeat as this service (e.g. fsm: a stand-in command writer)");
   if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
   info.usesFrameStreams = !noFrames;
+  if (!as.empty()) info.name = as;
 
   auto serviceResult = service::Service::open(info, commandLine.options());
   if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
@@ -49,7 +54,7 @@ int main(int argc, char** argv) {
 
   service::CommandPolicy policy = service::CommandPolicy::byPrefix("internal.");
   policy.veto = refuseHeartbeats;
-  if (auto answering = runtime.answerCommands(std::move(policy)); !answering) {
+  if (auto answering = quiet ? openvcu::Status{} : runtime.answerCommands(std::move(policy)); !answering) {
     return service::reportStartupError(info, answering.error());
   }
 

@@ -81,7 +81,7 @@ TEST_CASE("the test receive file sets a factor, a per-message timeout, a safety 
   CHECK(result->forward[1].source == std::uint8_t{0x45});
 }
 
-TEST_CASE("timeoutFactor scales every DBC-derived timeout; explicit timeouts win") {
+TEST_CASE("timeoutFactor scales every DBC-derived timeout, explicit timeouts win") {
   const config::VehicleConfig v = vehicle();
   auto result = loadText(R"({"timeoutFactor": 5, "messages": {"ECU1_Status": {"timeoutMs": 35}}})");
   REQUIRE(result);

@@ -193,7 +193,7 @@ TEST_CASE("after a stall the past cycles are skipped and counted, never sent in 
   CHECK(headers[1].atNs == START + 140 * MS);  // back on the original grid
 }
 
-TEST_CASE("a send group switched off keeps the messages silent; ungrouped messages go on") {
+TEST_CASE("a send group switched off keeps the messages silent, ungrouped messages go on") {
   Fixture f;
   f.start();  // internal.tx.keepAlive never commanded: its initial value 0
   f.runUntil(START + 100 * MS);

@@ -143,7 +143,7 @@ TEST_CASE("parser reports text after a BO_ header at the extra word") {
   CHECK(firstError(sut) == "test.dbc:1:14: unexpected text after BO_");
 }
 
-TEST_CASE("parser reports a missing ';' that is not followed by a statement") {
+TEST_CASE("parser reports a missing a semicolon that is not followed by a statement") {
   const ParseOutput sut = parseText("BA_DEF_ BO_ \"A\" INT 0 10 junk\n");
 
   CHECK(firstError(sut) == "test.dbc:1:26: expected ';', found 'j'");

@@ -65,7 +65,7 @@ TEST_CASE("parser unescapes quotes and backslashes in CM_ text") {
   CHECK(gearOf(sut)->comment == R"(the "gear" lever, C:\path)");
 }
 
-TEST_CASE("parser accepts CM_ without ';' before the next statement with a warning") {
+TEST_CASE("parser accepts CM_ without a semicolon before the next statement with a warning") {
   const ParseOutput sut = parseText(BASE + "CM_ BO_ 100 \"no terminator\"\nBO_ 200 Next: 8 Vcu\n");
 
   CHECK_FALSE(sut.hasErrors());
@@ -265,7 +265,7 @@ TEST_CASE("parser reads VAL_ for an environment variable") {
   CHECK(sut.database.environmentVariables[0].valueDescriptions.size() == 2);
 }
 
-TEST_CASE("parser accepts VAL_ without ';' before the next statement with a warning") {
+TEST_CASE("parser accepts VAL_ without a semicolon before the next statement with a warning") {
   const ParseOutput sut = parseText(BASE + "VAL_ 100 Gear 0 \"Neutral\" 1 \"Drive\"\nVAL_TABLE_ T 1 \"x\";\n");
 
   CHECK_FALSE(sut.hasErrors());
@@ -368,7 +368,7 @@ TEST_CASE("parser reads EV_ with every field and ENVVAR_DATA_") {
   CHECK(*label.dataSize == 16);
 }
 
-TEST_CASE("parser accepts EV_ without ';' before the next statement with a warning") {
+TEST_CASE("parser accepts EV_ without a semicolon before the next statement with a warning") {
   const ParseOutput sut = parseText(
       "BU_: Vcu\n"
       "EV_ Label: 0 [0|1] \"\" 0 7 DUMMY_NODE_VECTOR0 Vcu\n"

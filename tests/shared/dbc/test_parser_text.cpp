@@ -113,7 +113,7 @@ TEST_CASE("parser reads a last statement without a final newline") {
   CHECK(described->valueDescriptions.size() == 1);
 }
 
-TEST_CASE("parser accepts a VAL_ without ';' at the very end of the file with a warning") {
+TEST_CASE("parser accepts a VAL_ without a semicolon at the very end of the file with a warning") {
   const ParseOutput sut = parseText("BO_ 1 M: 8 Vcu\n SG_ S : 0|8@1+ (1,0) [0|0] \"\" Vcu\nVAL_ 1 S 0 \"a\"");
 
   CHECK_FALSE(sut.hasErrors());

@@ -1,0 +1,269 @@
+// vcu-can-tx as a process on the simulated bus, inside the sandbox with the real iox-roudi
+// and LCM, checked by an independent listener (its own sim link; it knows the DBC and the
+// J1939-76 rules, not can-tx's code):
+//   - every SHM/SDM pair of the HHEA keep-alive is in order, within its delta, in sequence
+//     and carries the right CRC; periods hold and nothing is missed; the HVLP SEQ/CS fields
+//     count and add up;
+//   - a runtime cycle change takes effect and survives a restart of vcu-can-tx;
+//   - killing the command writer (a stand-in "fsm") leads to the safe values after the
+//     timeout, with a fault event, while the keep-alive never misses a cycle.
+// The HHEA configuration is copied into the sandbox's /tmp (the overlay is written there).
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "integration_support.hpp"
+#include "openvcu/can/sim_link.hpp"
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/ipc/runtime.hpp"
+#include "openvcu/j1939/safety.hpp"
+#include "openvcu/signals/table.hpp"
+
+namespace harness = openvcu::harness;
+namespace fs = std::filesystem;
+using namespace openvcu;
+using namespace openvcu::integration;
+using namespace std::chrono_literals;
+
+namespace {
+
+const std::string CAN_TX = CAN_TX_BINARY;
+const fs::path HHEA_FOLDER = fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea";
+constexpr std::int64_t MS = 1'000'000;
+
+constexpr std::uint32_t S1_ES = 0x0CEFF321;
+constexpr std::uint32_t CCVS1 = 0x18FEF121;
+constexpr std::uint32_t HC1 = 0x19107171;
+
+struct Heard {
+  can::Frame frame;
+  std::int64_t atNs;  ///< the sender's CLOCK_MONOTONIC at send (sim link)
+};
+
+/// The independent listener: its own link on sim:vehicle.
+struct Listener {
+  std::unique_ptr<can::Link> link;
+  std::vector<Heard> heard;
+  Listener() {
+    if (!ipc::Runtime::initialized()) REQUIRE_STATUS(ipc::Runtime::init("test-can-tx-listener", 5s));
+    auto opened = can::openSimLink("vehicle", can::LinkOptions{});
+    REQUIRE_STATUS(opened);
+    link = std::move(*opened);
+    heard.reserve(200'000);
+  }
+  /// Records everything for `duration`.
+  void listen(std::chrono::milliseconds duration) {
+    const auto end = std::chrono::steady_clock::now() + duration;
+    std::array<can::ReceivedFrame, 64> batch{};
+    while (std::chrono::steady_clock::now() < end) {
+      const std::size_t count = link->receive(batch);
+      for (std::size_t i = 0; i < count; ++i) heard.push_back(Heard{batch[i].frame, batch[i].monotonicNs});
+      if (count == 0) std::this_thread::sleep_for(1ms);
+    }
+  }
+  [[nodiscard]] std::vector<Heard> withId(std::uint32_t id) const {
+    std::vector<Heard> matching;
+    for (const Heard& item : heard) {
+      if (item.frame.id == id) matching.push_back(item);
+    }
+    return matching;
+  }
+};
+
+fs::path copyConfig() {
+  const fs::path folder = fs::temp_directory_path() / "hhea";
+  fs::create_directories(folder);
+  for (const char* name : {"vehicle.json", "hhea.dbc", "schedule.json"}) {
+    fs::copy_file(HHEA_FOLDER / name, folder / name, fs::copy_options::overwrite_existing);
+  }
+  return folder / "vehicle.json";
+}
+
+harness::ProcessSpec canTxSpec(const fs::path& config) {
+  return harness::ProcessSpec{
+      .name = "can-tx", .argv = {CAN_TX, "--config", config.string()}, .notifyReadiness = true, .captureOutput = true};
+}
+
+harness::CommandResult vcuOn(harness::Harness& sut, const fs::path& config, std::vector<std::string> arguments) {
+  std::vector<std::string> argv{VCU};
+  argv.insert(argv.end(), arguments.begin(), arguments.end());
+  argv.emplace_back("--config");
+  argv.push_back(config.string());
+  return sut.run(argv);
+}
+
+/// Checks every J1939-76 pair the listener heard: SHM right before its SDM, within
+/// [delta, delta + slack], sequence + 1 mod 32, CRC; returns the pairs checked.
+std::size_t checkPairs(const Listener& listener, std::uint32_t sdmId, std::int64_t deltaNs) {
+  const std::uint32_t shmId = j1939::safetyHeaderCanId(sdmId);
+  std::optional<Heard> pendingHeader;
+  std::optional<std::uint8_t> lastSequence;
+  std::size_t pairs = 0;
+  for (const Heard& item : listener.heard) {
+    if (item.frame.id == shmId) {
+      const auto header = j1939::parseSafetyHeader(item.frame.payload());
+      REQUIRE(header);
+      if (!header->matchesData(sdmId)) continue;  // another SDM's header to the same DA
+      CHECK_MESSAGE(!pendingHeader, "two SHMs without an SDM between them");
+      pendingHeader = item;
+    } else if (item.frame.id == sdmId) {
+      if (!pendingHeader && pairs == 0 && !lastSequence) continue;  // its SHM went out before we listened
+      REQUIRE_MESSAGE(pendingHeader, "an SDM without its SHM before it");
+      const auto header = j1939::parseSafetyHeader(pendingHeader->frame.payload());
+      const std::int64_t delta = item.atNs - pendingHeader->atNs;
+      CHECK(delta >= deltaNs);
+      CHECK(delta < deltaNs + 20 * MS);  // generous: the test machine is shared
+      CHECK(header->sdmCrc == j1939::crc32J1939_76(item.frame.payload()));
+      if (lastSequence) CHECK(header->sequence == (*lastSequence + 1) % 32);
+      lastSequence = header->sequence;
+      pendingHeader.reset();
+      ++pairs;
+    }
+  }
+  return pairs;
+}
+
+/// Gaps between consecutive frames of `id`: none reaches 1.9 cycles (no missed cycle; a late
+/// frame on this shared test machine may come a few ms late, the next one is on time again),
+/// and the mean period equals the cycle within 1 % (absolute deadlines: no drift).
+void checkPeriods(const std::vector<Heard>& frames, std::int64_t cycleNs) {
+  REQUIRE(frames.size() > 3);
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    const std::int64_t gap = frames[i].atNs - frames[i - 1].atNs;
+    CHECK_MESSAGE(gap < cycleNs * 19 / 10, ("gap of " + std::to_string(gap / 1000) + " us"));
+  }
+  const double mean = static_cast<double>(frames.back().atNs - frames.front().atNs) /
+                      static_cast<double>(frames.size() - 1);
+  CHECK(mean == doctest::Approx(static_cast<double>(cycleNs)).epsilon(0.01));
+}
+
+struct Fixture {
+  harness::Harness sut;
+  fs::path config = copyConfig();
+  Fixture() { REQUIRE_STATUS(sut.startRoudi()); }
+  harness::Process& startCanTx() {
+    auto process = sut.start(canTxSpec(config));
+    REQUIRE_STATUS(process);
+    return **process;
+  }
+  void keepAlive() {
+    const auto result = vcuOn(sut, config, {"signal", "set", "internal.tx.keepAlive", "1"});
+    REQUIRE_MESSAGE(contains(result.out, "accepted"), (result.out + result.err));
+  }
+};
+
+}  // namespace
+
+TEST_CASE("an independent listener finds every SHM/SDM pair valid, the periods held and the HVLP fields right") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f;
+  f.startCanTx();
+  Listener listener;
+  f.keepAlive();
+  std::this_thread::sleep_for(100ms);
+  listener.listen(3s);
+  const std::size_t s1Pairs = checkPairs(listener, S1_ES, 292'000);
+  CHECK(s1Pairs >= 140);  // 3 s at 20 ms
+  CHECK(checkPairs(listener, 0x181BF321 /* HVESSC1 */, 567'000) >= 25);
+  CHECK(checkPairs(listener, CCVS1, 2'000'000) >= 25);
+  CHECK(checkPairs(listener, 0x18F02B21 /* CN */, 1'427'000) >= 5);
+  checkPeriods(listener.withId(S1_ES), 20 * MS);
+  checkPeriods(listener.withId(CCVS1), 100 * MS);
+  checkPeriods(listener.withId(0x0CFF1127 /* CMD_SYS_1 */), 10 * MS);
+  const auto hc1 = listener.withId(HC1);
+  checkPeriods(hc1, 20 * MS);
+  for (std::size_t i = 1; i < hc1.size(); ++i) {
+    const auto& data = hc1[i].frame.data;
+    CHECK(data[7] == static_cast<std::uint8_t>(hc1[i - 1].frame.data[7] + 1));  // SEQ_Command1
+    std::uint8_t sum = 0;
+    for (std::size_t b = 0; b < 8; ++b) {
+      if (b != 6) sum = static_cast<std::uint8_t>(sum + data[b]);
+    }
+    CHECK(data[6] == sum);  // CS_Command1
+  }
+  // the SDM the thesis traced: Control_Es_Relay 0 at start -> E3 FF ..
+  CHECK(listener.withId(S1_ES).back().frame.data[0] == 0xE3);
+}
+
+TEST_CASE("a runtime cycle change is acknowledged, takes effect and survives a restart of vcu-can-tx") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f;
+  harness::Process& first = f.startCanTx();
+  Listener listener;
+  f.keepAlive();
+  const auto refused = vcuOn(f.sut, f.config, {"schedule", "cycle", "CCVS1_PGN65265", "1"});
+  CHECK(contains(refused.out + refused.err, "refused"));  // shorter than its 2 ms SHM->SDM delta
+  const auto accepted = vcuOn(f.sut, f.config, {"schedule", "cycle", "CCVS1_PGN65265", "50"});
+  REQUIRE_MESSAGE(contains(accepted.out, "accepted"), (accepted.out + accepted.err));
+  std::this_thread::sleep_for(200ms);
+  listener.listen(1500ms);
+  checkPeriods(listener.withId(CCVS1), 50 * MS);
+  CHECK(fs::exists(f.config.parent_path() / "schedule.overlay.json"));
+
+  REQUIRE(f.sut.stop(first));
+  f.startCanTx();
+  listener.heard.clear();
+  std::this_thread::sleep_for(200ms);
+  listener.listen(1500ms);
+  checkPeriods(listener.withId(CCVS1), 50 * MS);
+  CHECK(checkPairs(listener, CCVS1, 2'000'000) >= 20);
+}
+
+TEST_CASE("when the heartbeat of the fsm stops, can-tx commands the safe values and raises a fault while the keep-alive goes on") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f;
+  f.startCanTx();
+  auto fsm = f.sut.start(harness::ProcessSpec{
+      .name = "fsm", .argv = {FIXTURE, "--config", f.config.string(), "--as", "fsm", "--quiet"}, .notifyReadiness = true});
+  REQUIRE_STATUS(fsm);
+  Listener listener;
+  f.keepAlive();
+  auto events = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, "hhea");
+  REQUIRE_STATUS(events);
+  std::vector<ipc::FaultEvent> faults;
+  REQUIRE(events->onFault([&](const ipc::FaultEvent& event) { faults.push_back(event); }));
+
+  // the stand-in FSM commands ControlWord 5 (as the real one does in "Connect for Driving")
+  auto vehicle = config::loadVehicleConfig(f.config.string());
+  REQUIRE(vehicle);
+  auto catalog = config::buildCatalog(*vehicle);
+  REQUIRE(catalog);
+  auto table = signals::SignalTable::open(*catalog, "hhea", signals::OpenMode::AttachOnly);
+  REQUIRE_STATUS(table);
+  const auto controlWord = catalog->indexOf("Vehicle_Control_Unit.HC1_Demands.ControlWord");
+  REQUIRE(controlWord);
+  table->writeCommand(*controlWord, 5, signals::monotonicNowNs(), 3);
+  std::this_thread::sleep_for(1500ms);  // longer than a heartbeat period: the fsm is seen alive
+
+  const std::int64_t killedNs = signals::monotonicNowNs();
+  REQUIRE((*fsm)->signal(SIGKILL));
+  listener.listen(5s);
+  for (int i = 0; i < 20; ++i) (void)events->handle(10ms);
+
+  // ControlWord: 5 until the timeout (3 s after the last beat), then the safe 6
+  const auto hc1 = listener.withId(HC1);
+  REQUIRE(!hc1.empty());
+  CHECK(hc1.front().frame.data[2] == 5);
+  CHECK(hc1.back().frame.data[2] == 6);
+  const auto firstSafe = std::find_if(hc1.begin(), hc1.end(), [](const Heard& h) { return h.frame.data[2] == 6; });
+  REQUIRE(firstSafe != hc1.end());
+  CHECK(firstSafe->atNs - killedNs > 1500 * MS);  // not before the timeout (last beat <= 1 s before the kill)
+  CHECK(firstSafe->atNs - killedNs < 4500 * MS);
+  const auto fault = std::find_if(faults.begin(), faults.end(), [](const ipc::FaultEvent& event) {
+    return event.name == "writer_lost.fsm" && event.active;
+  });
+  CHECK(fault != faults.end());
+  // the keep-alive never missed a cycle, before, during and after
+  checkPeriods(listener.withId(S1_ES), 20 * MS);
+  CHECK(checkPairs(listener, S1_ES, 292'000) >= 240);
+}
