@@ -243,10 +243,10 @@ struct Scheduler::Impl {
       if (entry.sdmPending) send(entry, entry.sdm);  // never leave an SHM without its SDM
       const j1939::SafetyPayload header =
           entry.pair->nextHeader(j1939::SafetyDataView(payload.data(), j1939::SAFETY_MESSAGE_LENGTH));
-      const std::int64_t now = clock.monotonicNs();
       if (port.send(entry.config.bus, frameOf(entry.pair->headerCanId(), true, header)) != can::SendStatus::Sent) {
         countFailure(entry.stats.sendFailures);
       }
+      const std::int64_t now = clock.monotonicNs();  // after the SHM left: the delta starts here
       if (entry.headerMessage) record(*entry.headerMessage, entry.headerKeys, header, entry.sourceAddress, now);
       entry.sdm = payload;
       entry.sdmPending = true;
