@@ -27,6 +27,7 @@
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/runtime.hpp"
 #include "openvcu/j1939/safety.hpp"
+#include "openvcu/j1939/time_date.hpp"
 #include "openvcu/signals/table.hpp"
 
 namespace harness = openvcu::harness;
@@ -38,6 +39,7 @@ using namespace std::chrono_literals;
 namespace {
 
 const std::string CAN_TX = CAN_TX_BINARY;
+const std::string CAN_RX = CAN_RX_BINARY;
 const fs::path HHEA_FOLDER = fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea";
 constexpr std::int64_t MS = 1'000'000;
 
@@ -266,4 +268,38 @@ TEST_CASE("when the heartbeat of the fsm stops, can-tx commands the safe values 
   // the keep-alive never missed a cycle, before, during and after
   checkPeriods(listener.withId(S1_ES), 20 * MS);
   CHECK(checkPairs(listener, S1_ES, 292'000) >= 240);
+}
+
+TEST_CASE("a one-shot from vcu send goes out through vcu-can-tx, and a Time/Date request relayed by can-rx is answered") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f;
+  f.startCanTx();
+  auto canRx = f.sut.start(harness::ProcessSpec{
+      .name = "can-rx", .argv = {CAN_RX, "--config", f.config.string()}, .notifyReadiness = true});
+  REQUIRE_STATUS(canRx);
+  Listener listener;
+  std::this_thread::sleep_for(300ms);  // iceoryx connects the new ports
+
+  const auto sent = vcuOn(f.sut, f.config, {"send", "vehicle", "18FF0099#0102030405060708"});
+  CHECK_MESSAGE(sent.exitCode() == 0, (sent.out + sent.err));
+  // the VIC asks for Time/Date (0x00EA21F3 E6 FE 00) from its own node on the bus
+  can::Frame request;
+  request.id = 0x00EA21F3;
+  request.flags = can::FLAG_EXTENDED;
+  request.length = 3;
+  request.data[0] = 0xE6;
+  request.data[1] = 0xFE;
+  request.data[2] = 0x00;
+  REQUIRE(listener.link->send(request) == can::SendStatus::Sent);
+  listener.listen(1s);
+
+  const auto oneShot = listener.withId(0x18FF0099);
+  REQUIRE(oneShot.size() == 1);
+  CHECK(oneShot[0].frame.data[7] == 0x08);
+  const auto answers = listener.withId(0x18FEE621);
+  REQUIRE(answers.size() == 1);
+  const auto timeDate = j1939::decodeTimeDate(answers[0].frame.payload());
+  REQUIRE(timeDate);
+  REQUIRE(timeDate->year);
+  CHECK(*timeDate->year >= 2024);  // the realtime clock of this machine
 }
