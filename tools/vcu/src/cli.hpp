@@ -1,6 +1,6 @@
 #pragma once
 // The `vcu` command tree. run() builds the CLI11 app, lets every command group register
-// its subcommands (registerDbcCommands(), later signal/status/fsm/schedule), parses the
+// its subcommands (registerDbcCommands(), signal, status, bus, schedule), parses the
 // arguments, runs the chosen command and returns the process exit code.
 //
 //   StringSink out, err;

@@ -12,12 +12,11 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
-#include <random>
 
+#include "command_request.hpp"
 #include "diagnostics.hpp"
 #include "stop_signal.hpp"
 #include "openvcu/core/text.hpp"
-#include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/signals/table.hpp"
 #include "text_table.hpp"
 
@@ -26,8 +25,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-/// Who `vcu` says it is in command requests (acks carry it back).
-constexpr const char* ISSUER = "vcu";
 /// The longest `vcu signal watch` sleeps between looks at its stop conditions.
 constexpr auto WATCH_TICK = 200ms;
 /// Retry delay when a plane could not be read (all of its newest writes were unfinished).
@@ -377,54 +374,14 @@ ExitCode runSignalSet(const SignalSetOptions& options, Streams streams) {
     value = *valueResult;
   }
 
-  auto eventsResult = ipc::EventBus::open(stack.config.lcmUrl, stack.config.instance);
-  if (!eventsResult) {
-    reportError(streams.err, eventsResult.error().message);
-    return ExitCode::Failure;
-  }
-  ipc::EventBus& events = *eventsResult;
-  std::random_device seed;
-  std::mt19937_64 generator((static_cast<std::uint64_t>(seed()) << 32) ^ seed() ^
-                            static_cast<std::uint64_t>(realtimeNowNs()));
-  const auto requestId = static_cast<std::int64_t>(generator() >> 1) | 1;  // positive, never 0
-  std::optional<ipc::CommandAck> answer;
-  auto subscribed = events.onAck([&](const ipc::CommandAck& ack) {
-    if (!answer && ack.requestId == requestId && ack.issuer == ISSUER) answer = ack;
-  });
-  if (!subscribed) {
-    reportError(streams.err, subscribed.error().message);
-    return ExitCode::Failure;
-  }
   ipc::CommandRequest request;
-  request.requestId = requestId;
-  request.issuer = ISSUER;
   request.kind = options.mode == SetMode::Override        ? ipc::CommandKind::SetOverride
                  : options.mode == SetMode::ClearOverride ? ipc::CommandKind::ClearOverride
                                                           : ipc::CommandKind::SetSignal;
   request.key = options.key;
   request.value = value;
   request.text = options.note;
-  if (!events.publish(request)) {
-    reportError(streams.err, "cannot send the command on " + events.channel(ipc::EventKind::Command));
-    return ExitCode::Failure;
-  }
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                               std::chrono::duration<double>(options.timeoutSeconds));
-  while (!answer) {
-    const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) break;
-    if (events.handle(left) == ipc::HandleResult::Failed) break;
-  }
-  if (!answer) {
-    reportError(streams.err, "no service answered within " + formatNumber(options.timeoutSeconds) + " s");
-    return ExitCode::Failure;
-  }
-  if (answer->accepted) {
-    streams.out.write("accepted\n");
-    return ExitCode::Ok;
-  }
-  streams.out.write("refused: " + answer->reason + "\n");
-  return ExitCode::Failure;
+  return sendCommandRequest(stack.config, std::move(request), options.timeoutSeconds, streams);
 }
 
 ExitCode runSignalWatch(const SignalWatchOptions& options, Streams streams) {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "command_request.hpp"
 #include "stack_access.hpp"
 
 namespace openvcu::cli {
@@ -33,9 +34,6 @@ struct SignalGetOptions {
 };
 
 enum class SetMode : std::uint8_t { Command, Override, ClearOverride };
-
-/// How long `vcu signal set` waits for the answer by default.
-inline constexpr double DEFAULT_ACK_TIMEOUT_SECONDS = 2.0;
 
 struct SignalSetOptions {
   StackOptions stack;
