@@ -24,9 +24,13 @@
 #      "window closed" line): utime+stime of /proc/<pid>/stat (all threads, clock ticks) and
 #      the sum of /proc/<pid>/task/*/schedstat run times (ns), in % of one core; context
 #      switches and the transmit thread's wake-ups (heartbeat counter "wakeups") per second;
+#      for the causes of late frames: its page faults, the hypervisor's steal time and how
+#      busy each CPU was (all processes, /proc/stat) over the window, and the scheduling
+#      class of each of its threads;
 #   7. can-tx's own statistics from its heartbeat (`vcu status`): tx.<Msg>.period_err_* and
 #      delta_err_* (since can-tx started, so they include the time before the window).
-# LISTENER_ARGS: more options for bench_tx_listener (e.g. "--late-events 100").
+# LISTENER_ARGS: more options for bench_tx_listener, e.g. "--late-events 100" or
+# "--dump /work/tx.csv" (a path outside /tmp: the sandbox's /tmp is private).
 # Set TX_CPU= (empty) to run vcu-can-tx unpinned, LISTENER_CPU= for an unpinned listener.
 # RT_PRIORITY=N (1..99): run with a copy of the configuration in the sandbox's /tmp whose
 # schedule has "realtimePriority": N (the transmit thread SCHED_FIFO; needs CAP_SYS_NICE).
@@ -63,7 +67,7 @@ work=/tmp/can-tx-bench
 mkdir -p "$work"
 tick="$(getconf CLK_TCK)"
 vcu="$build/bin/vcu"
-started=()  # PIDs this script started, ended in reverse order
+started=()  # PIDs this script started and has not reaped yet, ended in reverse order
 
 cleanup() {
   local i
@@ -73,6 +77,12 @@ cleanup() {
   done
 }
 trap cleanup EXIT
+# forget PID: it has been reaped; cleanup must not signal that number again.
+forget() {
+  local pid kept=()
+  for pid in "${started[@]}"; do [[ "$pid" == "$1" ]] || kept+=("$pid"); done
+  started=("${kept[@]}")
+}
 
 machine() {
   echo "== machine"
@@ -118,6 +128,8 @@ switches_of() { echo "${1##* }"; }
 faults_sample() { awk '{print $10, $12}' "/proc/$1/stat"; }
 # Steal ticks of CPU $1 (the hypervisor ran something else while this vCPU wanted to run).
 steal_sample() { awk -v cpu="cpu$1" '$1 == cpu {print $9}' /proc/stat; }
+# "<busy ticks> <all ticks>" of CPU $1 (busy: everything but idle and iowait), machine-wide.
+busy_sample() { awk -v cpu="cpu$1" '$1 == cpu { all = 0; for (i = 2; i <= 9; ++i) all += $i; print all - $5 - $6, all }' /proc/stat; }
 percent() { awk -v n="$1" -v d="$2" 'BEGIN { printf "%.3f", (d > 0 ? 100 * n / d : 0) }'; }
 
 # The latest heartbeat counters of vcu-can-tx as "name=value" words (one per line).
@@ -186,24 +198,27 @@ fi
 
 before="$(heartbeat_counters)"; tBefore="$(date +%s%N)"
 listenerLog="$work/listener.log"
+# shellcheck disable=SC2086  # LISTENER_ARGS is split into words on purpose
 (pinned "$listenerCpu" "$build/bench/bench_tx_listener" --config "$config" --seconds "$seconds" \
   ${LISTENER_ARGS:-}) >"$listenerLog" 2>&1 &
 listenerPid=$!
 started+=("$listenerPid")
 wait_until 30 grep -q '^listening on' "$listenerLog" || { echo "error: listener did not start: $(cat "$listenerLog")" >&2; exit 1; }
 load0="$(cut -d' ' -f1 /proc/loadavg)"
-f0="$(faults_sample "$canTxPid")"; s0="$(steal_sample 0) $(steal_sample 1)"
+f0="$(faults_sample "$canTxPid")"; s0="$(steal_sample 0) $(steal_sample 1)"; b0="$(busy_sample 0) $(busy_sample 1)"
 c0="$(cpu_sample "$canTxPid")"; t0="$(date +%s%N)"
 wait_until $(( seconds + 30 )) grep -q '^window closed' "$listenerLog" ||
   { echo "error: listener did not finish: $(cat "$listenerLog")" >&2; exit 1; }
 c1="$(cpu_sample "$canTxPid")"; t1="$(date +%s%N)"
-f1="$(faults_sample "$canTxPid")"; s1="$(steal_sample 0) $(steal_sample 1)"
+f1="$(faults_sample "$canTxPid")"; s1="$(steal_sample 0) $(steal_sample 1)"; b1="$(busy_sample 0) $(busy_sample 1)"
 load1="$(cut -d' ' -f1 /proc/loadavg)"
 listenerStatus=0
 wait "$listenerPid" || listenerStatus=$?
+forget "$listenerPid"
 if [[ "$hog" == 1 ]]; then
   kill -TERM "$hogPid" 2>/dev/null || true
   wait "$hogPid" 2>/dev/null || true
+  forget "$hogPid"
 fi
 after="$(heartbeat_counters)"; tAfter="$(date +%s%N)"
 
@@ -224,6 +239,9 @@ read -r minor0 major0 <<<"$f0"; read -r minor1 major1 <<<"$f1"
 read -r steal00 steal10 <<<"$s0"; read -r steal01 steal11 <<<"$s1"
 echo "   page faults in the window: $(( minor1 - minor0 )) minor, $(( major1 - major0 )) major;" \
   "steal time (hypervisor): CPU 0 $(( (steal01 - steal00) * 1000 / tick )) ms, CPU 1 $(( (steal11 - steal10) * 1000 / tick )) ms"
+read -r busy00 all00 busy10 all10 <<<"$b0"; read -r busy01 all01 busy11 all11 <<<"$b1"
+echo "   machine: CPU 0 busy $(percent $(( busy01 - busy00 )) $(( all01 - all00 ))) %, CPU 1 busy" \
+  "$(percent $(( busy11 - busy10 )) $(( all11 - all10 ))) % over the window (all processes, /proc/stat)"
 echo "   threads (tid, class, rt priority, last CPU, name):"
 ps -L -o tid=,cls=,rtprio=,psr=,comm= -p "$canTxPid" | sed 's/^ */     /'
 echo "== vcu-can-tx's own statistics (heartbeat, since it started; us)"
