@@ -64,6 +64,14 @@ Result<signals::Catalog> buildCatalog(const VehicleConfig& config) {
   }
   list.push_back(internalInfo("fsm.state", "", 0, 65535, "index of the FSM's current state (fsm file order)"));
   list.push_back(internalInfo("fsm.stateSince", "s", 0, 1e12, "CLOCK_REALTIME seconds when the state was entered"));
+  list.push_back(internalInfo("fsm.stateEntered", "s", 0, 1e12,
+                              "CLOCK_MONOTONIC seconds when the state was entered (a restarted vcu-fsm resumes `after`)"));
+  list.push_back(internalInfo("fsm.machine", "", 0, 2.9e14, "hash of the FSM file the state belongs to"));
+  list.push_back(internalInfo("fsm.reloads", "", 0, 1e15, "reload commands vcu-fsm received (each wakes its engine)"));
+  for (std::uint32_t timer = 0; timer < FSM_TIMER_SLOTS; ++timer) {
+    list.push_back(internalInfo("fsm.timer." + std::to_string(timer), "s", 0, 1e12,
+                                "CLOCK_MONOTONIC seconds since which a `for` condition holds; 0: not running"));
+  }
   for (const std::string_view service : SERVICES) {
     list.push_back(internalInfo("service." + std::string(service) + ".heartbeat", "", 0, 1.8e19,
                                 "heartbeat counter of vcu-" + std::string(service)));

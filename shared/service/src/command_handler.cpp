@@ -24,6 +24,7 @@ bool knownKind(ipc::CommandKind kind) noexcept {
     case ipc::CommandKind::ScheduleCycle:
     case ipc::CommandKind::ScheduleEnable:
     case ipc::CommandKind::ScheduleDefault:
+    case ipc::CommandKind::FsmReload:
       return true;
   }
   return false;
@@ -86,6 +87,8 @@ std::string commandKindName(ipc::CommandKind kind) {
       return "ScheduleEnable";
     case ipc::CommandKind::ScheduleDefault:
       return "ScheduleDefault";
+    case ipc::CommandKind::FsmReload:
+      return "FsmReload";
   }
   return "kind " + std::to_string(static_cast<int>(kind));
 }
@@ -159,6 +162,7 @@ bool CommandHandler::apply(const ipc::CommandRequest& request, signals::SignalIn
     case ipc::CommandKind::ScheduleCycle:
     case ipc::CommandKind::ScheduleEnable:
     case ipc::CommandKind::ScheduleDefault:
+    case ipc::CommandKind::FsmReload:
       return false;  // not table operations: a service handles them as custom kinds (or in its veto)
   }
   return false;

@@ -7,6 +7,7 @@
 #include "bus_commands.hpp"
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
+#include "fsm_commands.hpp"
 #include "schedule_commands.hpp"
 #include "signal_commands.hpp"
 #include "status_commands.hpp"
@@ -67,6 +68,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerStatusCommands(app, context);
     registerBusCommands(app, context);
     registerScheduleCommands(app, context);
+    registerFsmCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

@@ -6,7 +6,7 @@
 // order ("all" = DBC order), each message's decodable signals in DBC order, keyed
 // "Transmitter.Message.Signal" (the BO_ transmitter as written); then the internal
 // signals: the declared ones ("internal.<name>") in file order, then the built-in ones:
-// the FSM state, one heartbeat per service, the health of each bus (BUS_HEALTH_FIELDS)
+// the FSM's state and timers, one heartbeat per service, the health of each bus (BUS_HEALTH_FIELDS)
 // and the DM1 summary of each addressed node (DM1_FIELDS).
 
 #include "openvcu/config/vehicle.hpp"
@@ -25,6 +25,9 @@ inline constexpr std::string_view INTERNAL_PREFIX = "internal.";
 
 /// The services of a stack; each has a heartbeat counter "internal.service.<name>.heartbeat".
 inline constexpr std::array<std::string_view, 6> SERVICES = {"can-rx", "can-tx", "fsm", "gpio", "hmi", "ecu-sim"};
+
+/// Slots "internal.fsm.timer.<i>" in which vcu-fsm keeps its running `for` timers.
+inline constexpr std::uint32_t FSM_TIMER_SLOTS = 32;
 
 /// The J1939 source address of a DBC node (its NmStationAddress attribute), or empty.
 std::optional<std::uint8_t> nodeAddress(const dbc::Database& database, const dbc::Node& node);

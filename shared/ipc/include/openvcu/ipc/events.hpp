@@ -47,6 +47,7 @@ enum class CommandKind : std::int8_t {
   ScheduleCycle = 6,    ///< cycle time of the message named `key` to `value` ms
   ScheduleEnable = 7,   ///< message `key` transmitted (`value` 1) or not (0)
   ScheduleDefault = 8,  ///< value sent for signal `key` while nothing commands it
+  FsmReload = 9,        ///< vcu-fsm: load the FSM file `key` (empty: its configured file) and switch to it
 };
 
 struct CommandRequest {
