@@ -156,7 +156,8 @@ std::string describeCondition(const Machine& machine, const signals::Catalog& ca
   return text;
 }
 
-void checkSiblings(JsonChecker& check, const Machine& machine, const signals::Catalog& catalog, std::uint32_t node) {
+void checkSiblings(JsonChecker& check, const Machine& machine, const signals::Catalog& catalog, std::uint32_t node,
+                   const std::string& listPath) {
   const ConditionNode& parent = machine.nodes[node];
   std::map<std::string, std::vector<std::uint32_t>> same;  // text -> children
   std::map<std::uint32_t, std::vector<std::uint32_t>> bySignal;
@@ -170,13 +171,12 @@ void checkSiblings(JsonChecker& check, const Machine& machine, const signals::Ca
     same[text].push_back(c);
     if (current.kind == NodeKind::Compare && current.forNs == 0) bySignal[current.signal].push_back(child);
   }
-  const std::string list = parent.kind == NodeKind::All ? "all" : "any";
   for (const std::string& text : order) {
     const auto& entries = same[text];
     if (entries.size() < 2) continue;
     std::string message = "the same condition " + std::to_string(entries.size()) + " times: '" + text + "'";
     if (entries.size() > 2) message += " (different signals meant?)";
-    check.warning(JsonChecker::join(JsonChecker::join(parent.path, list), entries[1]), std::move(message));
+    check.warning(listPath == parent.path ? listPath : JsonChecker::join(listPath, entries[1]), std::move(message));
   }
   if (parent.kind != NodeKind::All) return;
   for (const auto& [signal, children] : bySignal) {
@@ -189,7 +189,7 @@ void checkSiblings(JsonChecker& check, const Machine& machine, const signals::Ca
       if (!terms.empty()) terms += ", ";
       terms += describeCondition(machine, catalog, child);
     }
-    check.error(JsonChecker::join(parent.path, list),
+    check.error(listPath,
                 "can never be true: " + catalog[machine.signals[signal].index].key + " cannot satisfy all of " + terms +
                     " at once");
   }

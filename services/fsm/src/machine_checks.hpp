@@ -4,6 +4,7 @@
 // (machine_loader.cpp) calls them; they only add diagnostics.
 
 #include <cstdint>
+#include <string>
 
 #include "machine.hpp"
 #include "openvcu/config/json.hpp"
@@ -12,9 +13,10 @@
 namespace openvcu::fsm {
 
 /// The children of the All/Any node `node`: the same comparison twice (warning) and, for
-/// All, one signal required to take values that exclude each other (error).
+/// All, one signal required to take values that exclude each other (error). `listPath`:
+/// where the children are written ("/.../condition/all"; a flat object's own path).
 void checkSiblings(config::JsonChecker& check, const Machine& machine, const signals::Catalog& catalog,
-                   std::uint32_t node);
+                   std::uint32_t node, const std::string& listPath);
 
 /// States no transition reaches, transitions after an always-true one, transitions with the
 /// same condition as an earlier one, self-transitions that do nothing, `for` timers

@@ -3,6 +3,7 @@
 // machine_checks.cpp.
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 #include <unordered_map>
@@ -155,9 +156,16 @@ class Loader {
   std::optional<std::uint32_t> resolveState(const std::string& name, const std::string& path, std::string_view what) {
     if (const auto index = m_machine.findState(name)) return *index;
     std::vector<std::string> names;
-    for (const State& state : m_machine.states) names.push_back(state.name);
+    std::optional<std::string> suggestion;
+    for (const State& state : m_machine.states) {
+      names.push_back(state.name);
+      const bool sameLetters = std::equal(name.begin(), name.end(), state.name.begin(), state.name.end(),
+                                          [](unsigned char a, unsigned char b) { return std::tolower(a) == std::tolower(b); });
+      if (sameLetters && !suggestion) suggestion = state.name;
+    }
+    if (!suggestion) suggestion = text::didYouMean(name, names);
     std::string message = std::string(what) + " " + inQuotes(name) + " is not defined";
-    if (const auto suggestion = text::didYouMean(name, names)) message += " (did you mean " + inQuotes(*suggestion) + "?)";
+    if (suggestion) message += " (did you mean " + inQuotes(*suggestion) + "?)";
     m_check.error(path, std::move(message));
     return std::nullopt;
   }
@@ -260,7 +268,7 @@ class Loader {
     node.path = path;
     m_machine.children.insert(m_machine.children.end(), children.begin(), children.end());
     const std::uint32_t index = addNode(std::move(node));
-    checkSiblings(m_check, m_machine, m_catalog, index);
+    checkSiblings(m_check, m_machine, m_catalog, index, listPath);
     return index;
   }
 
@@ -303,7 +311,10 @@ class Loader {
       m_check.error(path, "no operator: use one of eq, ne, lt, gt, le, ge, in, quality, ageGt");
       return NONE;
     }
-    return leaves.size() == 1 ? leaves.front() : group(NodeKind::All, leaves, path);
+    if (leaves.size() == 1) return leaves.front();
+    const std::uint32_t index = group(NodeKind::All, leaves, path);
+    checkSiblings(m_check, m_machine, m_catalog, index, path);
+    return index;
   }
 
   /// The thesis' flat form {"K1": v1, "K2": v2}: every key equal to its value.
@@ -332,7 +343,7 @@ class Loader {
     }
     if (leaves.size() == 1) return leaves.front();
     const std::uint32_t index = group(NodeKind::All, leaves, path);
-    checkSiblings(m_check, m_machine, m_catalog, index);
+    checkSiblings(m_check, m_machine, m_catalog, index, path);
     return index;
   }
 
