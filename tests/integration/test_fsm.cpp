@@ -1,0 +1,251 @@
+// vcu-fsm as a process on the HHEA configuration, inside the sandbox with real LCM and a
+// real signal table, driven by `vcu signal set` (operator switches) and observed through
+// the table and the LCM FSM channel:
+//   - SIGKILLed while a `for` condition is running, it restarts in the same state, does not
+//     re-run the entry actions, and takes the transition when the original timer expires;
+//   - a reload with a bad file is refused (the old machine keeps running), one with a good
+//     file switches in place, one without the current state is refused;
+//   - a machine with errors does not start (exit 1, the file and JSON path on stderr).
+// The configuration is copied into the sandbox's /tmp with the test's own FSM files.
+
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "integration_support.hpp"
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/signals/table.hpp"
+
+namespace harness = openvcu::harness;
+namespace fs = std::filesystem;
+using namespace openvcu;
+using namespace openvcu::integration;
+using namespace std::chrono_literals;
+
+namespace {
+
+const std::string FSM = FSM_BINARY;
+const fs::path HHEA_FOLDER = fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea";
+constexpr std::int64_t MS = 1'000'000;
+
+/// Standby -> Started (StartStop on; entry commands BMS_Control 0) -> Driving (ConnectDriving
+/// on for 2 s) -> back to Standby when StartStop goes off.
+constexpr const char* SEQUENCE = R"({"initialState": "Standby", "states": [
+  {"name": "Standby", "transitions": [
+    {"condition": {"key": "internal.operator.StartStop", "eq": "Start"}, "nextState": "Started"}]},
+  {"name": "Started", "entry": [{"signal": "Vehicle_Control_Unit.BMS.BMS_Control", "value": 0}], "transitions": [
+    {"condition": {"key": "internal.operator.StartStop", "eq": "Stop"}, "nextState": "Standby"},
+    {"condition": {"key": "internal.operator.ConnectDriving", "eq": 1, "for": "2s"}, "nextState": "Driving"}]},
+  {"name": "Driving", "transitions": [
+    {"condition": {"key": "internal.operator.StartStop", "eq": "Stop"}, "nextState": "Standby"}]}]})";
+
+/// The same machine with one more state reachable from Standby on Crash.
+constexpr const char* SEQUENCE_WITH_CRASH = R"({"initialState": "Standby", "states": [
+  {"name": "Standby", "transitions": [
+    {"condition": {"key": "internal.operator.Crash", "eq": 1}, "nextState": "Crash"},
+    {"condition": {"key": "internal.operator.StartStop", "eq": "Start"}, "nextState": "Started"}]},
+  {"name": "Started", "transitions": [
+    {"condition": {"key": "internal.operator.StartStop", "eq": "Stop"}, "nextState": "Standby"}]},
+  {"name": "Crash", "transitions": [
+    {"condition": {"key": "internal.operator.Crash", "eq": 0}, "nextState": "Standby"}]}]})";
+
+void writeFile(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  REQUIRE(out.good());
+}
+
+/// The HHEA files in /tmp/hhea with vehicle.json pointing at fsm.json = `machine`.
+fs::path copyConfig(const std::string& machine) {
+  const fs::path folder = fs::temp_directory_path() / "hhea";
+  fs::create_directories(folder);
+  for (const char* name : {"hhea.dbc", "schedule.json"}) {
+    fs::copy_file(HHEA_FOLDER / name, folder / name, fs::copy_options::overwrite_existing);
+  }
+  std::ifstream in(HHEA_FOLDER / "vehicle.json");
+  nlohmann::json vehicle = nlohmann::json::parse(in);
+  vehicle["fsm"] = "fsm.json";
+  writeFile(folder / "vehicle.json", vehicle.dump(2));
+  writeFile(folder / "fsm.json", machine);
+  return folder / "vehicle.json";
+}
+
+struct Fixture {
+  harness::Harness sut;
+  fs::path config;
+  std::optional<config::VehicleConfig> vehicle;
+  std::optional<signals::Catalog> catalog;
+  std::optional<signals::SignalTable> table;
+  std::optional<ipc::EventBus> events;
+  std::vector<ipc::FsmTransition> transitions;
+
+  explicit Fixture(const std::string& machine) : config(copyConfig(machine)) {
+    auto loaded = config::loadVehicleConfig(config.string());
+    REQUIRE_STATUS(loaded);
+    vehicle.emplace(std::move(*loaded));
+    auto built = config::buildCatalog(*vehicle);
+    REQUIRE_STATUS(built);
+    catalog.emplace(std::move(*built));
+    auto opened = signals::SignalTable::open(*catalog, "hhea");
+    REQUIRE_STATUS(opened);
+    table.emplace(std::move(*opened));
+    auto bus = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, "hhea");
+    REQUIRE_STATUS(bus);
+    events.emplace(std::move(*bus));
+    REQUIRE(events->onFsmTransition([this](const ipc::FsmTransition& transition) { transitions.push_back(transition); }));
+  }
+
+  harness::Process& startFsm() {
+    auto process = sut.start(harness::ProcessSpec{
+        .name = "fsm", .argv = {FSM, "--config", config.string()}, .notifyReadiness = true, .captureOutput = true});
+    REQUIRE_STATUS(process);
+    return **process;
+  }
+
+  harness::CommandResult vcu(std::vector<std::string> arguments) {
+    std::vector<std::string> argv{VCU};
+    argv.insert(argv.end(), arguments.begin(), arguments.end());
+    argv.emplace_back("--config");
+    argv.push_back(config.string());
+    return sut.run(argv);
+  }
+
+  void set(const std::string& key, const std::string& value) {
+    const auto result = vcu({"signal", "set", key, value});
+    REQUIRE_MESSAGE(contains(result.out, "accepted"), result.describe());
+  }
+
+  signals::SignalIndex index(const std::string& key) const {
+    const auto found = catalog->indexOf(key);
+    REQUIRE_MESSAGE(found, key);
+    return *found;
+  }
+
+  /// Waits (table change futex, no fixed sleep) until internal.fsm.state == `state`;
+  /// returns the bus value written with it, or empty on timeout.
+  std::optional<signals::BusValue> waitForState(double state, std::chrono::milliseconds timeout) {
+    const signals::SignalIndex slot = index("internal.fsm.state");
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    std::uint32_t epoch = table->changeEpoch();
+    for (;;) {
+      const auto value = table->readBus(slot);
+      if (value && value->updates > 0 && value->value == state) return value;
+      const auto left = end - std::chrono::steady_clock::now();
+      if (left <= 0ns) return std::nullopt;
+      epoch = table->waitForChange(epoch, std::chrono::duration_cast<std::chrono::nanoseconds>(left));
+    }
+  }
+
+  void drainEvents() {
+    while (events->handle(0ms) == ipc::HandleResult::Handled) {
+    }
+  }
+  bool sawCause(const std::string& part) {
+    drainEvents();
+    for (const ipc::FsmTransition& transition : transitions) {
+      if (contains(transition.cause, part)) return true;
+    }
+    return false;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("vcu-fsm SIGKILLed mid-sequence resumes the same state and its running for timer") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f(SEQUENCE);
+  harness::Process& first = f.startFsm();
+  REQUIRE(f.waitForState(0, 5s));  // Standby
+  f.set("internal.operator.StartStop", "Start");
+  REQUIRE(f.waitForState(1, 5s));  // Started
+  const signals::SignalIndex bmsControl = f.index("Vehicle_Control_Unit.BMS.BMS_Control");
+  const auto commanded = f.table->readCommand(bmsControl);
+  REQUIRE(commanded);
+  CHECK(commanded->value == 0);
+  CHECK(commanded->writer == 3);
+
+  f.set("internal.operator.ConnectDriving", "1");
+  const auto connect = f.table->readCommand(f.index("internal.operator.ConnectDriving"));
+  REQUIRE(connect);
+  // the `for` timer starts when vcu-fsm sees the switch: wait for its slot, then kill
+  const signals::SignalIndex timer = f.index("internal.fsm.timer.0");
+  const auto end = std::chrono::steady_clock::now() + 5s;
+  std::uint32_t epoch = f.table->changeEpoch();
+  while (!(f.table->readBus(timer) && f.table->readBus(timer)->value > 0) && std::chrono::steady_clock::now() < end) {
+    epoch = f.table->waitForChange(epoch, 100ms);
+  }
+  const auto timerStart = f.table->readBus(timer);
+  REQUIRE(timerStart);
+  REQUIRE(timerStart->value > 0);
+  REQUIRE(first.signal(SIGKILL));
+  REQUIRE(first.waitForExit(5s));
+
+  f.startFsm();
+  const auto resumed = f.waitForState(1, 5s);
+  REQUIRE(resumed);  // still Started
+  const auto afterRestart = f.table->readCommand(bmsControl);
+  REQUIRE(afterRestart);
+  CHECK(afterRestart->updates == commanded->updates);  // the entry action was not run again
+  const auto driving = f.waitForState(2, 5s);
+  REQUIRE(driving);
+  // Driving 2 s after the switch was first seen, not 2 s after the restart
+  const double heldSeconds = static_cast<double>(driving->timestampNs) / 1e9 - timerStart->value;
+  CHECK(heldSeconds >= 1.99);
+  CHECK(heldSeconds < 2.5);
+  CHECK(f.sawCause("resumed after a restart"));
+  CHECK(f.sawCause("internal.operator.ConnectDriving eq 1 for 2s"));
+}
+
+TEST_CASE("reload: a bad file is refused and the old machine runs on, a good one switches in place") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f(SEQUENCE);
+  f.startFsm();
+  REQUIRE(f.waitForState(0, 5s));
+  const fs::path folder = f.config.parent_path();
+  writeFile(folder / "bad.json", R"({"initialState": "Standby", "states": [{"name": "Standby", "transitions": [
+      {"condition": {"key": "internal.operator.StrtStop", "eq": 1}, "nextState": "Standby"}]}]})");
+  writeFile(folder / "without-standby.json", R"({"initialState": "Other", "states": [
+      {"name": "Other", "transitions": []}]})");
+  writeFile(folder / "good.json", SEQUENCE_WITH_CRASH);
+  const double hash = f.table->readBus(f.index("internal.fsm.machine"))->value;
+
+  const auto bad = f.vcu({"fsm", "reload", (folder / "bad.json").string()});
+  CHECK(bad.exitCode() == 1);
+  CHECK_MESSAGE(contains(bad.out, "refused"), bad.describe());
+  CHECK_MESSAGE(contains(bad.out, "bad.json: /states/0/transitions/0/condition/key: unknown signal"), bad.describe());
+  CHECK_MESSAGE(contains(bad.out, "did you mean 'internal.operator.StartStop'"), bad.describe());
+  const auto missing = f.vcu({"fsm", "reload", (folder / "without-standby.json").string()});
+  CHECK(missing.exitCode() == 1);
+  CHECK_MESSAGE(contains(missing.out, "the current state 'Standby' does not exist"), missing.describe());
+  CHECK(f.table->readBus(f.index("internal.fsm.machine"))->value == hash);
+  // the old machine still runs
+  f.set("internal.operator.StartStop", "Start");
+  REQUIRE(f.waitForState(1, 5s));
+  f.set("internal.operator.StartStop", "Stop");
+  REQUIRE(f.waitForState(0, 5s));
+
+  const auto good = f.vcu({"fsm", "reload", (folder / "good.json").string()});
+  REQUIRE_MESSAGE(good.exitCode() == 0, good.describe());
+  CHECK(contains(good.out, "accepted"));
+  CHECK(f.table->readBus(f.index("internal.fsm.machine"))->value != hash);
+  f.set("internal.operator.Crash", "1");
+  CHECK(f.waitForState(2, 5s));  // "Crash" exists only in the new machine
+  CHECK(f.sawCause("reloaded"));
+}
+
+TEST_CASE("a machine with errors does not start: exit 1 with the file, the JSON path and the reason") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f(R"({"initialState": "On Boot", "states": [{"name": "Start", "transitions": []}]})");
+  const harness::CommandResult result = f.sut.run({FSM, "--config", f.config.string()});
+  CHECK(result.exitCode() == 1);
+  CHECK_MESSAGE(contains(result.err, "fsm.json: /initialState: initial state 'On Boot' is not defined"),
+                result.describe());
+}
