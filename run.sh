@@ -29,6 +29,8 @@ echo "== openvcu: HHEA compact track loader configuration (config/hhea)"
 # Loading the signal catalog validates the whole vehicle.json (buses, DBC, internal signals).
 echo "== The operator switches and internal signals of config/hhea/vehicle.json"
 "$vcu" signal list --config config/hhea/vehicle.json 'internal.*'
+echo "== The state machine config/hhea/fsm.json (docs/fsm.md)"
+"$vcu" fsm check config/hhea/fsm.json --config config/hhea/vehicle.json
 if [ $info -eq 1 ]; then
   "$vcu" dbc info config/hhea/hhea.dbc
 else

@@ -82,3 +82,18 @@ TEST_CASE("vcu fsm replay runs the machine on the log's clock, deadlines between
   CHECK(contains(result.err, "12 frames"));
   CHECK(contains(result.err, "final state 'Lost'"));
 }
+
+TEST_CASE("the shipped HHEA machine checks clean, and the recorded connection replays on time") {
+  const RunResult check = runVcu({"fsm", "check", std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/fsm.json", "--config", HHEA});
+  CHECK_MESSAGE(check.exitCode == 0, check.out);
+  CHECK(contains(check.out, "0 errors, 0 warnings"));
+  const std::string data = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/fsm/";
+  const RunResult replay =
+      runVcu({"fsm", "replay", data + "replay_test.json", "--config", HHEA, data + "hhea_connect_drive.log"});
+  CHECK_MESSAGE(replay.exitCode == 0, replay.err);
+  CHECK(contains(replay.out, "0.000000 s  Wait -> Awaiting HV: "));
+  CHECK(contains(replay.out, "3.500000 s  Awaiting HV -> Connected: all(VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts eq 1 for 500ms"));
+  CHECK(contains(replay.out, "5.500000 s  Connected -> Settled: after 2s"));
+  CHECK(contains(replay.err, "360 frames"));
+  CHECK(contains(replay.err, "final state 'Settled'"));
+}

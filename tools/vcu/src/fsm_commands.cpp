@@ -63,6 +63,7 @@ constexpr const char* REPLAY_FOOTER =
     "Faults and events the actions publish are printed as well. Signal quality 'stale' is\n"
     "not simulated (can-rx sets it live): use 'ageGt' for timeouts you want to replay.\n"
     "Operator switches are not in a CAN log: internal signals keep their initial values.\n"
+    "The replay ends with the last frame: deadlines after it do not fire.\n"
     "\n"
     "Example:\n"
     "  vcu fsm replay config/hhea/fsm.json --config config/hhea/vehicle.json start.log\n"
@@ -391,7 +392,7 @@ ExitCode runFsmReplay(const FsmFileOptions& options, Streams streams) {
   const auto seconds = [&](std::int64_t ns) { return static_cast<double>(ns - ORIGIN) / 1e9; };
   std::uint64_t frames = 0;
   while (auto record = reader.next()) {
-    const std::int64_t logNs = record->hasTime ? std::llround(record->timeSeconds * 1e9) : (first ? now - ORIGIN + *first : 0);
+    const std::int64_t logNs = record->hasTime ? record->frame.timestampNs : (first ? now - ORIGIN + *first : 0);
     if (!first) {
       first = logNs;
       engine.start(ORIGIN, ORIGIN, fsm::StartMode::Fresh);
