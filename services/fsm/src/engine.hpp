@@ -49,8 +49,10 @@ class TableAccess final : public SignalAccess {
  public:
   TableAccess(signals::SignalTable& table, signals::WriterId writer) noexcept : m_table(table), m_writer(writer) {}
   std::optional<signals::SlotSnapshot> read(signals::SignalIndex index) noexcept override { return m_table.read(index); }
-  void writeCommand(signals::SignalIndex index, double value, std::int64_t nowNs) noexcept override {
-    m_table.writeCommand(index, value, nowNs, m_writer);
+  /// Stamped with the time of the write itself (not the step's start), so that readers and
+  /// the latency benchmark see when the command really changed.
+  void writeCommand(signals::SignalIndex index, double value, std::int64_t /*stepNs*/) noexcept override {
+    m_table.writeCommand(index, value, signals::monotonicNowNs(), m_writer);
   }
   void writeStatus(signals::SignalIndex index, double value, std::int64_t nowNs) noexcept override {
     m_table.writeBus(index, value, nowNs, m_writer, signals::Quality::Valid);
