@@ -85,7 +85,7 @@ struct Listener {
 fs::path copyConfig() {
   const fs::path folder = fs::temp_directory_path() / "hhea";
   fs::create_directories(folder);
-  for (const char* name : {"vehicle.json", "hhea.dbc", "schedule.json"}) {
+  for (const char* name : {"vehicle.json", "hhea.dbc", "schedule.json", "fsm.json"}) {
     fs::copy_file(HHEA_FOLDER / name, folder / name, fs::copy_options::overwrite_existing);
   }
   return folder / "vehicle.json";

@@ -140,7 +140,7 @@ TEST_CASE("nested all, any and not") {
   CHECK(bench.state() == "B");  // not(false) makes the any true
 }
 
-TEST_CASE("for: true only after holding continuously; a break restarts the timer") {
+TEST_CASE("for: true only after holding continuously, a break restarts the timer") {
   Bench bench;
   bench.start(machineAB(R"({"key": "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts", "eq": 1, "for": "500ms"})"));
   CHECK(bench.engine->nextDeadlineNs() == fsm::NO_DEADLINE);
@@ -212,7 +212,7 @@ TEST_CASE("ageGt and quality: timeouts and stale values") {
   CHECK(stale.state() == "B");
 }
 
-TEST_CASE("a transition runs exit, its actions, then entry; the state is written last") {
+TEST_CASE("a transition runs exit, its actions, then entry, and the state is written last") {
   Bench bench;
   bench.start(R"({"initialState": "A", "states": [
     {"name": "A", "exit": [{"signal": "Vehicle_Control_Unit.PDU_Rx_1.Close_GroupA_Contactors", "value": 1},
@@ -288,7 +288,7 @@ TEST_CASE("the loop guard stops a machine that never settles and raises fsm_loop
   CHECK(bench.engine->outputs().faults[0].name == "fsm_loop");
 }
 
-TEST_CASE("only changes of the current state's signals evaluate; equal commands are not rewritten") {
+TEST_CASE("only changes of the current state's signals evaluate, equal commands are not rewritten") {
   Bench bench;
   bench.start(R"({"initialState": "A", "states": [
     {"name": "A", "transitions": [{"condition": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "gt": 10},
@@ -311,7 +311,7 @@ TEST_CASE("only changes of the current state's signals evaluate; equal commands 
   CHECK(bench.commandWrites(fsmtest::BMS_CONTROL) == 1);
 }
 
-TEST_CASE("resume after a restart: same state, entry time and for timers; entry actions not re-run") {
+TEST_CASE("resume after a restart: same state, entry time and for timers, entry actions not re-run") {
   const std::string text = R"({"initialState": "A", "states": [
     {"name": "A", "transitions": [{"condition": {"key": "internal.operator.StartStop", "eq": 1}, "nextState": "B"}]},
     {"name": "B", "entry": [{"signal": "Vehicle_Control_Unit.BMS.BMS_Control", "value": 0}], "transitions": [

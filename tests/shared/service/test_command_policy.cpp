@@ -145,5 +145,6 @@ TEST_CASE("the service's veto has the last word, after the catalog and range che
 TEST_CASE("command kinds have readable names") {
   CHECK(service::commandKindName(ipc::CommandKind::SetSignal) == "SetSignal");
   CHECK(service::commandKindName(ipc::CommandKind::ClearOverride) == "ClearOverride");
-  CHECK(service::commandKindName(static_cast<ipc::CommandKind>(9)) == "kind 9");
+  CHECK(service::commandKindName(ipc::CommandKind::FsmReload) == "FsmReload");
+  CHECK(service::commandKindName(static_cast<ipc::CommandKind>(10)) == "kind 10");
 }
