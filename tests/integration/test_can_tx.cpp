@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <sched.h>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -72,6 +73,8 @@ struct Listener {
       for (std::size_t i = 0; i < count; ++i) heard.push_back(Heard{batch[i].frame, batch[i].monotonicNs});
       if (count == 0) std::this_thread::sleep_for(1ms);
     }
+    // a gap the listener's own queue made is not can-tx's
+    CHECK_MESSAGE(link->stats().receiveDropped == 0, "the listener's queue overflowed");
   }
   [[nodiscard]] std::vector<Heard> withId(std::uint32_t id) const {
     std::vector<Heard> matching;
@@ -82,6 +85,8 @@ struct Listener {
   }
 };
 
+/// Copies the HHEA configuration to the sandbox's /tmp. Its schedule runs the transmit
+/// thread with SCHED_FIFO 50, as on the vehicle (the tests run as root).
 fs::path copyConfig() {
   const fs::path folder = fs::temp_directory_path() / "hhea";
   fs::create_directories(folder);
@@ -135,18 +140,30 @@ std::size_t checkPairs(const Listener& listener, std::uint32_t sdmId, std::int64
   return pairs;
 }
 
-/// Gaps between consecutive frames of `id`: none reaches 1.9 cycles (no missed cycle; a late
-/// frame on this shared test machine may come a few ms late, the next one is on time again),
-/// and the mean period equals the cycle within 1 % (absolute deadlines: no drift).
+/// Gaps between consecutive frames of `id`: none reaches 2 cycles, and the mean period equals
+/// the cycle within 1 % (absolute deadlines: no drift). can-tx sends a frame late when it wakes
+/// late by less than a cycle and skips the slot only when a whole cycle has passed, so a gap
+/// under 2 cycles is exactly "no cycle missed" (a late frame may follow a punctual one).
+/// With normal scheduling this shared 2-core machine once held can-tx off for 26 ms (CI of
+/// 2026-11-21): hence SCHED_FIFO and RUN_SERIAL for these cases.
 void checkPeriods(const std::vector<Heard>& frames, std::int64_t cycleNs) {
   REQUIRE(frames.size() > 3);
   for (std::size_t i = 1; i < frames.size(); ++i) {
     const std::int64_t gap = frames[i].atNs - frames[i - 1].atNs;
-    CHECK_MESSAGE(gap < cycleNs * 19 / 10, ("gap of " + std::to_string(gap / 1000) + " us"));
+    CHECK_MESSAGE(gap < 2 * cycleNs, ("gap of " + std::to_string(gap / 1000) + " us"));
   }
   const double mean = static_cast<double>(frames.back().atNs - frames.front().atNs) /
                       static_cast<double>(frames.size() - 1);
   CHECK(mean == doctest::Approx(static_cast<double>(cycleNs)).epsilon(0.01));
+}
+
+/// true when one of the process's threads runs with SCHED_FIFO.
+bool hasFifoThread(pid_t pid) {
+  std::error_code error;
+  for (const auto& task : fs::directory_iterator(fs::path("/proc") / std::to_string(pid) / "task", error)) {
+    if (::sched_getscheduler(std::stoi(task.path().filename().string())) == SCHED_FIFO) return true;
+  }
+  return false;
 }
 
 struct Fixture {
@@ -156,6 +173,7 @@ struct Fixture {
   harness::Process& startCanTx() {
     auto process = sut.start(canTxSpec(config));
     REQUIRE_STATUS(process);
+    REQUIRE_MESSAGE(hasFifoThread((*process)->pid()), "the transmit thread did not get SCHED_FIFO");
     return **process;
   }
   void keepAlive() {
