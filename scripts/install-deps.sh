@@ -18,6 +18,7 @@ PACKAGES=(
   doctest-dev nlohmann-json3-dev libcli11-dev libbenchmark-dev
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
+  libgpiod-dev gpiod                  # vcu-gpio's libgpiod v1 back end; the gpiod tools
   # lcm-spy with the project's generated Java types (and its headless test)
   default-jdk-headless libjchart2d-java xvfb xauth
   # test peers: the canmatrix/python-can decoding oracle, namespaces for isolated tests

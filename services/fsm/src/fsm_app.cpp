@@ -16,9 +16,11 @@ namespace {
 /// bounds how long stop() and a reload wait.
 constexpr std::chrono::milliseconds LONGEST_SLEEP{250};
 constexpr std::chrono::seconds RELOAD_WAIT{3};
-/// Keys vcu-fsm answers commands for: the internal signals except can-tx's send groups.
+/// Keys vcu-fsm answers commands for: the internal signals except can-tx's send groups and
+/// vcu-gpio's keys (internal.gpio.* and the signals of input lines).
 constexpr std::string_view OWNED_PREFIX = "internal.";
 constexpr std::string_view CAN_TX_PREFIX = "internal.tx.";
+constexpr std::string_view GPIO_PREFIX = "internal.gpio.";
 constexpr std::string_view STATUS_PREFIXES[] = {"internal.fsm.", "internal.service.", "internal.bus.",
                                                 "internal.dm1."};
 
@@ -177,7 +179,11 @@ struct FsmAppImpl {
 
   service::CommandPolicy commandPolicy() {
     service::CommandPolicy policy;
-    policy.owns = [](std::string_view key) { return key.starts_with(OWNED_PREFIX) && !key.starts_with(CAN_TX_PREFIX); };
+    const config::GpioMap& gpio = runtime.config().gpio;
+    policy.owns = [&gpio](std::string_view key) {
+      return key.starts_with(OWNED_PREFIX) && !key.starts_with(CAN_TX_PREFIX) && !key.starts_with(GPIO_PREFIX) &&
+             gpio.inputBoundTo(key) == nullptr;
+    };
     policy.veto = [](const ipc::CommandRequest&, const signals::SignalInfo& info) -> std::optional<std::string> {
       for (const std::string_view prefix : STATUS_PREFIXES) {
         if (info.key.starts_with(prefix)) return "'" + info.key + "' is a status the stack reports; it cannot be commanded";

@@ -25,7 +25,7 @@ constexpr int MAX_DEPTH = 32;
 constexpr std::string_view OPERATORS[] = {"eq", "ne", "neq", "lt", "gt", "le", "ge", "in"};
 /// Internal signals the stack reports; a machine may read them but never command them.
 constexpr std::string_view STATUS_PREFIXES[] = {"internal.fsm.", "internal.service.", "internal.bus.",
-                                                "internal.dm1."};
+                                                "internal.dm1.", "internal.gpio."};
 
 std::string inQuotes(std::string_view text) {
   std::string result = "'";
@@ -479,23 +479,12 @@ class Loader {
       return std::nullopt;
     }
     const std::string text = json.get<std::string>();
-    std::size_t used = 0;
-    double amount = 0;
-    try {
-      amount = std::stod(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    const std::string unit = text.substr(used);
-    double scale = 0;
-    if (unit == "ms") scale = 1e6;
-    if (unit == "s") scale = 1e9;
-    if (unit == "min") scale = 60e9;
-    if (used == 0 || scale == 0 || !std::isfinite(amount) || amount <= 0 || amount * scale > 1e18) {
+    const std::optional<std::int64_t> ns = config::parseDurationNs(text);
+    if (!ns || *ns == 0) {
       m_check.error(path, inQuotes(text) + ": expected a positive duration with a unit: \"500ms\", \"2s\", \"1min\"");
       return std::nullopt;
     }
-    return static_cast<std::int64_t>(std::llround(amount * scale));
+    return ns;
   }
 
   // ---- actions ------------------------------------------------------------------------
@@ -602,6 +591,10 @@ class Loader {
           m_check.error(keyPath, key + " is a status the stack reports; an action cannot command it");
           return std::nullopt;
         }
+      }
+      if (const config::GpioLine* line = m_vehicle.gpio.inputBoundTo(key)) {
+        m_check.error(keyPath, key + " is read from GPIO input line " + line->name + "; an action cannot command it");
+        return std::nullopt;
       }
     } else if (!transmitted(*found)) {
       m_check.error(keyPath, key + " is not transmitted by " + m_vehicle.node +

@@ -62,6 +62,18 @@ Result<signals::Catalog> buildCatalog(const VehicleConfig& config) {
     for (const auto& description : declared.values) info.valueTexts.emplace_back(description.value, description.text);
     list.push_back(std::move(info));
   }
+  for (const GpioLine& line : config.gpio.lines) {
+    const bool output = line.direction == LineDirection::Output;
+    auto status = internalInfo("gpio." + line.name, "", 0, 1,
+                               std::string(output ? "level vcu-gpio drives on output line " : "level vcu-gpio read on input line ") +
+                                   line.name + " (1 = active)");
+    status.valueTexts = {{0, "inactive"}, {1, "active"}};
+    list.push_back(std::move(status));
+    if (!output) {
+      list.push_back(internalInfo("gpio.sim." + line.name, "", 0, 1,
+                                  "electrical level of input line " + line.name + " on the simulated chip (sim backend)"));
+    }
+  }
   list.push_back(internalInfo("fsm.state", "", 0, 65535, "index of the FSM's current state (fsm file order)"));
   list.push_back(internalInfo("fsm.stateSince", "s", 0, 1e12, "CLOCK_REALTIME seconds when the state was entered"));
   list.push_back(internalInfo("fsm.stateEntered", "s", 0, 1e12,

@@ -3,6 +3,8 @@
 #include "openvcu/core/text.hpp"
 
 #include <algorithm>
+#include <charconv>
+#include <cmath>
 
 namespace openvcu::config {
 
@@ -137,6 +139,19 @@ const Json* JsonChecker::array(const Json& object, const std::string& path, std:
     return nullptr;
   }
   return value;
+}
+
+std::optional<std::int64_t> parseDurationNs(std::string_view text) {
+  double amount = 0;
+  const auto parsed = std::from_chars(text.data(), text.data() + text.size(), amount);
+  if (parsed.ec != std::errc{} || parsed.ptr == text.data()) return std::nullopt;
+  const std::string_view unit(parsed.ptr, static_cast<std::size_t>(text.data() + text.size() - parsed.ptr));
+  double scale = 0;
+  if (unit == "ms") scale = 1e6;
+  if (unit == "s") scale = 1e9;
+  if (unit == "min") scale = 60e9;
+  if (scale == 0 || !std::isfinite(amount) || amount < 0 || amount * scale > 1e18) return std::nullopt;
+  return static_cast<std::int64_t>(std::llround(amount * scale));
 }
 
 }  // namespace openvcu::config

@@ -112,6 +112,7 @@ class Loader {
     files(root);
     internalSignals(root);
     lcm(root);
+    gpio();
   }
 
   VehicleConfig& config() { return m_config; }
@@ -360,6 +361,13 @@ class Loader {
     }
   }
 
+  /// The GPIO map is part of the configuration: its lines add status keys to the catalog.
+  void gpio() {
+    if (m_config.gpioFile.empty() || !fs::exists(m_config.gpioFile)) return;
+    auto map = loadGpioMap(m_config.gpioFile, m_config.internalSignals, m_otherFiles);
+    if (map) m_config.gpio = std::move(*map);
+  }
+
   void lcm(const Json& root) {
     const auto url = m_check.string(root, "", "lcm", false);
     if (!url) return;
@@ -379,6 +387,7 @@ class Loader {
  public:
   std::vector<Error> m_dbcWarnings;
   std::optional<Error> m_dbcError;
+  std::vector<Error> m_otherFiles;  ///< diagnostics of the files loaded with it (gpio.json)
 
  private:
   JsonChecker& m_check;
@@ -397,6 +406,7 @@ std::vector<Error> checkVehicleConfig(const std::string& path) {
   std::vector<Error> all = loader.m_dbcWarnings;
   if (loader.m_dbcError) all.push_back(*loader.m_dbcError);
   for (const Error& diagnostic : check.diagnostics()) all.push_back(diagnostic);
+  for (const Error& diagnostic : loader.m_otherFiles) all.push_back(diagnostic);
   return all;
 }
 
@@ -408,9 +418,13 @@ Result<VehicleConfig> loadVehicleConfig(const std::string& path, std::vector<Err
   loader.run(*json);
   if (loader.m_dbcError) return *loader.m_dbcError;
   if (!check.ok()) return check.firstError();
+  for (const Error& diagnostic : loader.m_otherFiles) {
+    if (diagnostic.severity == Severity::Error) return diagnostic;
+  }
   if (warnings) {
     warnings->insert(warnings->end(), loader.m_dbcWarnings.begin(), loader.m_dbcWarnings.end());
     for (const Error& diagnostic : check.diagnostics()) warnings->push_back(diagnostic);
+    warnings->insert(warnings->end(), loader.m_otherFiles.begin(), loader.m_otherFiles.end());
   }
   return std::move(loader.config());
 }

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <initializer_list>
 #include <optional>
 #include <string>
@@ -26,6 +27,11 @@ using Json = nlohmann::json;
 Result<Json> parseJson(std::string_view text, const std::string& fileName);
 /// Reads and parses a JSON file.
 Result<Json> readJsonFile(const std::string& path);
+
+/// A duration with a unit, "500ms", "2s", "1.5min" (also "0s"): nanoseconds, or empty for
+/// anything else (no unit, negative, not finite, over 10^18 ns).
+std::optional<std::int64_t> parseDurationNs(std::string_view text);
+inline constexpr std::string_view DURATION_FORM = "a duration with a unit: \"500ms\", \"2s\", \"1min\"";
 
 /// Collects errors and warnings while a loader walks a document. Getters never throw;
 /// on a wrong or missing value they record an error and return the fallback.

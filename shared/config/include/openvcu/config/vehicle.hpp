@@ -15,6 +15,7 @@
 // Reference: docs/config.md.
 
 #include "openvcu/can/link.hpp"
+#include "openvcu/config/gpio.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/model.hpp"
 
@@ -89,6 +90,7 @@ struct VehicleConfig {
   std::string simulationFile;
   std::string receiveFile;     ///< can-rx's receive settings (receive.json); empty: defaults
   std::vector<InternalSignal> internalSignals;
+  GpioMap gpio;                ///< loaded from gpioFile; empty when not configured
   std::string lcmUrl{DEFAULT_LCM_URL};
 
   /// The bus carrying a DBC message, or nullptr.

@@ -1,0 +1,26 @@
+// vcu-gpio: the VCU's relay outputs and hard-wired fault inputs (libgpiod or the simulated
+// chip): outputs follow their bound signals with on/off delays, inputs become signals on edge
+// events, safe levels on SIGTERM. README.md; the GPIO map: docs/gpio.md.
+
+#include "controller.hpp"
+#include "gpio_app.hpp"
+#include "openvcu/service/service.hpp"
+
+namespace service = openvcu::service;
+
+int main(int argc, char** argv) {
+  const service::ServiceInfo info{.name = "gpio",
+                                  .program = {},
+                                  .description = "GPIO lines: relay outputs follow their signals, inputs become signals",
+                                  .version = {},
+                                  .writerId = openvcu::gpio::GPIO_WRITER,
+                                  .usesFrameStreams = false};
+  service::CommandLine commandLine(info);
+  if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
+  auto serviceResult = service::Service::open(info, commandLine.options());
+  if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
+  service::Service& runtime = **serviceResult;
+  auto appResult = openvcu::gpio::GpioApp::create(runtime);
+  if (!appResult) return service::reportStartupError(info, appResult.error());
+  return runtime.run();
+}

@@ -1,0 +1,109 @@
+#pragma once
+// What vcu-gpio does with its lines, with time passed in (tests drive it with a fake clock):
+//   - outputs follow the commanded value (override, else command) of their bound signal with
+//     an on-delay and an off-delay: a line switches to level L once L has been commanded
+//     continuously for delay(L), measured from the command's own time stamp (a command that
+//     flips back within the delay never reaches the line);
+//   - inputs: an edge makes a new raw level; it is accepted once it stayed for the debounce
+//     time, and then written to the bound signal (bus plane, writer 4) and the line's status;
+//   - every line's level goes to "internal.gpio.<line>" (bus plane) and every change is
+//     logged and counted.
+// Start: an output resumes the level its status key says vcu-gpio drove last (a restart after
+// a crash: no glitch on the relay), else its initial level; inputs start at what they read.
+// safeState() drives every output to its safe level (SIGTERM).
+//
+//   auto controllerResult = gpio::Controller::create(map, catalog, table, chip, log);
+//   controller.start(now);
+//   output thread: controller.updateOutputs(now); sleep until nextOutputDeadlineNs() or a table change
+//   input thread:  controller.onEvent(event); controller.updateInputs(now); sleep until nextInputDeadlineNs() or an event
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "chip.hpp"
+
+namespace openvcu::gpio {
+
+inline constexpr signals::WriterId GPIO_WRITER = 4;
+inline constexpr std::int64_t NO_DEADLINE = std::numeric_limits<std::int64_t>::max();
+/// After a failed set(), the next attempt comes this much later (no retry storm).
+inline constexpr std::int64_t RETRY_NS = 1'000'000'000;
+
+struct GpioCounters {
+  std::atomic<std::int64_t> outputSwitches{};
+  std::atomic<std::int64_t> inputChanges{};  ///< accepted (debounced) input changes
+  std::atomic<std::int64_t> inputEdges{};    ///< raw edges seen
+  std::atomic<std::int64_t> inputBounces{};  ///< raw levels that went back before their debounce ended
+  std::atomic<std::int64_t> setFailures{};
+};
+
+/// One log line: `error` true for failures.
+using LogSink = std::function<void(bool error, const std::string& line)>;
+
+/// @note restricted thread-safe: start/safeState on one thread while no other runs;
+///       updateOutputs/nextOutputDeadlineNs on one thread, onEvent/updateInputs/
+///       nextInputDeadlineNs on another (they touch disjoint lines); levels() from any.
+class Controller {
+ public:
+  static Result<std::unique_ptr<Controller>> create(const config::GpioMap& map, const signals::Catalog& catalog,
+                                                    signals::SignalTable& table, Chip& chip, LogSink log);
+  Controller(const Controller&) = delete;
+  Controller& operator=(const Controller&) = delete;
+
+  /// Requests the lines (see the file comment) and writes every status key.
+  Status start(std::int64_t nowNs);
+
+  void updateOutputs(std::int64_t nowNs);
+  [[nodiscard]] std::int64_t nextOutputDeadlineNs() const noexcept;
+
+  void onEvent(const LineEvent& event);
+  void updateInputs(std::int64_t nowNs);
+  [[nodiscard]] std::int64_t nextInputDeadlineNs() const noexcept;
+
+  /// Every output to its safe level (logged), status keys written.
+  void safeState(std::int64_t nowNs);
+
+  /// The level of `line` as vcu-gpio last drove or accepted it.
+  [[nodiscard]] bool level(std::size_t line) const noexcept { return m_levels[line].load(std::memory_order_relaxed); }
+  [[nodiscard]] GpioCounters& counters() noexcept { return m_counters; }
+  [[nodiscard]] const config::GpioMap& map() const noexcept { return *m_map; }
+
+ private:
+  struct LineState {
+    signals::SignalIndex status{};
+    signals::SignalIndex bound{};
+    // outputs
+    bool target{};
+    std::int64_t targetSinceNs{};
+    std::int64_t retryAtNs{};
+    // inputs
+    bool raw{};
+    std::int64_t rawSinceNs{};
+  };
+
+  Controller(const config::GpioMap& map, signals::SignalTable& table, Chip& chip, LogSink log,
+             std::vector<LineState> lines) noexcept;
+  [[nodiscard]] bool output(std::size_t line) const noexcept;
+  [[nodiscard]] std::int64_t dueNs(std::size_t line) const noexcept;
+  void drive(std::size_t line, bool level, std::int64_t nowNs, const std::string& why);
+  void writeStatus(std::size_t line, std::int64_t nowNs) noexcept;
+
+  const config::GpioMap* m_map;
+  signals::SignalTable* m_table;
+  Chip* m_chip;
+  LogSink m_log;
+  std::vector<LineState> m_lines;
+  std::unique_ptr<std::atomic<bool>[]> m_levels;  // per line: driven or accepted level
+  GpioCounters m_counters;
+};
+
+/// "2 s", "150 ms", "0 s".
+std::string formatDelay(std::int64_t ns);
+
+}  // namespace openvcu::gpio

@@ -1,0 +1,171 @@
+#include "gpio_app.hpp"
+
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <thread>
+
+#include "controller.hpp"
+
+namespace openvcu::gpio {
+namespace {
+
+/// The longest the output thread sleeps without a table change or a deadline: it also
+/// bounds how long stopping waits for it.
+constexpr std::int64_t LONGEST_SLEEP_NS = 250'000'000;
+constexpr std::string_view OWNED_PREFIX = "internal.gpio.";
+constexpr std::string_view SIM_PREFIX = "internal.gpio.sim.";
+
+}  // namespace
+
+service::CommandPolicy gpioCommandPolicy(const config::GpioMap& map) {
+  service::CommandPolicy policy;
+  policy.owns = [&map](std::string_view key) { return key.starts_with(OWNED_PREFIX) || map.inputBoundTo(key) != nullptr; };
+  policy.veto = [&map](const ipc::CommandRequest& request,
+                       const signals::SignalInfo& info) -> std::optional<std::string> {
+    const bool setting = request.kind == ipc::CommandKind::SetSignal || request.kind == ipc::CommandKind::OperatorSwitch;
+    if (const config::GpioLine* line = map.inputBoundTo(info.key)) {
+      if (setting) {
+        return "'" + info.key + "' is read from input line " + line->name + "; force it with an override";
+      }
+      return std::nullopt;
+    }
+    if (info.key.starts_with(SIM_PREFIX)) {
+      if (map.backend != config::GpioBackend::Sim) {
+        return "the GPIO back end is " + std::string(config::gpioBackendName(map.backend)) +
+               ": the real line sets this input";
+      }
+      return std::nullopt;
+    }
+    return "'" + info.key + "' is the level vcu-gpio reports for its line; command the bound signal instead";
+  };
+  return policy;
+}
+
+struct GpioAppImpl {
+  service::Service& runtime;
+  std::unique_ptr<Chip> chip;
+  std::unique_ptr<Controller> controller;
+  std::thread outputThread;
+  std::thread inputThread;
+  std::atomic<bool> stopping{false};
+  int stopFd{-1};
+
+  explicit GpioAppImpl(service::Service& service) : runtime(service) {}
+
+  ~GpioAppImpl() {
+    stopping.store(true);
+    if (stopFd >= 0) {
+      const std::uint64_t one = 1;
+      (void)::write(stopFd, &one, sizeof one);
+    }
+    if (inputThread.joinable()) inputThread.join();
+    if (outputThread.joinable()) outputThread.join();  // within LONGEST_SLEEP_NS
+    if (controller) controller->safeState(signals::monotonicNowNs());
+    if (chip) chip->release();
+    if (stopFd >= 0) ::close(stopFd);
+  }
+
+  Status open() {
+    const config::GpioMap& map = runtime.config().gpio;
+    if (map.empty()) {
+      return Error{"the configuration has no GPIO lines (\"gpio\" in " + runtime.config().path + ")"};
+    }
+    stopFd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (stopFd < 0) return Error{std::string("eventfd: ") + std::strerror(errno)};
+    auto chipResult = openChip(map, runtime.table(), runtime.catalog());
+    if (!chipResult) return chipResult.error();
+    chip = std::move(*chipResult);
+    auto controllerResult = Controller::create(map, runtime.catalog(), runtime.table(), *chip,
+                                               [this](bool error, const std::string& line) {
+                                                 if (error) {
+                                                   runtime.log().error(line);
+                                                 } else {
+                                                   runtime.log().info(line);
+                                                 }
+                                               });
+    if (!controllerResult) return controllerResult.error();
+    controller = std::move(*controllerResult);
+    if (Status started = controller->start(signals::monotonicNowNs()); !started) return started;
+    controller->updateOutputs(signals::monotonicNowNs());
+    if (Status answering = runtime.answerCommands(gpioCommandPolicy(map)); !answering) return answering.error();
+    registerCounters(map);
+    runtime.setStatus(std::to_string(map.lines.size()) + " lines on the " + std::string(chip->kind()) + " back end");
+    outputThread = std::thread([this] { runOutputs(); });
+    inputThread = std::thread([this] { runInputs(); });
+    return {};
+  }
+
+  void registerCounters(const config::GpioMap& map) {
+    GpioCounters& counters = controller->counters();
+    const auto add = [this](const char* name, std::atomic<std::int64_t>& value) {
+      runtime.heartbeat().addCounterSource(name, [&value] { return value.load(std::memory_order_relaxed); });
+    };
+    add("output_switches", counters.outputSwitches);
+    add("input_changes", counters.inputChanges);
+    add("input_edges", counters.inputEdges);
+    add("input_bounces", counters.inputBounces);
+    add("set_failures", counters.setFailures);
+    for (std::size_t i = 0; i < map.lines.size(); ++i) {
+      runtime.heartbeat().addCounterSource("line." + map.lines[i].name,
+                                           [this, i] { return controller->level(i) ? 1 : 0; });
+    }
+  }
+
+  /// Outputs (and the sim chip's inputs): woken by table changes and output deadlines.
+  void runOutputs() {
+    signals::SignalTable& table = runtime.table();
+    while (!stopping.load(std::memory_order_relaxed)) {
+      const std::uint32_t epoch = table.changeEpoch();
+      chip->tableChanged();
+      const std::int64_t now = signals::monotonicNowNs();
+      controller->updateOutputs(now);
+      const std::int64_t deadline = controller->nextOutputDeadlineNs();
+      std::int64_t timeout = LONGEST_SLEEP_NS;
+      if (deadline != NO_DEADLINE) timeout = std::clamp<std::int64_t>(deadline - now, 0, LONGEST_SLEEP_NS);
+      if (timeout > 0) (void)table.waitForChange(epoch, std::chrono::nanoseconds(timeout));
+    }
+  }
+
+  /// Inputs: woken by line events and debounce deadlines.
+  void runInputs() {
+    const std::vector<int> fds = chip->eventFds();
+    std::vector<pollfd> watched;
+    for (const int fd : fds) watched.push_back(pollfd{fd, POLLIN, 0});
+    watched.push_back(pollfd{stopFd, POLLIN, 0});
+    std::array<LineEvent, 32> batch{};
+    while (!stopping.load(std::memory_order_relaxed)) {
+      const std::int64_t now = signals::monotonicNowNs();
+      controller->updateInputs(now);
+      const std::int64_t deadline = controller->nextInputDeadlineNs();
+      int timeoutMs = -1;
+      if (deadline != NO_DEADLINE) timeoutMs = static_cast<int>(std::max<std::int64_t>((deadline - now + 999'999) / 1'000'000, 0));
+      const int ready = ::poll(watched.data(), watched.size(), timeoutMs);
+      if (ready < 0 && errno != EINTR) {
+        runtime.log().error(std::string("poll on the line events: ") + std::strerror(errno));
+        return;
+      }
+      for (std::size_t i = 0; i + 1 < watched.size(); ++i) {
+        if ((watched[i].revents & POLLIN) == 0) continue;
+        const std::size_t count = chip->readEvents(watched[i].fd, batch);
+        for (std::size_t e = 0; e < count; ++e) controller->onEvent(batch[e]);
+      }
+    }
+  }
+};
+
+Result<std::unique_ptr<GpioApp>> GpioApp::create(service::Service& runtime) {
+  auto impl = std::make_unique<GpioAppImpl>(runtime);
+  if (Status opened = impl->open(); !opened) return opened.error();
+  return std::unique_ptr<GpioApp>(new GpioApp(std::move(impl)));
+}
+
+GpioApp::GpioApp(std::unique_ptr<GpioAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
+GpioApp::~GpioApp() = default;
+
+}  // namespace openvcu::gpio
