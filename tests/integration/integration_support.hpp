@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,19 @@ inline harness::Process& startStack(harness::Harness& sut) {
 
 inline bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
+}
+
+/// Copies every file of config/hhea into `folder` (the sandbox's /tmp/hhea): the tests run
+/// on the embedded default and may then change their copy. Returns folder/vehicle.json.
+inline std::filesystem::path copyHheaConfig(const std::filesystem::path& folder) {
+  namespace fs = std::filesystem;
+  fs::create_directories(folder);
+  for (const auto& entry : fs::directory_iterator(fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea")) {
+    if (entry.is_regular_file()) {
+      fs::copy_file(entry.path(), folder / entry.path().filename(), fs::copy_options::overwrite_existing);
+    }
+  }
+  return folder / "vehicle.json";
 }
 
 }  // namespace openvcu::integration

@@ -41,7 +41,6 @@ namespace {
 
 const std::string CAN_TX = CAN_TX_BINARY;
 const std::string CAN_RX = CAN_RX_BINARY;
-const fs::path HHEA_FOLDER = fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea";
 constexpr std::int64_t MS = 1'000'000;
 
 constexpr std::uint32_t S1_ES = 0x0CEFF321;
@@ -87,14 +86,7 @@ struct Listener {
 
 /// Copies the HHEA configuration to the sandbox's /tmp. Its schedule runs the transmit
 /// thread with SCHED_FIFO 50, as on the vehicle (the tests run as root).
-fs::path copyConfig() {
-  const fs::path folder = fs::temp_directory_path() / "hhea";
-  fs::create_directories(folder);
-  for (const char* name : {"vehicle.json", "hhea.dbc", "schedule.json", "fsm.json"}) {
-    fs::copy_file(HHEA_FOLDER / name, folder / name, fs::copy_options::overwrite_existing);
-  }
-  return folder / "vehicle.json";
-}
+fs::path copyConfig() { return copyHheaConfig(fs::temp_directory_path() / "hhea"); }
 
 harness::ProcessSpec canTxSpec(const fs::path& config) {
   return harness::ProcessSpec{

@@ -66,10 +66,7 @@ void writeFile(const fs::path& path, const std::string& text) {
 /// The HHEA files in /tmp/hhea with vehicle.json pointing at fsm.json = `machine`.
 fs::path copyConfig(const std::string& machine) {
   const fs::path folder = fs::temp_directory_path() / "hhea";
-  fs::create_directories(folder);
-  for (const char* name : {"hhea.dbc", "schedule.json"}) {
-    fs::copy_file(HHEA_FOLDER / name, folder / name, fs::copy_options::overwrite_existing);
-  }
+  copyHheaConfig(folder);
   std::ifstream in(HHEA_FOLDER / "vehicle.json");
   nlohmann::json vehicle = nlohmann::json::parse(in);
   vehicle["fsm"] = "fsm.json";

@@ -101,10 +101,8 @@ TEST_CASE("a GPIO map line bound to a signal that cannot hold 0 and 1, or bound 
 TEST_CASE("the vehicle configuration refuses a bad GPIO map with the map's file and path") {
   const fs::path folder = fs::temp_directory_path() / ("openvcu-gpio-vehicle-" + std::to_string(::getpid()));
   fs::create_directories(folder);
-  for (const char* name : {"vehicle.json", "hhea.dbc", "schedule.json", "fsm.json"}) {
-    fs::copy_file(fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea" / name, folder / name,
-                  fs::copy_options::overwrite_existing);
-  }
+  fs::copy(fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea", folder,
+           fs::copy_options::overwrite_existing | fs::copy_options::recursive);
   std::ofstream(folder / "gpio.json") << R"({)" + CHIPS + R"(, "lines": [{"name": "X", "chip": "main", "offset": 1, "direction": "output", "signal": "relay.Cl15", "initial": 2}]})";
   auto loaded = config::loadVehicleConfig((folder / "vehicle.json").string());
   REQUIRE_FALSE(loaded);
