@@ -4,11 +4,14 @@
 
 #include <doctest/doctest.h>
 
+#include <chrono>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "harness.hpp"
+#include "openvcu/signals/table.hpp"
 
 namespace openvcu::integration {
 
@@ -58,6 +61,21 @@ inline std::filesystem::path copyHheaConfig(const std::filesystem::path& folder)
     }
   }
   return folder / "vehicle.json";
+}
+
+/// Waits (table change futex, no fixed sleep) until the bus plane of `slot` holds `value`;
+/// returns that bus value, or empty on timeout.
+inline std::optional<signals::BusValue> waitForBus(const signals::SignalTable& table, signals::SignalIndex slot,
+                                                   double value, std::chrono::nanoseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  std::uint32_t epoch = table.changeEpoch();
+  for (;;) {
+    const auto read = table.readBus(slot);
+    if (read && read->updates > 0 && read->value == value) return read;
+    const auto left = end - std::chrono::steady_clock::now();
+    if (left <= std::chrono::nanoseconds::zero()) return std::nullopt;
+    epoch = table.waitForChange(epoch, std::chrono::duration_cast<std::chrono::nanoseconds>(left));
+  }
 }
 
 }  // namespace openvcu::integration

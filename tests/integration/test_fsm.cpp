@@ -129,28 +129,25 @@ struct Fixture {
   /// Waits (table change futex, no fixed sleep) until internal.fsm.state == `state`;
   /// returns the bus value written with it, or empty on timeout.
   std::optional<signals::BusValue> waitForState(double state, std::chrono::milliseconds timeout) {
-    const signals::SignalIndex slot = index("internal.fsm.state");
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    std::uint32_t epoch = table->changeEpoch();
-    for (;;) {
-      const auto value = table->readBus(slot);
-      if (value && value->updates > 0 && value->value == state) return value;
-      const auto left = end - std::chrono::steady_clock::now();
-      if (left <= 0ns) return std::nullopt;
-      epoch = table->waitForChange(epoch, std::chrono::duration_cast<std::chrono::nanoseconds>(left));
-    }
+    return waitForBus(*table, index("internal.fsm.state"), state, timeout);
   }
 
   void drainEvents() {
     while (events->handle(0ms) == ipc::HandleResult::Handled) {
     }
   }
+  /// Waits up to 3 s for a transition whose cause contains `part` (the table shows a new
+  /// state before its LCM event arrives).
   bool sawCause(const std::string& part) {
-    drainEvents();
-    for (const ipc::FsmTransition& transition : transitions) {
-      if (contains(transition.cause, part)) return true;
+    const auto end = std::chrono::steady_clock::now() + 3s;
+    for (;;) {
+      drainEvents();
+      for (const ipc::FsmTransition& transition : transitions) {
+        if (contains(transition.cause, part)) return true;
+      }
+      if (std::chrono::steady_clock::now() >= end) return false;
+      (void)events->handle(100ms);
     }
-    return false;
   }
 };
 

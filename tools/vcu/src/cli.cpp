@@ -8,6 +8,7 @@
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
 #include "fsm_commands.hpp"
+#include "gpio_commands.hpp"
 #include "schedule_commands.hpp"
 #include "signal_commands.hpp"
 #include "status_commands.hpp"
@@ -69,6 +70,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerBusCommands(app, context);
     registerScheduleCommands(app, context);
     registerFsmCommands(app, context);
+    registerGpioCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

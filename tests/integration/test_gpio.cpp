@@ -1,0 +1,180 @@
+// vcu-gpio with the simulated chip and the real vcu-fsm on the HHEA configuration, inside the
+// sandbox with real LCM and a real signal table:
+//   - Start: the FSM commands the Cl15 relay; vcu-gpio switches the line 2 s later (its
+//     on-delay); SIGKILLed, it comes back driving the same level without a glitch; SIGTERM
+//     drives the safe level; Stop switches the relay off 2 s after the command;
+//   - the contactor-fault line driven high on the simulated chip (`vcu signal set
+//     internal.gpio.sim.ContactorFault 1`, answered by vcu-gpio) reaches the FSM, which
+//     enters "Contactor Fault" and raises its fault; `vcu gpio` shows the lines.
+
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "integration_support.hpp"
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/ipc/event_bus.hpp"
+
+namespace harness = openvcu::harness;
+namespace fs = std::filesystem;
+using namespace openvcu;
+using namespace openvcu::integration;
+using namespace std::chrono_literals;
+
+namespace {
+
+const std::string FSM = FSM_BINARY;
+const std::string GPIO = GPIO_BINARY;
+
+/// The index of `name` in the HHEA machine (internal.fsm.state is the file-order index).
+double stateIndex(const std::string& name) {
+  std::ifstream in(fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea" / "fsm.json");
+  const nlohmann::json machine = nlohmann::json::parse(in);
+  for (std::size_t i = 0; i < machine["states"].size(); ++i) {
+    if (machine["states"][i]["name"] == name) return static_cast<double>(i);
+  }
+  FAIL("no state " << name);
+  return -1;
+}
+
+struct Fixture {
+  harness::Harness sut;
+  fs::path config = copyHheaConfig(fs::temp_directory_path() / "hhea");
+  std::optional<config::VehicleConfig> vehicle;
+  std::optional<signals::Catalog> catalog;
+  std::optional<signals::SignalTable> table;
+
+  Fixture() {
+    auto loaded = config::loadVehicleConfig(config.string());
+    REQUIRE_STATUS(loaded);
+    vehicle.emplace(std::move(*loaded));
+    auto built = config::buildCatalog(*vehicle);
+    REQUIRE_STATUS(built);
+    catalog.emplace(std::move(*built));
+    auto opened = signals::SignalTable::open(*catalog, "hhea");
+    REQUIRE_STATUS(opened);
+    table.emplace(std::move(*opened));
+  }
+
+  harness::Process& start(const std::string& name, const std::string& binary) {
+    auto process = sut.start(harness::ProcessSpec{
+        .name = name, .argv = {binary, "--config", config.string()}, .notifyReadiness = true, .captureOutput = true});
+    REQUIRE_STATUS(process);
+    return **process;
+  }
+
+  harness::CommandResult vcu(std::vector<std::string> arguments) {
+    std::vector<std::string> argv{VCU};
+    argv.insert(argv.end(), arguments.begin(), arguments.end());
+    argv.emplace_back("--config");
+    argv.push_back(config.string());
+    return sut.run(argv);
+  }
+
+  void set(const std::string& key, const std::string& value) {
+    const auto result = vcu({"signal", "set", key, value});
+    REQUIRE_MESSAGE(contains(result.out, "accepted"), result.describe());
+  }
+
+  signals::SignalIndex index(const std::string& key) const {
+    const auto found = catalog->indexOf(key);
+    REQUIRE_MESSAGE(found, key);
+    return *found;
+  }
+
+  /// Seconds from the relay's command to the level `level` on internal.gpio.Cl15.
+  double switchDelay(double level) {
+    const auto switched = waitForBus(*table, index("internal.gpio.Cl15"), level, 5s);
+    REQUIRE_MESSAGE(switched, "internal.gpio.Cl15 never became " << level);
+    const auto command = table->readCommand(index("internal.relay.Cl15"));
+    REQUIRE(command);
+    REQUIRE(command->value == level);
+    return static_cast<double>(switched->timestampNs - command->timestampNs) / 1e9;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the Cl15 relay follows the state machine with its 2 s delays and a killed vcu-gpio comes back to the same output") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f;
+  f.start("fsm", FSM);
+  harness::Process& first = f.start("gpio", GPIO);
+  REQUIRE(waitForBus(*f.table, f.index("internal.fsm.state"), stateIndex("Standby"), 5s));
+  REQUIRE(waitForBus(*f.table, f.index("internal.gpio.Cl15"), 0, 5s));
+
+  f.set("internal.operator.StartStop", "Start");
+  const double onDelay = f.switchDelay(1);
+  CHECK(onDelay >= 2.0);
+  CHECK(onDelay < 2.3);
+  CHECK(first.waitForLine("Cl15: output on (commanded on, on-delay 2 s)", 2s));
+
+  // SIGKILL: the table keeps the level; the restarted service requests the line at it
+  const auto before = f.table->readBus(f.index("internal.gpio.Cl15"));
+  REQUIRE(first.signal(SIGKILL));
+  REQUIRE(first.waitForExit(5s));
+  harness::Process& second = f.start("gpio", GPIO);
+  CHECK(second.waitForLine("Cl15: output sim offset 17 requested, on (resumed: the level driven before the restart)", 5s));
+  const auto after = f.table->readBus(f.index("internal.gpio.Cl15"));
+  REQUIRE(after);
+  CHECK(after->value == 1);
+  CHECK(after->updates == before->updates + 1);  // one write (the restart's status), never 0
+
+  f.set("internal.operator.StartStop", "Stop");
+  const double offDelay = f.switchDelay(0);
+  CHECK(offDelay >= 2.0);
+  CHECK(offDelay < 2.3);
+
+  // on again, then SIGTERM: the safe level (off) before the process ends
+  f.set("internal.operator.StartStop", "Start");
+  REQUIRE(f.switchDelay(1) >= 2.0);
+  REQUIRE(f.sut.stop(second));
+  const auto safe = f.table->readBus(f.index("internal.gpio.Cl15"));
+  REQUIRE(safe);
+  CHECK(safe->value == 0);
+  CHECK(contains(second.output(), "Cl15: output off (safe state)"));
+}
+
+TEST_CASE("a fault on the contactor-fault input line makes the FSM enter its fault state, and vcu gpio shows the lines") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f;
+  auto events = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, "hhea");
+  REQUIRE_STATUS(events);
+  std::vector<ipc::FaultEvent> faults;
+  REQUIRE(events->onFault([&](const ipc::FaultEvent& event) { faults.push_back(event); }));
+  f.start("fsm", FSM);
+  harness::Process& gpio = f.start("gpio", GPIO);
+  f.set("internal.operator.StartStop", "Start");
+  REQUIRE(waitForBus(*f.table, f.index("internal.fsm.state"), stateIndex("Ready"), 5s));
+
+  const auto refused = f.vcu({"signal", "set", "internal.fault.Contactor", "1"});
+  CHECK(contains(refused.out + refused.err, "read from input line ContactorFault"));
+  f.set("internal.gpio.sim.ContactorFault", "1");
+  CHECK(waitForBus(*f.table, f.index("internal.fault.Contactor"), 1, 2s));
+  CHECK(waitForBus(*f.table, f.index("internal.fsm.state"), stateIndex("Contactor Fault"), 2s));
+  CHECK(gpio.waitForLine("ContactorFault: input on -> internal.fault.Contactor = 1 (stable for 20 ms)", 2s));
+  const auto end = std::chrono::steady_clock::now() + 3s;
+  const auto raised = [&] {
+    for (const ipc::FaultEvent& fault : faults) {
+      if (fault.name == "contactor_fault" && fault.active) return true;
+    }
+    return false;
+  };
+  while (!raised() && std::chrono::steady_clock::now() < end) (void)events->handle(100ms);
+  CHECK(raised());
+
+  const auto shown = f.vcu({"gpio"});
+  CHECK(shown.exitCode() == 0);
+  CHECK(contains(shown.out, "Cl15"));
+  CHECK(contains(shown.out, "ContactorFault"));
+  CHECK(contains(shown.out, "internal.fault.Contactor"));
+  CHECK(contains(shown.out, "Fault"));
+  INFO(shown.out);
+}
