@@ -23,6 +23,10 @@ PACKAGES=(
   default-jdk-headless libjchart2d-java xvfb xauth
   # test peers: the canmatrix/python-can decoding oracle, namespaces for isolated tests
   python3 python3-canmatrix python3-can util-linux iproute2
+  # kernel tests (tests/kernel): QEMU boots a Debian kernel with SocketCAN and gpio-sim;
+  # busybox/cpio/kmod build its initramfs, make/gcc-12/bc/xz-utils the gpio-sim module,
+  # can-utils are the peers inside the VM
+  qemu-system-x86 busybox-static cpio kmod make gcc-12 bc xz-utils can-utils
 )
 
 missing=()

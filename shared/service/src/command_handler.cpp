@@ -25,6 +25,7 @@ bool knownKind(ipc::CommandKind kind) noexcept {
     case ipc::CommandKind::ScheduleEnable:
     case ipc::CommandKind::ScheduleDefault:
     case ipc::CommandKind::FsmReload:
+    case ipc::CommandKind::SimFault:
       return true;
   }
   return false;
@@ -89,6 +90,8 @@ std::string commandKindName(ipc::CommandKind kind) {
       return "ScheduleDefault";
     case ipc::CommandKind::FsmReload:
       return "FsmReload";
+    case ipc::CommandKind::SimFault:
+      return "SimFault";
   }
   return "kind " + std::to_string(static_cast<int>(kind));
 }
@@ -163,6 +166,7 @@ bool CommandHandler::apply(const ipc::CommandRequest& request, signals::SignalIn
     case ipc::CommandKind::ScheduleEnable:
     case ipc::CommandKind::ScheduleDefault:
     case ipc::CommandKind::FsmReload:
+    case ipc::CommandKind::SimFault:
       return false;  // not table operations: a service handles them as custom kinds (or in its veto)
   }
   return false;

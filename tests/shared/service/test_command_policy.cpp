@@ -146,5 +146,6 @@ TEST_CASE("command kinds have readable names") {
   CHECK(service::commandKindName(ipc::CommandKind::SetSignal) == "SetSignal");
   CHECK(service::commandKindName(ipc::CommandKind::ClearOverride) == "ClearOverride");
   CHECK(service::commandKindName(ipc::CommandKind::FsmReload) == "FsmReload");
-  CHECK(service::commandKindName(static_cast<ipc::CommandKind>(10)) == "kind 10");
+  CHECK(service::commandKindName(ipc::CommandKind::SimFault) == "SimFault");
+  CHECK(service::commandKindName(static_cast<ipc::CommandKind>(11)) == "kind 11");
 }

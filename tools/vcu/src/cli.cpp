@@ -9,6 +9,7 @@
 #include "diagnostics.hpp"
 #include "fsm_commands.hpp"
 #include "gpio_commands.hpp"
+#include "sim_commands.hpp"
 #include "schedule_commands.hpp"
 #include "signal_commands.hpp"
 #include "status_commands.hpp"
@@ -71,6 +72,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerScheduleCommands(app, context);
     registerFsmCommands(app, context);
     registerGpioCommands(app, context);
+    registerSimCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

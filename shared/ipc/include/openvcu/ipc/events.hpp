@@ -48,6 +48,7 @@ enum class CommandKind : std::int8_t {
   ScheduleEnable = 7,   ///< message `key` transmitted (`value` 1) or not (0)
   ScheduleDefault = 8,  ///< value sent for signal `key` while nothing commands it
   FsmReload = 9,        ///< vcu-fsm: load the FSM file `key` (empty: its configured file) and switch to it
+  SimFault = 10,        ///< vcu-ecu-sim: inject (`value` 1) or clear (0) the fault named `key`
 };
 
 struct CommandRequest {

@@ -1,0 +1,236 @@
+#include "ecu_sim_app.hpp"
+
+#include <array>
+#include <atomic>
+#include <ctime>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "openvcu/can/open_link.hpp"
+#include "vehicle_model.hpp"
+
+namespace openvcu::ecusim {
+namespace {
+
+constexpr std::string_view SILENT_PREFIX = "silent.";
+
+std::int64_t realtimeNs() noexcept {
+  timespec now{};
+  ::clock_gettime(CLOCK_REALTIME, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+void sleepUntil(std::int64_t monotonicNs) noexcept {
+  timespec until{};
+  until.tv_sec = static_cast<time_t>(monotonicNs / 1'000'000'000);
+  until.tv_nsec = static_cast<long>(monotonicNs % 1'000'000'000);
+  while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
+  }
+}
+
+}  // namespace
+
+struct EcuSimAppImpl {
+  service::Service& runtime;
+  SimConfig config;
+  std::optional<VirtualBus> bus;
+  std::optional<VehicleModel> model;
+  std::vector<std::unique_ptr<can::Link>> links;
+  std::optional<signals::SignalIndex> wakeIndex;
+  std::thread thread;
+  std::atomic<bool> stopping{false};
+  // fault requests from the command handler (loop thread) to the simulation thread
+  std::mutex requestsMutex;
+  std::vector<std::pair<std::string, bool>> requests;
+  // heartbeat mirrors
+  std::atomic<std::int64_t> sent{}, received{}, sendFailures{}, awake{}, connection{}, socTenths{}, pairsOk{},
+      pairsRefused{}, timeRequests{}, timeAnswers{}, timeErrors{}, sohAnswers{}, faultsActive{};
+
+  explicit EcuSimAppImpl(service::Service& service) : runtime(service) {}
+  ~EcuSimAppImpl() {
+    stopping.store(true);
+    if (thread.joinable()) thread.join();
+  }
+
+  Status open() {
+    const config::VehicleConfig& vehicle = runtime.config();
+    auto configResult = loadSimConfig(vehicle.simulationFile, vehicle);
+    if (!configResult) return configResult.error();
+    config = std::move(*configResult);
+    auto busResult = VirtualBus::create(vehicle);
+    if (!busResult) return busResult.error();
+    bus.emplace(std::move(*busResult));
+    auto modelResult = VehicleModel::create(*bus, config);
+    if (!modelResult) return modelResult.error();
+    model.emplace(std::move(*modelResult));
+    if (!config.wakeSignal.empty()) {
+      wakeIndex = runtime.catalog().indexOf(config.wakeSignal);
+      if (!wakeIndex) return Error{config.file + ": /wakeSignal: no signal '" + config.wakeSignal + "' in the catalog"};
+    }
+    for (const config::BusConfig& busConfig : vehicle.buses) {
+      auto link = can::openLink(busConfig.link.kind, busConfig.link.target, busConfig.linkOptions());
+      if (!link) return Error{"bus " + busConfig.name + ": " + link.error().message};
+      links.push_back(std::move(*link));
+    }
+    service::CommandPolicy policy;
+    policy.owns = [](std::string_view) { return false; };
+    policy.customKinds = {ipc::CommandKind::SimFault};
+    policy.custom = [this](const ipc::CommandRequest& request) { return request_(request); };
+    if (Status answering = runtime.answerCommands(std::move(policy)); !answering) return answering.error();
+    registerCounters();
+    runtime.log().info("simulating " + std::to_string(bus->nodes().size()) + " nodes on " +
+                       std::to_string(links.size()) + " bus(es); SOC " + std::to_string(static_cast<int>(config.initialSoc)) + " %");
+    thread = std::thread([this] { run(); });
+    return {};
+  }
+
+  /// A fault request: checked here, applied by the simulation thread at its next wake.
+  std::optional<std::string> request_(const ipc::CommandRequest& request) {
+    const std::string& name = request.key;
+    const bool on = request.value != 0;
+    if (name.starts_with(SILENT_PREFIX)) {
+      const std::string node = name.substr(SILENT_PREFIX.size());
+      const auto nodes = bus->nodes();
+      if (std::find(nodes.begin(), nodes.end(), node) == nodes.end()) {
+        std::string known;
+        for (const std::string& candidate : nodes) known += (known.empty() ? "" : ", ") + candidate;
+        return "no simulated node '" + node + "' (nodes: " + known + ")";
+      }
+    } else if (!faultByName(name)) {
+      std::string known;
+      for (std::size_t i = 0; i < FAULT_COUNT; ++i) known += std::string(faultName(static_cast<Fault>(i))) + ", ";
+      return "unknown fault '" + name + "' (faults: " + known + "silent.<node>)";
+    }
+    std::lock_guard lock(requestsMutex);
+    requests.emplace_back(name, on);
+    runtime.log().warning(std::string("fault ") + name + (on ? " injected" : " cleared"));
+    return std::nullopt;
+  }
+
+  void applyRequests() {
+    std::lock_guard lock(requestsMutex);
+    for (const auto& [name, on] : requests) {
+      if (name.starts_with(SILENT_PREFIX)) {
+        bus->setSilent(name.substr(SILENT_PREFIX.size()), on);
+      } else if (const auto fault = faultByName(name)) {
+        model->setFault(*fault, on);
+      }
+      ipc::FaultEvent event;
+      event.timestampNs = realtimeNs();
+      event.name = "sim." + name;
+      event.source = runtime.program();
+      event.severity = ipc::FaultSeverity::Warning;
+      event.active = on;
+      event.text = std::string("injected fault ") + name + (on ? " on" : " off");
+      runtime.events().publish(event);
+    }
+    requests.clear();
+  }
+
+  void run() {
+    std::array<can::ReceivedFrame, 64> batch{};
+    const auto send = [this](std::size_t busIndex, const can::Frame& frame) {
+      if (links[busIndex]->send(frame) != can::SendStatus::Sent) sendFailures.fetch_add(1, std::memory_order_relaxed);
+    };
+    std::int64_t nextTick = signals::monotonicNowNs();
+    bus->start(nextTick);
+    while (!stopping.load(std::memory_order_relaxed)) {
+      const std::int64_t now = signals::monotonicNowNs();
+      for (auto& link : links) {
+        std::size_t count = 0;
+        while ((count = link->receive(batch)) > 0) {
+          for (std::size_t i = 0; i < count; ++i) model->receive(batch[i].frame, batch[i].monotonicNs);
+          if (count < batch.size()) break;
+        }
+      }
+      applyRequests();
+      if (now >= nextTick) {
+        bool wake = true;
+        if (wakeIndex) {
+          const auto level = runtime.table().readBus(*wakeIndex);
+          wake = level && level->updates > 0 && level->value >= 0.5;
+        }
+        model->step(now, realtimeNs(), wake, send);
+        nextTick += ((now - nextTick) / config.tickNs + 1) * config.tickNs;
+        reportSafety();
+      }
+      model->sendDue(now, send);
+      mirror();
+      sleepUntil(std::min(nextTick, bus->nextDueNs()));
+    }
+  }
+
+  void reportSafety() {
+    const auto change = model->takeSafetyChange();
+    if (!change) return;
+    const bool ok = *change == j1939::SafetyResult::Ok;
+    ipc::FaultEvent event;
+    event.timestampNs = realtimeNs();
+    event.name = "sim.vic_safety";
+    event.source = runtime.program();
+    event.severity = ipc::FaultSeverity::Error;
+    event.active = !ok;
+    event.text = ok ? std::string("the simulated VIC accepts the VCU's J1939-76 pairs again")
+                    : "the simulated VIC refuses the VCU's J1939-76 pairs: " +
+                          std::string(j1939::safetyResultName(*change));
+    runtime.events().publish(event);
+    if (ok) {
+      runtime.log().info(event.text);
+    } else {
+      runtime.log().error(event.text);
+    }
+  }
+
+  void mirror() {
+    const auto put = [](std::atomic<std::int64_t>& target, std::int64_t value) {
+      target.store(value, std::memory_order_relaxed);
+    };
+    put(sent, static_cast<std::int64_t>(bus->framesSent()));
+    put(received, static_cast<std::int64_t>(bus->framesReceived()));
+    put(awake, model->awake() ? 1 : 0);
+    put(connection, model->connection());
+    put(socTenths, static_cast<std::int64_t>(model->soc() * 10));
+    put(pairsOk, static_cast<std::int64_t>(model->safety().ok));
+    put(pairsRefused, static_cast<std::int64_t>(model->safety().refused));
+    put(timeRequests, static_cast<std::int64_t>(model->timeRequests()));
+    put(timeAnswers, static_cast<std::int64_t>(model->timeAnswers()));
+    put(timeErrors, static_cast<std::int64_t>(model->timeAnswerErrors()));
+    put(sohAnswers, static_cast<std::int64_t>(model->sohAnswers()));
+    std::int64_t mask = 0;
+    for (std::size_t i = 0; i < FAULT_COUNT; ++i) {
+      if (model->fault(static_cast<Fault>(i))) mask |= std::int64_t{1} << i;
+    }
+    put(faultsActive, mask);
+  }
+
+  void registerCounters() {
+    const auto add = [this](const char* name, std::atomic<std::int64_t>& value) {
+      runtime.heartbeat().addCounterSource(name, [&value] { return value.load(std::memory_order_relaxed); });
+    };
+    add("frames_sent", sent);
+    add("frames_received", received);
+    add("send_failures", sendFailures);
+    add("vic_awake", awake);
+    add("vic_connection", connection);
+    add("soc_tenths", socTenths);
+    add("vic_pairs_ok", pairsOk);
+    add("vic_pairs_refused", pairsRefused);
+    add("time_requests", timeRequests);
+    add("time_answers", timeAnswers);
+    add("time_answer_errors", timeErrors);
+    add("soh_answers", sohAnswers);
+    add("faults_active", faultsActive);
+  }
+};
+
+Result<std::unique_ptr<EcuSimApp>> EcuSimApp::create(service::Service& runtime) {
+  auto impl = std::make_unique<EcuSimAppImpl>(runtime);
+  if (Status opened = impl->open(); !opened) return opened.error();
+  return std::unique_ptr<EcuSimApp>(new EcuSimApp(std::move(impl)));
+}
+
+EcuSimApp::EcuSimApp(std::unique_ptr<EcuSimAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
+EcuSimApp::~EcuSimApp() = default;
+
+}  // namespace openvcu::ecusim

@@ -1,0 +1,127 @@
+#include "virtual_bus.hpp"
+
+#include <algorithm>
+
+namespace openvcu::ecusim {
+
+Result<VirtualBus> VirtualBus::create(const config::VehicleConfig& vehicle) {
+  VirtualBus bus;
+  bus.m_vehicle = &vehicle;
+  bus.m_codecs = dbc::DatabaseCodec(vehicle.database);
+  for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
+    for (const std::size_t index : vehicle.buses[b].messages) {
+      const dbc::Message& message = vehicle.database.messages[index];
+      if (message.pseudo || message.length > can::MAX_DATA_LENGTH) continue;
+      if (message.transmitter == vehicle.node) {
+        Rx rx;
+        rx.messageIndex = index;
+        rx.id = message.id;
+        rx.extended = message.extended;
+        rx.values.assign(message.signals.size(), std::numeric_limits<double>::quiet_NaN());
+        bus.m_rx.push_back(std::move(rx));
+        continue;
+      }
+      Tx tx;
+      tx.messageIndex = index;
+      tx.bus = b;
+      tx.node = message.transmitter;
+      tx.frame.id = message.id;
+      tx.frame.flags = message.extended ? can::FLAG_EXTENDED : 0;
+      const auto initial = bus.m_codecs[index].initialPayload();
+      tx.frame.length = static_cast<std::uint8_t>(std::min<std::size_t>(initial.size(), can::MAX_DATA_LENGTH));
+      std::copy_n(initial.begin(), tx.frame.length, tx.frame.data.begin());
+      tx.cycleNs = message.cycleTimeMs ? static_cast<std::int64_t>(*message.cycleTimeMs) * 1'000'000 : 0;
+      bus.m_tx.push_back(std::move(tx));
+    }
+  }
+  return bus;
+}
+
+Result<OutputRef> VirtualBus::output(const std::string& message, const std::string& signal) const {
+  for (std::size_t i = 0; i < m_tx.size(); ++i) {
+    const dbc::Message& candidate = m_vehicle->database.messages[m_tx[i].messageIndex];
+    if (candidate.name != message) continue;
+    for (std::uint32_t s = 0; s < candidate.signals.size(); ++s) {
+      if (candidate.signals[s].name == signal) return OutputRef{i, s};
+    }
+    return Error{"message " + message + " has no signal " + signal};
+  }
+  return Error{"no simulated node transmits a message " + message + " on a configured bus"};
+}
+
+Result<std::size_t> VirtualBus::outputMessage(const std::string& name) const {
+  for (std::size_t i = 0; i < m_tx.size(); ++i) {
+    if (m_vehicle->database.messages[m_tx[i].messageIndex].name == name) return i;
+  }
+  return Error{"no simulated node transmits a message " + name + " on a configured bus"};
+}
+
+Result<InputRef> VirtualBus::input(const std::string& message, const std::string& signal) const {
+  for (std::size_t i = 0; i < m_rx.size(); ++i) {
+    const dbc::Message& candidate = m_vehicle->database.messages[m_rx[i].messageIndex];
+    if (candidate.name != message) continue;
+    for (std::uint32_t s = 0; s < candidate.signals.size(); ++s) {
+      if (candidate.signals[s].name == signal) return InputRef{i, s};
+    }
+    return Error{"message " + message + " has no signal " + signal};
+  }
+  return Error{"the VCU (" + m_vehicle->node + ") transmits no message " + message + " on a configured bus"};
+}
+
+void VirtualBus::set(OutputRef ref, double value) noexcept {
+  Tx& tx = m_tx[ref.message];
+  const dbc::Signal& signal = m_vehicle->database.messages[tx.messageIndex].signals[ref.signal];
+  if (!std::isfinite(value)) return;
+  if (signal.minimum < signal.maximum) value = std::clamp(value, signal.minimum, signal.maximum);
+  (void)m_codecs[tx.messageIndex].encode(ref.signal, value, std::span<std::uint8_t>(tx.frame.data.data(), tx.frame.length));
+}
+
+bool VirtualBus::receive(const can::Frame& frame, std::int64_t atNs) noexcept {
+  for (Rx& rx : m_rx) {
+    if (rx.id != frame.id || rx.extended != frame.extended()) continue;
+    m_codecs[rx.messageIndex].decode(frame.payload(), [&rx](std::uint32_t signal, const dbc::DecodedValue& value) {
+      rx.values[signal] = value.physical;
+    });
+    rx.lastNs = atNs;
+    ++m_received;
+    return true;
+  }
+  return false;
+}
+
+std::int64_t VirtualBus::nextDueNs() const noexcept {
+  std::int64_t next = NEVER;
+  for (const Tx& tx : m_tx) {
+    if (tx.cycleNs > 0) next = std::min(next, tx.nextNs);
+  }
+  return next;
+}
+
+void VirtualBus::start(std::int64_t nowNs) noexcept {
+  std::int64_t stagger = 0;
+  for (Tx& tx : m_tx) {
+    if (tx.cycleNs <= 0) continue;
+    tx.nextNs = nowNs + (stagger % tx.cycleNs);
+    stagger += 1'000'000;
+  }
+}
+
+bool VirtualBus::setSilent(const std::string& node, bool silent) {
+  bool found = false;
+  for (Tx& tx : m_tx) {
+    if (tx.node != node) continue;
+    tx.silent = silent;
+    found = true;
+  }
+  return found;
+}
+
+std::vector<std::string> VirtualBus::nodes() const {
+  std::vector<std::string> names;
+  for (const Tx& tx : m_tx) {
+    if (std::find(names.begin(), names.end(), tx.node) == names.end()) names.push_back(tx.node);
+  }
+  return names;
+}
+
+}  // namespace openvcu::ecusim

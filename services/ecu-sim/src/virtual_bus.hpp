@@ -1,0 +1,127 @@
+#pragma once
+// The simulated nodes' side of the bus: every DBC message a node other than this VCU
+// transmits, with its payload (the DBC's initial payload, then what the node models set),
+// its cycle (GenMsgCycleTime; messages without one go out only when a model asks) and an
+// absolute next deadline; and the VCU's messages decoded as they are received.
+//
+//   auto busResult = ecusim::VirtualBus::create(vehicle);
+//   const auto soc = bus.output("VIC", "HVESSD2_PGN61585", "HS_FastUpdSOC");   // resolved once
+//   bus.set(*soc, 62.5);                                                     // encoded at once
+//   bus.sendDue(now, [&](std::size_t busIndex, const can::Frame& frame) { links[busIndex]->send(frame); });
+//   bus.receive(frame, atNs);   // a VCU frame: decoded; bus.get(*relay) reads it
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "openvcu/can/frame.hpp"
+#include "openvcu/config/vehicle.hpp"
+#include "openvcu/core/result.hpp"
+#include "openvcu/dbc/codec.hpp"
+
+namespace openvcu::ecusim {
+
+inline constexpr std::int64_t NEVER = std::numeric_limits<std::int64_t>::max();
+
+/// A signal of a simulated node's message.
+struct OutputRef {
+  std::size_t message{};  ///< index into the transmitted messages
+  std::uint32_t signal{};
+};
+/// A signal of a VCU message.
+struct InputRef {
+  std::size_t message{};  ///< index into the received messages
+  std::uint32_t signal{};
+};
+
+/// @note restricted thread-safe: one thread (the simulation's).
+class VirtualBus {
+ public:
+  static Result<VirtualBus> create(const config::VehicleConfig& vehicle);
+
+  /// Errors name the message and signal (and say the node does not transmit it).
+  Result<OutputRef> output(const std::string& message, const std::string& signal) const;
+  Result<InputRef> input(const std::string& message, const std::string& signal) const;
+  /// The transmitted message `name`, for sendNow().
+  Result<std::size_t> outputMessage(const std::string& name) const;
+
+  /// Sets a physical value (clamped to the signal's DBC range); no allocation.
+  void set(OutputRef ref, double value) noexcept;
+  /// The last received value; NaN before the first frame of its message.
+  [[nodiscard]] double get(InputRef ref) const noexcept { return m_rx[ref.message].values[ref.signal]; }
+  /// CLOCK_MONOTONIC ns of the last frame of a VCU message; 0 when none came.
+  [[nodiscard]] std::int64_t lastReceivedNs(InputRef ref) const noexcept { return m_rx[ref.message].lastNs; }
+
+  /// Decodes `frame` when it is a VCU message; false otherwise.
+  bool receive(const can::Frame& frame, std::int64_t atNs) noexcept;
+
+  /// Sends every cyclic message due at `nowNs` (missed cycles are skipped, never sent in a
+  /// burst) through `send(busIndex, frame)`; messages of silent nodes are not sent.
+  template <typename Send>
+  void sendDue(std::int64_t nowNs, Send&& send);
+  /// Sends one message now (an answer to a request), unless its node is silent.
+  template <typename Send>
+  void sendNow(std::size_t message, std::int64_t nowNs, Send&& send);
+  [[nodiscard]] std::int64_t nextDueNs() const noexcept;
+
+  /// Starts the cycles at `nowNs` (each message after its own cycle, staggered by 1 ms steps).
+  void start(std::int64_t nowNs) noexcept;
+
+  /// Silences (or revives) every message `node` transmits. false for an unknown node.
+  bool setSilent(const std::string& node, bool silent);
+  [[nodiscard]] std::vector<std::string> nodes() const;
+  [[nodiscard]] std::uint32_t frameId(std::size_t message) const noexcept { return m_tx[message].frame.id; }
+  [[nodiscard]] std::uint64_t framesSent() const noexcept { return m_sent; }
+  [[nodiscard]] std::uint64_t framesReceived() const noexcept { return m_received; }
+
+ private:
+  struct Tx {
+    std::size_t messageIndex{};  ///< into the database
+    std::size_t bus{};
+    std::string node;
+    can::Frame frame;
+    std::int64_t cycleNs{};  ///< 0: on request only
+    std::int64_t nextNs{NEVER};
+    bool silent{};
+  };
+  struct Rx {
+    std::size_t messageIndex{};
+    std::uint32_t id{};
+    bool extended{};
+    std::vector<double> values;  ///< by signal index, NaN before the first frame
+    std::int64_t lastNs{};
+  };
+
+  const config::VehicleConfig* m_vehicle{};
+  dbc::DatabaseCodec m_codecs;
+  std::vector<Tx> m_tx;
+  std::vector<Rx> m_rx;
+  std::uint64_t m_sent{};
+  std::uint64_t m_received{};
+};
+
+template <typename Send>
+void VirtualBus::sendDue(std::int64_t nowNs, Send&& send) {
+  for (Tx& tx : m_tx) {
+    if (tx.cycleNs <= 0 || tx.nextNs > nowNs) continue;
+    const std::int64_t late = nowNs - tx.nextNs;
+    tx.nextNs += (late / tx.cycleNs + 1) * tx.cycleNs;
+    if (tx.silent) continue;
+    send(tx.bus, tx.frame);
+    ++m_sent;
+  }
+}
+
+template <typename Send>
+void VirtualBus::sendNow(std::size_t message, std::int64_t, Send&& send) {
+  Tx& tx = m_tx[message];
+  if (tx.silent) return;
+  send(tx.bus, tx.frame);
+  ++m_sent;
+}
+
+}  // namespace openvcu::ecusim

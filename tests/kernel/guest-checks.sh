@@ -1,0 +1,266 @@
+#!/bin/bash
+# Runs INSIDE the QEMU VM (started by run-vm.sh): the openvcu services on real SocketCAN
+# (vcan0, vcan1) and a gpio-sim chip, checked from outside with can-utils, the kernel's
+# can-j1939 socket, gpio-sim's sysfs and the vcu tool.
+#
+#   guest-checks.sh OUTDIR     (OUTDIR/guest.env names the binaries: see CMakeLists.txt)
+#
+# Prints one "CHECK <name> PASS|FAIL: detail" line per check and a RESULT line; exit 0 when
+# every check passed, 1 otherwise. Service logs and captured traffic stay in OUTDIR.
+# No `set -e`: a failing check must not stop the checks after it.
+set -uo pipefail
+
+OUT=$1
+# shellcheck disable=SC1091
+. "$OUT/guest.env"   # VCU_CAN_RX VCU_CAN_TX VCU_GPIO VCU_FSM VCU IOX_ROUDI SRC
+export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
+HERE=$SRC/tests/kernel
+CFG=$HERE/data/vehicle.json
+PY=/usr/bin/python3
+pass=0; fail=0; failed=()
+pids=()
+
+t() { echo "T+$(cut -d' ' -f1 /proc/uptime)s $*"; }
+result() { # name PASS|FAIL detail
+  echo "CHECK $1 $2: $3"
+  if [[ $2 == PASS ]]; then pass=$((pass + 1)); else fail=$((fail + 1)); failed+=("$1"); fi
+}
+# value of one plane (bus|command) of KEY: the first word after the plane's label
+plane() { "$VCU" signal get "$2" --config "$CFG" 2>&1 | awk -v p="$1" '$1 == p {print $2; exit}'; }
+# wait_for SECONDS COMMAND...: retry every 0.1 s until the command succeeds
+wait_for() {
+  local deadline=$(( $(date +%s%N) + ${1%.*} * 1000000000 )); shift
+  until "$@"; do (( $(date +%s%N) < deadline )) || return 1; sleep 0.1; done
+}
+plane_is() { [[ "$(plane "$1" "$2")" == "$3" ]]; }
+start() { # name pattern binary args...: start in the background, wait for PATTERN in its log
+  local name=$1 pattern=$2; shift 2
+  "$@" > "$OUT/$name.log" 2>&1 &
+  pids+=($!)
+  if wait_for 30 grep -q "$pattern" "$OUT/$name.log" 2>/dev/null; then return 0; fi
+  echo "$name did not get ready:"; tail -20 "$OUT/$name.log"; return 1
+}
+cleanup() { # end what we started, by PID; services first (SIGTERM: safe outputs), RouDi last
+  local i
+  for ((i = ${#pids[@]} - 1; i >= 0; i--)); do kill "${pids[$i]}" 2>/dev/null; done
+  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null; done
+}
+trap cleanup EXIT
+
+t "guest start, kernel $(uname -r)"
+# the VM's devtmpfs has no /dev/fd: bash process substitution needs it
+[[ -e /dev/fd ]] || ln -s /proc/self/fd /dev/fd
+# LCM (udpm multicast) stays on loopback: the VM has no network device anyway
+ip route add 224.0.0.0/4 dev lo
+# vcan0: classic vehicle bus; vcan1: the CAN FD bus (MTU 72 = CANFD_MTU)
+ip link add dev vcan0 type vcan && ip link set vcan0 mtu 16 && ip link set vcan0 up
+ip link add dev vcan1 type vcan && ip link set vcan1 mtu 72 && ip link set vcan1 up
+# gpio-sim: one bank of 32 lines labelled as the test gpio.json expects
+SIMCFG=/sys/kernel/config/gpio-sim/openvcu
+mkdir "$SIMCFG" "$SIMCFG/bank0"
+echo 32 > "$SIMCFG/bank0/num_lines"
+echo openvcu-kvm-sim > "$SIMCFG/bank0/label"
+echo 1 > "$SIMCFG/live"
+SIMSYS=/sys/devices/platform/$(cat "$SIMCFG/dev_name")/$(cat "$SIMCFG/bank0/chip_name")
+t "vcan0, vcan1, gpio-sim $(cat "$SIMCFG/bank0/chip_name") ready"
+
+# ---------------------------------------------------------------- the stack
+cd "$OUT" || exit 1
+start roudi "RouDi is ready" "$IOX_ROUDI" -c "$SRC/config/iceoryx/roudi.toml" || { echo "RESULT: RouDi failed"; exit 1; }
+for svc in can-rx:$VCU_CAN_RX can-tx:$VCU_CAN_TX fsm:$VCU_FSM gpio:$VCU_GPIO; do
+  start "${svc%%:*}" ready "${svc#*:}" --config "$CFG" || { echo "RESULT: ${svc%%:*} failed to start"; exit 1; }
+done
+t "stack ready"
+
+# ---------------------------------------------------------------- 1. cansend -> can-rx -> table
+# PDU_Tx_2 (0x18FF4140 from the PDU): HV_DC_1_U_V raw 8000 x 0.05 = 400 V,
+# HV_DC_1_I_A raw 33000 x 0.05 - 1600 = 50 A (16-bit Intel fields, hhea.dbc)
+cansend vcan0 18FF4140#401FE880FFFFFFFF
+if wait_for 5 plane_is bus PDU.PDU_Tx_2.HV_DC_1_U_V 400 && plane_is bus PDU.PDU_Tx_2.HV_DC_1_I_A 50; then
+  result cansend_decode PASS "18FF4140#401FE880.. -> HV_DC_1_U_V 400 V, HV_DC_1_I_A 50 A"
+else
+  result cansend_decode FAIL "$("$VCU" signal get PDU.PDU_Tx_2.HV_DC_1_U_V PDU.PDU_Tx_2.HV_DC_1_I_A --config "$CFG" 2>&1 | tr '\n' '|')"
+fi
+
+# keep the PDU healthy (byPDU_Status 1 "OK", 100 ms) so the FSM stays in Ready
+cangen vcan0 -g 100 -I 18FF4040 -L 8 -D 01FFFFFFFFFFFFFF -e > /dev/null 2>&1 &
+pids+=($!)
+
+# ---------------------------------------------------------------- 3a. Start: FSM -> Cl15 -> GPIO line
+# A poller samples the Cl15 line (gpio-sim's sysfs value of offset 17) every 5 ms and
+# writes the wall-clock time it first reads 1; the on-delay is measured from the time stamp
+# of the FSM's command in the table (internal.relay.Cl15, command plane).
+cl15=$SIMSYS/sim_gpio17/value
+$PY - "$cl15" > "$OUT/cl15.txt" 2>&1 <<'PYEOF' &
+import sys, time
+path, end = sys.argv[1], time.time() + 8
+print("polling", flush=True)
+samples = 0
+while time.time() < end:
+    with open(path) as line:
+        value = line.read().strip()
+    samples += 1
+    if value == "1":
+        print("on %.6f samples %d" % (time.time(), samples), flush=True)
+        break
+    time.sleep(0.005)
+else:
+    print("never samples %d" % samples)
+PYEOF
+poller=$!
+wait_for 10 grep -q polling "$OUT/cl15.txt"
+before=$(cat "$cl15")
+answer=$("$VCU" signal set internal.operator.StartStop Start --config "$CFG" 2>&1)
+t "Start: $answer"
+wait_for 3 plane_is command internal.relay.Cl15 1; cmd_ok=$?
+wait "$poller"
+cmd_line=$("$VCU" signal get internal.relay.Cl15 --config "$CFG" 2>&1 | grep '^  command')
+# on-delay = the first time the line read 1 - the command's UTC time stamp ("at ...Z")
+delay_ms=$($PY - "$cmd_line" "$(cat "$OUT/cl15.txt")" <<'PYEOF'
+import datetime, re, sys
+stamp = re.search(r"at (\S+)Z", sys.argv[1])
+on = re.search(r"on (\S+)", sys.argv[2])
+if not (stamp and on):
+    print("none")
+else:
+    commanded = datetime.datetime.fromisoformat(stamp.group(1)).replace(tzinfo=datetime.timezone.utc).timestamp()
+    print(int(round((float(on.group(1)) - commanded) * 1000)))
+PYEOF
+)
+detail="answer '$answer', line before $before, switched on ${delay_ms} ms after the command (on-delay 2 s); poller: $(tr '\n' ' ' < "$OUT/cl15.txt"); $cmd_line"
+if [[ $answer == accepted && $cmd_ok == 0 && $before == 0 && $delay_ms =~ ^-?[0-9]+$ ]] \
+   && (( delay_ms >= 1990 && delay_ms <= 2500 )) && plane_is bus internal.gpio.Cl15 1; then
+  result gpio_output_cl15_on_delay PASS "$detail"
+else
+  result gpio_output_cl15_on_delay FAIL "$detail; internal.gpio.Cl15 $(plane bus internal.gpio.Cl15)"
+fi
+
+# ---------------------------------------------------------------- 3b. contactor-fault input -> table -> FSM
+# pull the line up in gpio-sim -> vcu-gpio (edge, 20 ms debounce) -> internal.fault.Contactor
+# -> vcu-fsm leaves Ready for "Contactor Fault"
+idx=$($PY -c "import json,sys; s=[x['name'] for x in json.load(open(sys.argv[1]))['states']]; print(s.index('Ready'), s.index('Contactor Fault'))" "$SRC/config/hhea/fsm.json")
+read -r READY CONTACTOR_FAULT <<< "$idx"
+wait_for 5 plane_is bus internal.fsm.state "$READY"; in_ready=$?
+state_before=$(plane bus internal.fsm.state)
+fault_before=$(plane bus internal.fault.Contactor)
+echo pull-up > "$SIMSYS/sim_gpio27/pull"
+if [[ $in_ready == 0 && $fault_before == 0 ]] && wait_for 5 plane_is bus internal.fault.Contactor 1 \
+   && plane_is bus internal.gpio.ContactorFault 1 && wait_for 5 plane_is bus internal.fsm.state "$CONTACTOR_FAULT"; then
+  result gpio_input_contactor_fault_fsm PASS "state $state_before (Ready) -> line pulled up -> internal.fault.Contactor 1 -> state $CONTACTOR_FAULT (Contactor Fault)"
+else
+  result gpio_input_contactor_fault_fsm FAIL "state before '$state_before' (want $READY), fault before '$fault_before', now fault.Contactor '$(plane bus internal.fault.Contactor)', gpio.ContactorFault '$(plane bus internal.gpio.ContactorFault)', state '$(plane bus internal.fsm.state)'"
+fi
+echo pull-down > "$SIMSYS/sim_gpio27/pull"
+
+# ---------------------------------------------------------------- 2. can-tx on the wire
+# Recorded in a quiet window (nothing but the stack runs: under emulation every extra
+# process start steals CPU from the transmit thread), checked by the independent checker.
+sleep 0.5
+candump -L vcan0 > "$OUT/tx.log" 2>&1 &
+dump_pid=$!
+sleep "${TX_WINDOW_S:-5}"
+kill "$dump_pid"; wait "$dump_pid" 2>/dev/null
+for part in periods j1939_76; do
+  $PY "$HERE/check_tx.py" --part "$part" --dbc "$SRC/config/hhea/hhea.dbc" --schedule "$SRC/config/hhea/schedule.json" \
+      --node Vehicle_Control_Unit "$OUT/tx.log" > "$OUT/check_tx_$part.txt" 2>&1
+  rc=$?; cat "$OUT/check_tx_$part.txt"
+  if [[ $rc == 0 ]]; then result "can_tx_$part" PASS "$(head -1 "$OUT/check_tx_$part.txt")"
+  else result "can_tx_$part" FAIL "$(grep -c FAIL "$OUT/check_tx_$part.txt") failures, first: $(grep -m2 FAIL "$OUT/check_tx_$part.txt" | tr '\n' '|')"; fi
+done
+t "start sequence checks done"
+
+# ---------------------------------------------------------------- 4a. canplayer -> can-rx
+# PDU_Tx_2 again with 500 V / -100 A (raw 10000 = 0x2710, raw 30000 = 0x7530), replayed
+printf '(1.000000) vcan0 18FF4140#10273075FFFFFFFF\n(1.050000) vcan0 18FF4140#10273075FFFFFFFF\n' > "$OUT/play.log"
+canplayer -I "$OUT/play.log"
+if wait_for 5 plane_is bus PDU.PDU_Tx_2.HV_DC_1_U_V 500 && plane_is bus PDU.PDU_Tx_2.HV_DC_1_I_A -100; then
+  result canplayer_decode PASS "replayed log -> HV_DC_1_U_V 500 V, HV_DC_1_I_A -100 A"
+else
+  result canplayer_decode FAIL "HV_DC_1_U_V $(plane bus PDU.PDU_Tx_2.HV_DC_1_U_V), HV_DC_1_I_A $(plane bus PDU.PDU_Tx_2.HV_DC_1_I_A)"
+fi
+
+# ---------------------------------------------------------------- 4b. CAN FD both ways (aux on vcan1)
+# in: an FD frame (BRS, 12 bytes) from cansend reaches can-rx's rx stream of bus aux
+"$VCU" dump aux --stream rx --count 1 --timeout 5 --config "$CFG" > "$OUT/fd_rx.txt" 2> "$OUT/fd_rx.err" &
+dpid=$!
+wait_for 5 grep -q listening "$OUT/fd_rx.err"
+cansend vcan1 '18FF5045##1112233445566778899AABBCC'
+wait "$dpid"; rc=$?
+if [[ $rc == 0 ]] && grep -Eq '18FF5045##[0-9A-F]112233445566778899AABBCC$' "$OUT/fd_rx.txt"; then
+  result canfd_receive PASS "$(cat "$OUT/fd_rx.txt")"
+else
+  result canfd_receive FAIL "vcu dump exit $rc: $(cat "$OUT/fd_rx.txt" "$OUT/fd_rx.err" | tr '\n' '|')"
+fi
+# out: vcu send -> can-tx -> an FD frame on vcan1, seen by candump
+candump -L -n 1 vcan1,18FF5121:1FFFFFFF > "$OUT/fd_tx.txt" 2>&1 &
+dpid=$!; sleep 0.3
+send_out=$("$VCU" send aux '18FF5121##1A1A2A3A4A5A6A7A8A9AAABACADAEAFA0' --config "$CFG" 2>&1)   # BRS, 16 bytes
+wait_for 3 grep -q '##' "$OUT/fd_tx.txt"
+kill "$dpid" 2>/dev/null; wait "$dpid" 2>/dev/null
+if grep -Eq '18FF5121##[0-9A-F]A1A2A3A4A5A6A7A8A9AAABACADAEAFA0$' "$OUT/fd_tx.txt"; then
+  result canfd_transmit PASS "$(cat "$OUT/fd_tx.txt")"
+else
+  result canfd_transmit FAIL "vcu send: $send_out; candump: $(cat "$OUT/fd_tx.txt")"
+fi
+
+# ---------------------------------------------------------------- 5a. forwarding (receive.json)
+candump -L -n 1 vcan1,18FF4141:1FFFFFFF > "$OUT/fwd1.txt" 2>&1 &
+d1=$!
+candump -L -n 1 vcan0,18FF6045:1FFFFFFF > "$OUT/fwd2.txt" 2>&1 &
+d2=$!; sleep 0.3
+cansend vcan0 18FF4140#0102030405060708   # vehicle -> aux, identifier rewritten
+cansend vcan1 18FF6045#A1A2A3             # aux -> vehicle by PGN 0xFF60 + source 0x45
+cansend vcan1 18FF6046#B1B2B3             # same PGN, other source: must not be forwarded
+wait_for 3 grep -q '#' "$OUT/fwd1.txt"; wait_for 3 grep -q '#' "$OUT/fwd2.txt"
+kill "$d1" "$d2" 2>/dev/null; wait "$d1" "$d2" 2>/dev/null
+candump -L -T 1000 vcan0,18FF6046:1FFFFFFF > "$OUT/fwd3.txt" 2>&1 &
+d3=$!; sleep 0.2; cansend vcan1 18FF6046#B1B2B3; wait "$d3" 2>/dev/null
+if grep -q '18FF4141#0102030405060708' "$OUT/fwd1.txt" && grep -q '18FF6045#A1A2A3' "$OUT/fwd2.txt" \
+   && ! grep -q '18FF6046' "$OUT/fwd3.txt"; then
+  result forwarding PASS "vcan0 18FF4140 -> vcan1 18FF4141; vcan1 PGN FF60 SA 45 -> vcan0; SA 46 not forwarded"
+else
+  result forwarding FAIL "vcan1 saw '$(cat "$OUT/fwd1.txt")', vcan0 saw '$(cat "$OUT/fwd2.txt")', unwanted '$(cat "$OUT/fwd3.txt")'"
+fi
+
+# ---------------------------------------------------------------- 5b. J1939 TP: DM1 (BAM) from the kernel's can-j1939
+# The VIC (SA 0xF3) broadcasts DM1 with 3 DTCs (14 bytes -> the kernel sends TP.CM BAM + 2 TP.DT).
+$PY - > "$OUT/dm1.txt" 2>&1 <<'EOF'
+import socket
+def dtc(spn, fmi, oc):
+    return bytes([spn & 0xFF, (spn >> 8) & 0xFF, ((spn >> 16) & 0x7) << 5 | fmi, oc & 0x7F])
+payload = bytes([0x04, 0xFF]) + dtc(5000, 3, 1) + dtc(6001, 4, 2) + dtc(520200, 31, 3)  # amber lamp on
+s = socket.socket(socket.AF_CAN, socket.SOCK_DGRAM, socket.CAN_J1939)
+s.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+s.bind(("vcan0", socket.J1939_NO_NAME, socket.J1939_NO_PGN, 0xF3))
+print("sent", s.sendto(payload, ("vcan0", socket.J1939_NO_NAME, 0xFECA, 0xFF)), "bytes:", payload.hex())
+EOF
+cat "$OUT/dm1.txt"
+if wait_for 5 plane_is bus internal.dm1.VIC.activeDtcs 3 && plane_is bus internal.dm1.VIC.firstSpn 5000 \
+   && plane_is bus internal.dm1.VIC.firstFmi 3; then
+  result j1939_tp_dm1 PASS "kernel can-j1939 BAM, 3 DTCs -> internal.dm1.VIC.activeDtcs 3, firstSpn 5000, firstFmi 3"
+else
+  result j1939_tp_dm1 FAIL "$(cat "$OUT/dm1.txt"); activeDtcs $(plane bus internal.dm1.VIC.activeDtcs), firstSpn $(plane bus internal.dm1.VIC.firstSpn), firstFmi $(plane bus internal.dm1.VIC.firstFmi)"
+fi
+
+# ---------------------------------------------------------------- 4c. link down / up
+ip link set vcan0 down
+wait_for 5 plane_is bus internal.bus.vehicle.state 4; down_seen=$?   # 4 = Down
+state_down=$(plane bus internal.bus.vehicle.state)
+sleep 0.5
+ip link set vcan0 up
+wait_for 5 plane_is bus internal.bus.vehicle.state 0; up_seen=$?     # 0 = Active
+state_up=$(plane bus internal.bus.vehicle.state)
+cansend vcan0 18FF4140#204E1075FFFFFFFF   # 1000 V (raw 20000), -100 A
+if [[ $down_seen == 0 && $up_seen == 0 ]] && wait_for 5 plane_is bus PDU.PDU_Tx_2.HV_DC_1_U_V 1000 \
+   && kill -0 "${pids[1]}" 2>/dev/null; then
+  result link_down_up PASS "state $state_down while down, $state_up after up, frames decoded again"
+else
+  result link_down_up FAIL "state while down '$state_down', after up '$state_up', HV_DC_1_U_V $(plane bus PDU.PDU_Tx_2.HV_DC_1_U_V); can-rx log: $(grep -i 'vcan0\|down\|up' "$OUT/can-rx.log" | tail -4 | tr '\n' '|')"
+fi
+
+t "checks done"
+"$VCU" status --config "$CFG" > "$OUT/status.txt" 2>&1   # counters (can-tx missed cycles, ...) for the logs
+cleanup; trap - EXIT
+echo 0 > "$SIMCFG/live"; rmdir "$SIMCFG/bank0" "$SIMCFG"
+echo "RESULT: $pass passed, $fail failed${failed[*]:+ (${failed[*]})}"
+[[ $fail == 0 ]]
