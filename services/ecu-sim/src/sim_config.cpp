@@ -34,7 +34,7 @@ class Loader {
     const Json* battery = m_check.member(root, "", "battery", false);
     if (!battery || !m_check.isObject(*battery, "/battery")) return;
     m_check.onlyKeys(*battery, "/battery", {"capacityAh", "initialSoc", "emptyVoltage", "fullVoltage", "resistanceOhm",
-                                            "stateOfHealth", "lowSoc", "chargeVoltageLimit", "chargeCurrentLimit",
+                                            "stateOfHealth", "lowSoc", "highSoc", "chargeVoltageLimit", "chargeCurrentLimit",
                                             "fullSoc", "comment"});
     number(*battery, "/battery", "capacityAh", m_config.capacityAh, 0.1, 10000);
     number(*battery, "/battery", "initialSoc", m_config.initialSoc, 0, 100);
@@ -43,6 +43,7 @@ class Loader {
     number(*battery, "/battery", "resistanceOhm", m_config.resistanceOhm, 0, 10);
     number(*battery, "/battery", "stateOfHealth", m_config.stateOfHealth, 0, 100);
     number(*battery, "/battery", "lowSoc", m_config.lowSoc, 0, 100);
+    number(*battery, "/battery", "highSoc", m_config.highSoc, 0, 100);
     number(*battery, "/battery", "chargeVoltageLimit", m_config.chargeVoltageLimit, 0, 1100);
     number(*battery, "/battery", "chargeCurrentLimit", m_config.chargeCurrentLimit, 0, 1000);
     number(*battery, "/battery", "fullSoc", m_config.fullSoc, 0, 100);

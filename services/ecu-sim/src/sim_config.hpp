@@ -31,6 +31,7 @@ struct SimConfig {
   double resistanceOhm{0.05};
   double stateOfHealth{96};        ///< %
   double lowSoc{15};               ///< % the fault soc_low sets
+  double highSoc{90};              ///< % the fault soc_high sets
   double chargeVoltageLimit{700};  ///< V, PropA_C3 UChLimLong
   double chargeCurrentLimit{60};   ///< A, PropA_C3 IChLimLong
   double fullSoc{95};              ///< % above which the VIC stops allowing charge current

@@ -10,7 +10,7 @@ namespace {
 
 constexpr std::string_view FAULT_NAMES[FAULT_COUNT] = {"battery", "isolation",    "contactor_stuck", "pdu",
                                                        "hvlp",    "hvlp_shutdown", "editron",        "obc",
-                                                       "soc_low", "shm_expectation"};
+                                                       "soc_low", "soc_high", "shm_expectation"};
 // HS_HiUBusCnctnSts
 constexpr int AWAITING = 0, CONNECTED = 1, CONNECTING = 2, DISCONNECTING = 3, CHARGING = 5, FAULTED = 14;
 /// Largest |Time/Date - system clock| accepted as a correct answer (the wire has 0.25 s steps).
@@ -30,6 +30,7 @@ std::optional<Fault> faultByName(std::string_view name) noexcept {
 Result<VehicleModel> VehicleModel::create(VirtualBus& bus, const SimConfig& config) {
   VehicleModel model(bus, config);
   if (Status resolved = model.resolve(); !resolved) return resolved.error();
+  bus.setSilent("VIC", true);  // asleep until the keep-alive (and the wake signal) come
   model.m_soc = config.initialSoc;
   model.m_socBeforeLow = config.initialSoc;
   for (const SafetyCheckConfig& pair : config.safety) {
@@ -136,10 +137,10 @@ void VehicleModel::setFault(Fault fault, bool active) noexcept {
   const std::size_t index = static_cast<std::size_t>(fault);
   if (m_faults[index] == active) return;
   m_faults[index] = active;
-  if (fault == Fault::SocLow) {
+  if (fault == Fault::SocLow || fault == Fault::SocHigh) {
     if (active) {
       m_socBeforeLow = m_soc;
-      m_soc = m_config->lowSoc;
+      m_soc = fault == Fault::SocLow ? m_config->lowSoc : m_config->highSoc;
     } else {
       m_soc = m_socBeforeLow;
     }
@@ -224,7 +225,9 @@ void VehicleModel::stepVic(std::int64_t nowNs, double dt, bool wake) {
     const bool wantsDriving = request == 3;
     const bool wantsCharging = request == 2 || request == 5;
     switch (m_connection) {
-      case FAULTED:
+      case FAULTED:  // the fault is gone: the HV bus stays open until a new request
+        to(AWAITING);
+        break;
       case AWAITING:
         if ((wantsDriving || wantsCharging) && consent) to(CONNECTING);
         break;

@@ -39,13 +39,14 @@ enum class Fault : std::uint8_t {
   Editron,         ///< st_mot_fault 2
   Obc,             ///< OBC_Hardware_Fault 1, no charge current
   SocLow,          ///< SOC jumps to the configured low value (restored when cleared)
+  SocHigh,         ///< SOC jumps to the configured high value (restored when cleared)
   ShmExpectation,  ///< the VIC expects another SDM CRC: every pair is refused
   Count,
 };
 inline constexpr std::size_t FAULT_COUNT = static_cast<std::size_t>(Fault::Count);
 
 /// "battery", "isolation", "contactor_stuck", "pdu", "hvlp", "hvlp_shutdown", "editron",
-/// "obc", "soc_low", "shm_expectation".
+/// "obc", "soc_low", "soc_high", "shm_expectation".
 [[nodiscard]] std::string_view faultName(Fault fault) noexcept;
 [[nodiscard]] std::optional<Fault> faultByName(std::string_view name) noexcept;
 
@@ -135,7 +136,7 @@ class VehicleModel {
   int m_connection{0};        ///< HS_HiUBusCnctnSts
   std::int64_t m_connectionSinceNs{};
   double m_soc{};
-  double m_socBeforeLow{};
+  double m_socBeforeLow{};  ///< the SOC before soc_low / soc_high, restored when cleared
   double m_current{};
   bool m_closedA{}, m_closedB{};
   std::int64_t m_lastStepNs{};
