@@ -1,0 +1,168 @@
+// vcu-ecu-sim's parts with a fake clock on the HHEA configuration: the simulation file's
+// refusals, the virtual bus, and the VIC's J1939-76 checks, keep-alive and HV connection,
+// the PDU and the HVLP enable sequence.
+
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <vector>
+
+#include "openvcu/dbc/codec.hpp"
+#include "openvcu/j1939/safety.hpp"
+#include "sim_config.hpp"
+#include "vehicle_model.hpp"
+
+using namespace openvcu;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
+constexpr std::int64_t MS = 1'000'000;
+constexpr std::int64_t T0 = 1000 * 1'000'000'000LL;
+
+struct Fixture {
+  config::VehicleConfig vehicle;
+  ecusim::SimConfig sim;
+  std::optional<ecusim::VirtualBus> bus;
+  std::optional<ecusim::VehicleModel> model;
+  dbc::DatabaseCodec codecs;
+  std::vector<can::Frame> sent;
+  std::optional<j1939::SafetyPairBuilder> builder;
+
+  Fixture() {
+    auto loaded = config::loadVehicleConfig(HHEA);
+    REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
+    vehicle = std::move(*loaded);
+    auto simResult = ecusim::loadSimConfig(vehicle.simulationFile, vehicle);
+    REQUIRE_MESSAGE(simResult, (simResult ? "" : simResult.error().toString()));
+    sim = std::move(*simResult);
+    auto busResult = ecusim::VirtualBus::create(vehicle);
+    REQUIRE(busResult);
+    bus.emplace(std::move(*busResult));
+    auto modelResult = ecusim::VehicleModel::create(*bus, sim);
+    REQUIRE_MESSAGE(modelResult, (modelResult ? "" : modelResult.error().toString()));
+    model.emplace(std::move(*modelResult));
+    codecs = dbc::DatabaseCodec(vehicle.database);
+    builder.emplace(vehicle.database.findMessage("S1_ES_PGN61427")->id);
+    bus->start(T0);
+  }
+
+  /// A VCU frame from the DBC's initial payload with `values` encoded.
+  can::Frame frame(const std::string& name, const std::map<std::string, double>& values) {
+    const dbc::Message* message = vehicle.database.findMessage(name);
+    REQUIRE_MESSAGE(message, name);
+    const auto index = static_cast<std::size_t>(message - vehicle.database.messages.data());
+    can::Frame out;
+    out.id = message->id;
+    out.flags = can::FLAG_EXTENDED;
+    const auto initial = codecs[index].initialPayload();
+    out.length = static_cast<std::uint8_t>(initial.size());
+    std::copy(initial.begin(), initial.end(), out.data.begin());
+    for (const auto& [signal, value] : values) {
+      const auto* found = message->findSignal(signal);
+      REQUIRE_MESSAGE(found, signal);
+      const auto signalIndex = static_cast<std::uint32_t>(found - message->signals.data());
+      REQUIRE(codecs[index].encode(signalIndex, value, std::span<std::uint8_t>(out.data.data(), out.length)) ==
+              dbc::EncodeStatus::Ok);
+    }
+    return out;
+  }
+
+  /// The keep-alive and one S1_ES pair (SHM, then the SDM 0.3 ms later; `corrupt` flips a bit).
+  void keepAlive(std::int64_t at, double relay, bool corrupt = false) {
+    model->receive(frame("CCVS1_PGN65265", {}), at);
+    model->receive(frame("HVESSC1_PGN6912", {{"HS_OperConsent", 1}}), at);
+    model->receive(frame("CN_PGN61483", {{"Crash_Typ", 0}}), at);
+    can::Frame data = frame("S1_ES_PGN61427", {{"Control_Es_Relay", relay}});
+    const auto header = builder->nextHeader(j1939::SafetyDataView(data.data.data(), 8));
+    can::Frame shm;
+    shm.id = builder->headerCanId();
+    shm.flags = can::FLAG_EXTENDED;
+    shm.length = 8;
+    std::copy(header.begin(), header.end(), shm.data.begin());
+    if (corrupt) data.data[7] ^= 0x01;
+    model->receive(shm, at);
+    model->receive(data, at + 300'000);
+  }
+
+  /// Runs the models and the bus from `from` to `to` in 10 ms steps, feeding the keep-alive.
+  void run(std::int64_t from, std::int64_t to, double relay, bool corrupt = false) {
+    for (std::int64_t t = from; t <= to; t += 10 * MS) {
+      if ((t - from) % (20 * MS) == 0) keepAlive(t, relay, corrupt);  // the 20 ms cycle of S1_ES
+      const auto send = [this](std::size_t, const can::Frame& f) { sent.push_back(f); };
+      model->step(t, 1'795'268'730'000'000'000LL, true, send);
+      model->sendDue(t, send);
+    }
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the HHEA simulation file loads, and a bad one is refused with its JSON path") {
+  Fixture f;
+  CHECK(f.sim.safety.size() == 1);
+  CHECK(f.sim.safety[0].dataCanId == 0x0CEFF321u);
+  CHECK(f.sim.wakeSignal == "internal.gpio.Cl15");
+  const fs::path file = fs::temp_directory_path() / ("openvcu-sim-" + std::to_string(::getpid()) + ".json");
+  std::ofstream(file) << R"({"battery": {"capacityAh": -1, "colour": 1}, "timing": {"connect": "fast"},
+    "safety": [{"message": "S1_ES"}]})";
+  auto bad = ecusim::loadSimConfig(file.string(), f.vehicle);
+  fs::remove(file);
+  REQUIRE_FALSE(bad);
+  CHECK(bad.error().location.jsonPath == "/battery/colour");  // the first error
+}
+
+TEST_CASE("the VIC sleeps silent without the keep-alive and connects for driving on good J1939-76 pairs") {
+  Fixture f;
+  const auto send = [&f](std::size_t, const can::Frame& frame) { f.sent.push_back(frame); };
+  f.model->step(T0, 0, true, send);
+  f.model->sendDue(T0 + 200 * MS, send);
+  for (const can::Frame& frame : f.sent) CHECK(frame.id != 0x14F096F3u);  // no HVESSS1: asleep
+  CHECK_FALSE(f.model->awake());
+
+  f.run(T0, T0 + 100 * MS, 0);
+  CHECK(f.model->awake());
+  CHECK(f.model->connection() == 0);  // awaiting HV request
+  f.run(T0 + 110 * MS, T0 + 400 * MS, 3);
+  CHECK(f.model->connection() == 2);  // precharging
+  f.run(T0 + 410 * MS, T0 + 1000 * MS, 3);
+  CHECK(f.model->connection() == 1);
+  CHECK(f.model->safety().ok > 40);
+  CHECK(f.model->safety().refused == 0);
+  bool heard = false;
+  for (const can::Frame& frame : f.sent) heard = heard || frame.id == 0x14F096F3u;
+  CHECK(heard);
+}
+
+TEST_CASE("pairs with a bad CRC are refused and the VIC does not connect, and says why once") {
+  Fixture f;
+  f.run(T0, T0 + 1000 * MS, 3, true);
+  CHECK(f.model->connection() == 0);
+  CHECK(f.model->safety().ok == 0);
+  CHECK(f.model->safety().refused > 40);
+  const auto change = f.model->takeSafetyChange();
+  REQUIRE(change);
+  CHECK(*change == j1939::SafetyResult::CrcMismatch);
+  CHECK_FALSE(f.model->takeSafetyChange());  // reported once, not per pair
+}
+
+TEST_CASE("a battery fault reports 14 and clears to awaiting, the keep-alive lost sends the VIC to sleep") {
+  Fixture f;
+  f.run(T0, T0 + 1000 * MS, 3);
+  REQUIRE(f.model->connection() == 1);
+  f.model->setFault(ecusim::Fault::Battery, true);
+  f.run(T0 + 1010 * MS, T0 + 1100 * MS, 3);
+  CHECK(f.model->connection() == 14);
+  f.model->setFault(ecusim::Fault::Battery, false);
+  f.run(T0 + 1110 * MS, T0 + 1200 * MS, 0);
+  CHECK(f.model->connection() == 0);
+  const auto send = [](std::size_t, const can::Frame&) {};
+  f.model->step(T0 + 2300 * MS, 0, true, send);  // no keep-alive for over 1 s
+  CHECK_FALSE(f.model->awake());
+  CHECK(ecusim::faultByName("shm_expectation") == ecusim::Fault::ShmExpectation);
+  CHECK_FALSE(ecusim::faultByName("batery"));
+}
