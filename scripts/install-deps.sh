@@ -27,6 +27,8 @@ PACKAGES=(
   # busybox/cpio/kmod build its initramfs, make/gcc-12/bc/xz-utils the gpio-sim module,
   # can-utils are the peers inside the VM
   qemu-system-x86 busybox-static cpio kmod make gcc-12 bc xz-utils can-utils
+  # ./run.sh runs the stack under supervisord
+  supervisor
 )
 
 missing=()
