@@ -1,38 +1,129 @@
 #!/usr/bin/env bash
-# The first command: sets up and runs openvcu on the simulated HHEA vehicle.
-#
-# The services (can-rx, can-tx, fsm, gpio, hmi, ecu-sim) do not exist yet. Until they do,
-# this installs what is missing, builds the `vcu` tool and checks the embedded HHEA
-# configuration: the vehicle DBC is parsed, validated and summarised, and vehicle.json is
-# loaded into its signal catalog.
-#   ./run.sh                 check and summarise config/hhea
-#   ./run.sh --info          also list every HHEA message and signal
+# The first command: installs what is missing, builds, and runs the openvcu stack on the
+# simulated HHEA vehicle under supervisord, in the foreground, until Ctrl-C.
+#   ./run.sh                      the stack + the simulated vehicle, a live status view
+#   ./run.sh --scenario drive     also drive it: Start -> Connect Driving -> AC charging -> Stop
+#   ./run.sh --headless           no status view: a status line every 5 s
+#   ./run.sh --for SECONDS        stop after SECONDS
+#   ./run.sh --isolated           in private mount and network namespaces (LCM multicast stays
+#                                 on loopback; needed where multicast must not reach the network)
+#   ./run.sh --bus socketcan:can0 the vehicle bus on real hardware (no simulated vehicle)
+#   ./run.sh --config FILE        another vehicle (default config/hhea/vehicle.json)
+#   ./run.sh --check              only check the configuration (DBC, FSM) and exit
+# Ctrl-C (or the end of --for) stops every process cleanly and removes the stack's shared
+# memory. Logs: the folder printed at start (one file per service).
 set -euo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
+root=$PWD
 
-info=0
-for arg in "$@"; do
-  case "$arg" in
-    --info) info=1 ;;
-    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
-    *) echo "run.sh: unknown option '$arg'" >&2; exit 2 ;;
+headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0
+config=config/hhea/vehicle.json
+args=("$@")
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --headless) headless=1 ;;
+    --scenario) scenario=${2:?--scenario needs a name}; shift ;;
+    --for) seconds=${2:?--for needs seconds}; shift ;;
+    --isolated) isolated=1 ;;
+    --bus) bus=${2:?--bus needs socketcan:IFACE}; shift ;;
+    --config) config=${2:?--config needs a file}; shift ;;
+    --check) check=1 ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
   esac
+  shift
 done
+case "$scenario" in ""|drive) ;; *) echo "run.sh: unknown scenario '$scenario' (known: drive)" >&2; exit 2 ;; esac
+case "$bus" in ""|socketcan:*) ;; *) echo "run.sh: --bus takes socketcan:IFACE" >&2; exit 2 ;; esac
+if [ -n "$seconds" ] && ! [[ "$seconds" =~ ^[0-9]+$ ]]; then echo "run.sh: --for takes whole seconds" >&2; exit 2; fi
 
-scripts/install-deps.sh --quiet
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build --target vcu -j "$(nproc 2>/dev/null || echo 2)" >/dev/null
-
-vcu=build/bin/vcu
-echo "== openvcu: HHEA compact track loader configuration (config/hhea)"
-"$vcu" dbc check config/hhea/hhea.dbc
-# Loading the signal catalog validates the whole vehicle.json (buses, DBC, internal signals).
-echo "== The operator switches and internal signals of config/hhea/vehicle.json"
-"$vcu" signal list --config config/hhea/vehicle.json 'internal.*'
-echo "== The state machine config/hhea/fsm.json (docs/fsm.md)"
-"$vcu" fsm check config/hhea/fsm.json --config config/hhea/vehicle.json
-if [ $info -eq 1 ]; then
-  "$vcu" dbc info config/hhea/hhea.dbc
-else
-  echo "(./run.sh --info lists every message and signal; build/bin/vcu --help shows the tool)"
+if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
+  scripts/install-deps.sh --quiet
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+  echo "== building (build/)"
+  cmake --build build -j "$(nproc 2>/dev/null || echo 2)" | tail -1
+  if [ $isolated -eq 1 ]; then
+    # the same sandbox as the tests: fresh /dev/shm and /tmp, lo only, PID namespace
+    exec tests/harness/run_isolated.sh --keep "$root" -- "$root/run.sh" "${args[@]}"
+  fi
 fi
+
+bin=${OPENVCU_BIN:-$root/build/bin}  # the tests point it at their build tree
+vcu=$bin/vcu
+config=$(readlink -f "$config")
+echo "== configuration $config"
+"$vcu" fsm check "$(python3 -c 'import json,os,sys; p=sys.argv[1]; print(os.path.join(os.path.dirname(p), json.load(open(p))["fsm"]))' "$config")" --config "$config" -q
+[ $check -eq 1 ] && exit 0
+
+run=$(mktemp -d "${TMPDIR:-/tmp}/openvcu-run.XXXXXX")
+instance=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["instance"])' "$config")
+if [ -n "$bus" ]; then
+  # a copy of the configuration next to the original (relative paths keep working) with the
+  # first bus on the real interface; the simulated vehicle is not started
+  copy=$(dirname "$config")/.run-$(basename "$config" .json)-$$.json
+  python3 - "$config" "$copy" "$bus" <<'PY'
+import json, sys
+vehicle = json.load(open(sys.argv[1]))
+vehicle["buses"][0]["link"] = sys.argv[3]
+json.dump(vehicle, open(sys.argv[2], "w"), indent=2)
+PY
+  config=$copy
+fi
+export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run
+sed -e "s/^;user=root.*/$( [ "$(id -u)" = 0 ] && echo 'user=root' || echo ';not root')/" \
+  config/supervisor/openvcu.conf > "$run/openvcu.conf"
+if [ -n "$bus" ]; then
+  sed -i -e '/^\[program:ecu-sim\]/,/^$/s/^autorestart=true/autostart=false\nautorestart=true/' "$run/openvcu.conf"
+fi
+echo "== starting the stack under supervisord (logs: $run)"
+supervisord -n -c "$run/openvcu.conf" &
+supervisor=$!
+
+stopped=0
+stop() {
+  [ $stopped -eq 1 ] && return
+  stopped=1
+  echo "== stopping"
+  supervisorctl -c "$run/openvcu.conf" shutdown >/dev/null 2>&1 || kill -TERM "$supervisor" 2>/dev/null || true
+  wait "$supervisor" 2>/dev/null || true
+  # every service has ended: the signal table and its lock go (iox-roudi removed its own)
+  rm -f "/dev/shm/openvcu-$instance" "/dev/shm/openvcu-$instance.lock"
+  [ -n "$bus" ] && rm -f "$config"
+  echo "== stopped; logs in $run"
+}
+trap stop EXIT
+trap 'exit 130' INT TERM
+
+# up when every service beats (vcu status lists one line per service heard)
+expected=5; [ -n "$bus" ] && expected=4
+for _ in $(seq 1 30); do
+  beating=$("$vcu" status --config "$config" --wait 1 2>/dev/null | grep -c '^vcu-' || true)
+  [ "$beating" -ge "$expected" ] && break
+done
+"$vcu" top --once --config "$config" || true
+
+drive() {
+  local set=("$vcu" signal set --config "$config")
+  echo "== scenario drive: Start"; "${set[@]}" internal.operator.StartStop Start; sleep 5
+  echo "== scenario drive: Connect Driving"; "${set[@]}" internal.operator.ConnectDriving 1; sleep 6
+  echo "== scenario drive: disconnect, AC charging"; "${set[@]}" internal.operator.ConnectDriving 0; sleep 3
+  "${set[@]}" internal.operator.ACCharging 1; sleep 6
+  echo "== scenario drive: stop charging, Stop"; "${set[@]}" internal.operator.ACCharging 0; sleep 3
+  "${set[@]}" internal.operator.StartStop Stop
+}
+[ "$scenario" = drive ] && drive &
+
+deadline=""
+[ -n "$seconds" ] && deadline=$(( $(date +%s) + seconds ))
+view="$vcu top --config $config"
+"$vcu" top --help >/dev/null 2>&1 || view=""
+while kill -0 "$supervisor" 2>/dev/null; do
+  if [ -n "$deadline" ] && [ "$(date +%s)" -ge "$deadline" ]; then break; fi
+  if [ $headless -eq 0 ] && [ -n "$view" ] && [ -t 1 ]; then
+    left=""; [ -n "$deadline" ] && left="--for $(( deadline - $(date +%s) ))"
+    $view $left || true
+    break
+  fi
+  echo "$(date +%T) $("$vcu" top --once --config "$config" 2>/dev/null | grep -E '^(FSM|BATTERY) ' | tr -s ' ' | paste -sd'|' -)"
+  sleep 3
+done

@@ -1,0 +1,321 @@
+// `vcu top`. The description and footer are its manual.
+#include "top_commands.hpp"
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "diagnostics.hpp"
+#include "openvcu/config/json.hpp"
+#include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/signals/table.hpp"
+#include "stop_signal.hpp"
+#include "text_table.hpp"
+
+namespace openvcu::cli {
+namespace {
+
+constexpr const char* TOP_DESCRIPTION = "Live view of a running stack: services, FSM state, key signals, faults";
+constexpr const char* TOP_FOOTER =
+    "Refreshes once a second until Ctrl-C (or --for SECONDS): the services heard on the\n"
+    "heartbeat channel (pid, uptime, restarts seen while top runs, heartbeat age, CPU %\n"
+    "and RSS of local processes, status), the FSM state and how long it has held, the\n"
+    "battery (SOC, HV connection, pack voltage and current), contactors, the four HVLP\n"
+    "inverters, the GPIO lines, each bus's load, can-tx's worst period error p99 and the\n"
+    "active faults (LCM fault events since top started). --once prints one snapshot\n"
+    "after 1.5 s without clearing the screen.\n"
+    "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
+    "\n"
+    "Examples:\n"
+    "  vcu top --config config/hhea/vehicle.json\n"
+    "  vcu top --once --config config/hhea/vehicle.json\n"
+    "Exit: 0 shown, 1 configuration error or no stack heard, 2 usage error.\n";
+
+struct ServiceView {
+  ipc::Heartbeat last;
+  std::int32_t firstPid{};
+  int restarts{};
+  std::int64_t cpuTicks{-1};
+  double cpuPercent{};
+  std::chrono::steady_clock::time_point cpuAt;
+};
+
+/// utime + stime of a local process in clock ticks, or -1.
+std::int64_t cpuTicks(std::int32_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!std::getline(in, text)) return -1;
+  const auto close = text.rfind(')');
+  if (close == std::string::npos) return -1;
+  std::istringstream fields(text.substr(close + 2));
+  std::string field;
+  std::int64_t utime = 0;
+  std::int64_t stime = 0;
+  for (int i = 3; i <= 15 && fields >> field; ++i) {
+    if (i == 14) utime = std::stoll(field);
+    if (i == 15) stime = std::stoll(field);
+  }
+  return utime + stime;
+}
+
+/// Resident set of a local process in MB, or -1.
+double rssMb(std::int32_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/statm");
+  long pages = 0;
+  long resident = 0;
+  if (!(in >> pages >> resident)) return -1;
+  return static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) / 1e6;
+}
+
+std::string fixed(double value, int decimals) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(decimals);
+  out << value;
+  return out.str();
+}
+
+class Top {
+ public:
+  Top(const Stack& stack, Streams streams) : m_stack(stack), m_streams(streams) { loadStateNames(); }
+
+  Status open() {
+    auto events = ipc::EventBus::open(m_stack.config.lcmUrl, m_stack.config.instance);
+    if (!events) return events.error();
+    m_events.emplace(std::move(*events));
+    auto heartbeats = m_events->onHeartbeat([this](const ipc::Heartbeat& beat) { onHeartbeat(beat); });
+    auto faults = m_events->onFault([this](const ipc::FaultEvent& fault) {
+      if (fault.active) {
+        m_faults[fault.name] = fault;
+      } else {
+        m_faults.erase(fault.name);
+      }
+    });
+    if (!heartbeats) return heartbeats.error();
+    if (!faults) return faults.error();
+    return {};
+  }
+
+  /// Handles events for `duration` (or until a stop is requested).
+  void listen(std::chrono::milliseconds duration) {
+    const auto end = std::chrono::steady_clock::now() + duration;
+    while (!stopRequested()) {
+      const auto left = std::chrono::ceil<std::chrono::milliseconds>(end - std::chrono::steady_clock::now());
+      if (left.count() <= 0) break;
+      if (m_events->handle(left) == ipc::HandleResult::Failed) break;
+    }
+  }
+
+  [[nodiscard]] bool heardAny() const { return !m_services.empty(); }
+
+  std::string render() {
+    if (!m_table) {
+      auto table = signals::SignalTable::open(m_stack.catalog, m_stack.config.instance, signals::OpenMode::AttachOnly);
+      if (table) m_table.emplace(std::move(*table));
+    }
+    std::string out = "openvcu top: instance " + m_stack.config.instance + ", " + formatUtc(realtimeNowNs()) + "\n\n";
+    services(out);
+    out += "\n";
+    vehicle(out);
+    faults(out);
+    return out;
+  }
+
+ private:
+  void onHeartbeat(const ipc::Heartbeat& beat) {
+    ServiceView& view = m_services[beat.service];
+    if (view.firstPid == 0) view.firstPid = beat.pid;
+    if (view.last.pid != 0 && view.last.pid != beat.pid) ++view.restarts;
+    if (view.last.pid != beat.pid) view.cpuTicks = -1;
+    view.last = beat;
+  }
+
+  void services(std::string& out) {
+    const std::int64_t now = realtimeNowNs();
+    const auto clock = std::chrono::steady_clock::now();
+    const double ticksPerSecond = static_cast<double>(::sysconf(_SC_CLK_TCK));
+    TextTable table({"SERVICE", "PID", "UPTIME", "RESTARTS", "BEAT", "CPU %", "RSS MB", "STATUS"});
+    for (auto& [name, view] : m_services) {
+      const std::int64_t ticks = cpuTicks(view.last.pid);
+      if (ticks >= 0 && view.cpuTicks >= 0) {
+        const double seconds = std::chrono::duration<double>(clock - view.cpuAt).count();
+        if (seconds > 0.2) view.cpuPercent = static_cast<double>(ticks - view.cpuTicks) / ticksPerSecond / seconds * 100;
+      }
+      if (ticks >= 0) {
+        view.cpuTicks = ticks;
+        view.cpuAt = clock;
+      }
+      const double rss = rssMb(view.last.pid);
+      const std::int64_t age = std::max<std::int64_t>(0, now - view.last.timestampNs);
+      table.addRow({name, std::to_string(view.last.pid), formatDuration(view.last.uptimeMs * 1'000'000),
+                    std::to_string(view.restarts), formatDuration(age) + (age > 3'000'000'000 ? " LATE" : ""),
+                    ticks >= 0 ? fixed(view.cpuPercent, 1) : "-", rss >= 0 ? fixed(rss, 1) : "-",
+                    view.last.status.empty() ? "-" : view.last.status});
+    }
+    if (table.empty()) {
+      out += "(no heartbeat heard yet)\n";
+      return;
+    }
+    table.appendTo(out);
+  }
+
+  /// "60 %" or the value text, or "-" when unknown; `stale` marks old bus values.
+  std::string value(const std::string& key) const {
+    const auto index = m_stack.catalog.indexOf(key);
+    if (!m_table || !index) return "-";
+    const auto slot = m_table->read(*index);
+    if (!slot) return "-";
+    // two decimals are enough on a status screen (650.35 V, not 650.3500000000001 V)
+    const auto shown = [](double value) { return std::round(value * 100) / 100; };
+    if (const auto command = signals::effectiveCommand(*slot)) return formatValue(m_stack.catalog[*index], shown(command->value));
+    if (slot->bus.updates == 0) return "never";
+    std::string text = formatValue(m_stack.catalog[*index], shown(slot->bus.value));
+    if (slot->bus.quality != signals::Quality::Valid) text += " (" + std::string(signals::qualityName(slot->bus.quality)) + ")";
+    return text;
+  }
+
+  void vehicle(std::string& out) {
+    if (!m_table) {
+      out += "(no signal table yet)\n";
+      return;
+    }
+    std::string state = "-";
+    if (const auto index = m_stack.catalog.indexOf("internal.fsm.state")) {
+      if (const auto bus = m_table->readBus(*index); bus && bus->updates > 0) {
+        const auto number = static_cast<std::size_t>(bus->value);
+        state = number < m_stateNames.size() ? m_stateNames[number] : std::to_string(number);
+        state += " (for " + formatDuration(signals::monotonicNowNs() - bus->timestampNs) + ")";
+      }
+    }
+    out += "FSM         " + state + "\n";
+    const auto line = [&](const std::string& label, std::initializer_list<std::pair<const char*, const char*>> items) {
+      std::string text;
+      bool any = false;
+      for (const auto& [name, key] : items) {
+        if (!m_stack.catalog.indexOf(key)) continue;
+        any = true;
+        text += std::string(name) + " " + value(key) + "   ";
+      }
+      if (any) out += label + text + "\n";
+    };
+    line("BATTERY     ", {{"SOC", "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"},
+                          {"HV", "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts"},
+                          {"U", "VIC.HVESSD1_PGN61584.HS_ULvl"},
+                          {"I", "VIC.HVESSD1_PGN61584.HS_I"}});
+    line("CONTACTORS  ", {{"VIC+", "VIC.HVESSS1_PGN61590.HS_HiUBusPosCntctrSts"},
+                          {"VIC-", "VIC.HVESSS1_PGN61590.HS_HiUBusNegCntctrSts"},
+                          {"PDU A", "PDU.PDU_Tx_1.GroupA_Contactors_State"},
+                          {"PDU B", "PDU.PDU_Tx_1.GroupB_Contactors_State"}});
+    line("INVERTERS   ", {{"0x71", "HVLP_SA71.HS2_Status_Feedback.InverterStatus"},
+                          {"0x72", "HVLP_SA72.HS2_Status_Feedback_2.InverterStatus"},
+                          {"0x73", "HVLP_SA73.HS2_Status_Feedback_3.InverterStatus"},
+                          {"0x74", "HVLP_SA74.HS2_Status_Feedback_4.InverterStatus"},
+                          {"Editron", "Editron.ST_MOT_2.st_mot_fault"}});
+    std::string gpio;
+    for (const config::GpioLine& lineSpec : m_stack.config.gpio.lines) {
+      gpio += lineSpec.name + " " + value(lineSpec.statusKey()) + "   ";
+    }
+    if (!gpio.empty()) out += "GPIO        " + gpio + "\n";
+    std::string buses;
+    for (const config::BusConfig& bus : m_stack.config.buses) {
+      buses += bus.name + " load " + value("internal.bus." + bus.name + ".load") + ", " +
+               value("internal.bus." + bus.name + ".state") + "   ";
+    }
+    out += "BUSES       " + buses + "\n";
+    const auto tx = m_services.find("vcu-can-tx");
+    if (tx != m_services.end()) {
+      std::int64_t worst = -1;
+      std::string which;
+      for (const ipc::Counter& counter : tx->second.last.counters) {
+        if (counter.name.ends_with(".period_err_p99_us") && counter.value > worst) {
+          worst = counter.value;
+          which = counter.name.substr(3, counter.name.size() - 3 - std::string(".period_err_p99_us").size());
+        }
+      }
+      if (worst >= 0) out += "TX TIMING   worst period error p99 " + std::to_string(worst) + " us (" + which + ")\n";
+    }
+  }
+
+  void faults(std::string& out) {
+    out += "\nFAULTS      ";
+    if (m_faults.empty()) {
+      out += "none active\n";
+      return;
+    }
+    out += "\n";
+    for (const auto& [name, fault] : m_faults) {
+      out += "  " + name + " (" + fault.source + "): " + fault.text + "\n";
+    }
+  }
+
+  void loadStateNames() {
+    if (m_stack.config.fsmFile.empty()) return;
+    auto json = config::readJsonFile(m_stack.config.fsmFile);
+    if (!json || !json->is_object() || !json->contains("states") || !(*json)["states"].is_array()) return;
+    for (const auto& state : (*json)["states"]) {
+      m_stateNames.push_back(state.is_object() && state.contains("name") && state["name"].is_string()
+                                 ? state["name"].get<std::string>()
+                                 : "?");
+    }
+  }
+
+  const Stack& m_stack;
+  Streams m_streams;
+  std::optional<ipc::EventBus> m_events;
+  std::optional<signals::SignalTable> m_table;
+  std::map<std::string, ServiceView> m_services;
+  std::map<std::string, ipc::FaultEvent> m_faults;
+  std::vector<std::string> m_stateNames;
+};
+
+}  // namespace
+
+ExitCode runTop(const TopOptions& options, Streams streams) {
+  ExitCode exitCode = ExitCode::Ok;
+  const auto maybeStack = loadStack(options.stack, streams.err, &exitCode);
+  if (!maybeStack) return exitCode;
+  Top top(*maybeStack, streams);
+  if (Status opened = top.open(); !opened) {
+    reportError(streams.err, opened.error().message);
+    return ExitCode::Failure;
+  }
+  const StopSignalScope stopScope;
+  if (options.once) {
+    top.listen(std::chrono::milliseconds(750));
+    (void)top.render();  // the first CPU sample
+    top.listen(std::chrono::milliseconds(750));
+    streams.out.write(top.render());
+    if (!top.heardAny()) {
+      reportError(streams.err, "no heartbeat within 1.5 s (is the stack running? events: " +
+                                   maybeStack->config.lcmUrl + ")");
+      return ExitCode::Failure;
+    }
+    return ExitCode::Ok;
+  }
+  const auto end = std::chrono::steady_clock::now() +
+                   std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(options.forSeconds));
+  while (!stopRequested() && (options.forSeconds <= 0 || std::chrono::steady_clock::now() < end)) {
+    top.listen(std::chrono::milliseconds(1000));
+    streams.out.write("\x1b[H\x1b[2J" + top.render() + "\n(Ctrl-C to stop)\n");
+  }
+  return ExitCode::Ok;
+}
+
+void registerTopCommands(CLI::App& app, CommandContext& context) {
+  auto options = std::make_shared<TopOptions>();
+  CLI::App* top = app.add_subcommand("top", TOP_DESCRIPTION);
+  top->footer(TOP_FOOTER);
+  top->add_flag("--once", options->once, "one snapshot after 1.5 s, then exit");
+  top->add_option("--for", options->forSeconds, "stop after SECONDS")->check(CLI::NonNegativeNumber);
+  addStackOptions(*top, options->stack);
+  top->callback([options, &context] { context.exitCode = runTop(*options, context.streams); });
+}
+
+}  // namespace openvcu::cli
