@@ -3,7 +3,7 @@
 // forwarding, and publishes every frame on the iceoryx "rx" stream. README.md.
 
 #include "can_rx_app.hpp"
-#include "openvcu/service/service.hpp"
+#include "openvcu/service/main.hpp"
 
 namespace service = openvcu::service;
 
@@ -14,12 +14,5 @@ int main(int argc, char** argv) {
                                   .version = {},
                                   .writerId = openvcu::canrx::CAN_RX_WRITER,
                                   .usesFrameStreams = true};
-  service::CommandLine commandLine(info);
-  if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
-  auto serviceResult = service::Service::open(info, commandLine.options());
-  if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
-  service::Service& runtime = **serviceResult;
-  auto appResult = openvcu::canrx::CanRxApp::create(runtime);
-  if (!appResult) return service::reportStartupError(info, appResult.error());
-  return runtime.run();
+  return service::runApp<openvcu::canrx::CanRxApp>(info, argc, argv);
 }

@@ -3,7 +3,7 @@
 // processes and commands safe values when a command writer dies. README.md.
 
 #include "can_tx_app.hpp"
-#include "openvcu/service/service.hpp"
+#include "openvcu/service/main.hpp"
 #include "scheduler.hpp"
 
 namespace service = openvcu::service;
@@ -15,12 +15,5 @@ int main(int argc, char** argv) {
                                   .version = {},
                                   .writerId = openvcu::cantx::CAN_TX_WRITER,
                                   .usesFrameStreams = true};
-  service::CommandLine commandLine(info);
-  if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
-  auto serviceResult = service::Service::open(info, commandLine.options());
-  if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
-  service::Service& runtime = **serviceResult;
-  auto appResult = openvcu::cantx::CanTxApp::create(runtime);
-  if (!appResult) return service::reportStartupError(info, appResult.error());
-  return runtime.run();
+  return service::runApp<openvcu::cantx::CanTxApp>(info, argc, argv);
 }

@@ -3,7 +3,7 @@
 // fault injection. README.md.
 
 #include "ecu_sim_app.hpp"
-#include "openvcu/service/service.hpp"
+#include "openvcu/service/main.hpp"
 
 namespace service = openvcu::service;
 
@@ -14,12 +14,5 @@ int main(int argc, char** argv) {
                                   .version = {},
                                   .writerId = openvcu::ecusim::ECU_SIM_WRITER,
                                   .usesFrameStreams = true};
-  service::CommandLine commandLine(info);
-  if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
-  auto serviceResult = service::Service::open(info, commandLine.options());
-  if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
-  service::Service& runtime = **serviceResult;
-  auto appResult = openvcu::ecusim::EcuSimApp::create(runtime);
-  if (!appResult) return service::reportStartupError(info, appResult.error());
-  return runtime.run();
+  return service::runApp<openvcu::ecusim::EcuSimApp>(info, argc, argv);
 }

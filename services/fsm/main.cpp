@@ -4,7 +4,7 @@
 
 #include "engine.hpp"
 #include "fsm_app.hpp"
-#include "openvcu/service/service.hpp"
+#include "openvcu/service/main.hpp"
 
 namespace service = openvcu::service;
 
@@ -15,12 +15,5 @@ int main(int argc, char** argv) {
                                   .version = {},
                                   .writerId = openvcu::fsm::FSM_WRITER,
                                   .usesFrameStreams = false};
-  service::CommandLine commandLine(info);
-  if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
-  auto serviceResult = service::Service::open(info, commandLine.options());
-  if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
-  service::Service& runtime = **serviceResult;
-  auto appResult = openvcu::fsm::FsmApp::create(runtime);
-  if (!appResult) return service::reportStartupError(info, appResult.error());
-  return runtime.run();
+  return service::runApp<openvcu::fsm::FsmApp>(info, argc, argv);
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "harness.hpp"
+#include "openvcu/config/catalog.hpp"
 #include "openvcu/signals/table.hpp"
 
 namespace openvcu::integration {
@@ -77,6 +78,56 @@ inline std::optional<signals::BusValue> waitForBus(const signals::SignalTable& t
     epoch = table.waitForChange(epoch, std::chrono::duration_cast<std::chrono::nanoseconds>(left));
   }
 }
+
+/// A stack on a configuration file, seen from the test: the configuration and its catalog
+/// (loaded at construction), the signal table (openTable(), once a service created it), and
+/// `vcu` commands against it.
+struct ConfiguredStack {
+  harness::Harness sut;
+  std::filesystem::path config;
+  std::optional<config::VehicleConfig> vehicle;
+  std::optional<signals::Catalog> catalog;
+  std::optional<signals::SignalTable> table;
+
+  explicit ConfiguredStack(std::filesystem::path configPath) : config(std::move(configPath)) {
+    auto loaded = config::loadVehicleConfig(config.string());
+    REQUIRE_STATUS(loaded);
+    vehicle.emplace(std::move(*loaded));
+    auto built = config::buildCatalog(*vehicle);
+    REQUIRE_STATUS(built);
+    catalog.emplace(std::move(*built));
+  }
+
+  void openTable() {
+    auto opened = signals::SignalTable::open(*catalog, vehicle->instance);
+    REQUIRE_STATUS(opened);
+    table.emplace(std::move(*opened));
+  }
+  /// A service binary with --config, readiness awaited, output captured.
+  harness::Process& startService(const std::string& name, const std::string& binary) {
+    auto process = sut.start(harness::ProcessSpec{
+        .name = name, .argv = {binary, "--config", config.string()}, .notifyReadiness = true, .captureOutput = true});
+    REQUIRE_STATUS(process);
+    return **process;
+  }
+  harness::CommandResult vcu(std::vector<std::string> arguments) {
+    std::vector<std::string> argv{VCU};
+    argv.insert(argv.end(), arguments.begin(), arguments.end());
+    argv.emplace_back("--config");
+    argv.push_back(config.string());
+    return sut.run(argv);
+  }
+  /// `vcu signal set KEY VALUE`, which must be accepted.
+  void set(const std::string& key, const std::string& value) {
+    const auto result = vcu({"signal", "set", key, value});
+    REQUIRE_MESSAGE(contains(result.out, "accepted"), result.describe());
+  }
+  [[nodiscard]] signals::SignalIndex index(const std::string& key) const {
+    const auto found = catalog->indexOf(key);
+    REQUIRE_MESSAGE(found, key);
+    return *found;
+  }
+};
 
 }  // namespace openvcu::integration
 

@@ -45,50 +45,10 @@ double stateIndex(const std::string& name) {
   return -1;
 }
 
-struct Fixture {
-  harness::Harness sut;
-  fs::path config = copyHheaConfig(fs::temp_directory_path() / "hhea");
-  std::optional<config::VehicleConfig> vehicle;
-  std::optional<signals::Catalog> catalog;
-  std::optional<signals::SignalTable> table;
+struct Fixture : ConfiguredStack {
+  Fixture() : ConfiguredStack(copyHheaConfig(fs::temp_directory_path() / "hhea")) { openTable(); }
 
-  Fixture() {
-    auto loaded = config::loadVehicleConfig(config.string());
-    REQUIRE_STATUS(loaded);
-    vehicle.emplace(std::move(*loaded));
-    auto built = config::buildCatalog(*vehicle);
-    REQUIRE_STATUS(built);
-    catalog.emplace(std::move(*built));
-    auto opened = signals::SignalTable::open(*catalog, "hhea");
-    REQUIRE_STATUS(opened);
-    table.emplace(std::move(*opened));
-  }
-
-  harness::Process& start(const std::string& name, const std::string& binary) {
-    auto process = sut.start(harness::ProcessSpec{
-        .name = name, .argv = {binary, "--config", config.string()}, .notifyReadiness = true, .captureOutput = true});
-    REQUIRE_STATUS(process);
-    return **process;
-  }
-
-  harness::CommandResult vcu(std::vector<std::string> arguments) {
-    std::vector<std::string> argv{VCU};
-    argv.insert(argv.end(), arguments.begin(), arguments.end());
-    argv.emplace_back("--config");
-    argv.push_back(config.string());
-    return sut.run(argv);
-  }
-
-  void set(const std::string& key, const std::string& value) {
-    const auto result = vcu({"signal", "set", key, value});
-    REQUIRE_MESSAGE(contains(result.out, "accepted"), result.describe());
-  }
-
-  signals::SignalIndex index(const std::string& key) const {
-    const auto found = catalog->indexOf(key);
-    REQUIRE_MESSAGE(found, key);
-    return *found;
-  }
+  harness::Process& start(const std::string& name, const std::string& binary) { return startService(name, binary); }
 
   /// Seconds from the relay's command to the level `level` on internal.gpio.Cl15.
   double switchDelay(double level) {

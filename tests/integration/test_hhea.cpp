@@ -48,33 +48,18 @@ double stateIndex(const std::string& name) {
   return -1;
 }
 
-struct Stack {
-  harness::Harness sut;
-  fs::path config = copyHheaConfig(fs::temp_directory_path() / "hhea");
-  std::optional<config::VehicleConfig> vehicle;
-  std::optional<signals::Catalog> catalog;
-  std::optional<signals::SignalTable> table;
+struct Stack : ConfiguredStack {
   std::optional<ipc::EventBus> events;
   std::vector<ipc::FaultEvent> faults;
 
-  Stack() {
-    auto loaded = config::loadVehicleConfig(config.string());
-    REQUIRE_STATUS(loaded);
-    vehicle.emplace(std::move(*loaded));
-    auto built = config::buildCatalog(*vehicle);
-    REQUIRE_STATUS(built);
-    catalog.emplace(std::move(*built));
+  Stack() : ConfiguredStack(copyHheaConfig(fs::temp_directory_path() / "hhea")) {
     REQUIRE_STATUS(sut.startRoudi());
     for (const auto& [name, binary] : std::vector<std::pair<std::string, std::string>>{
              {"can-rx", CAN_RX_BINARY}, {"can-tx", CAN_TX_BINARY}, {"fsm", FSM_BINARY}, {"gpio", GPIO_BINARY},
              {"ecu-sim", ECU_SIM_BINARY}}) {
-      auto process = sut.start(harness::ProcessSpec{
-          .name = name, .argv = {binary, "--config", config.string()}, .notifyReadiness = true, .captureOutput = true});
-      REQUIRE_STATUS(process);
+      startService(name, binary);
     }
-    auto opened = signals::SignalTable::open(*catalog, "hhea");
-    REQUIRE_STATUS(opened);
-    table.emplace(std::move(*opened));
+    openTable();
     auto bus = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, "hhea");
     REQUIRE_STATUS(bus);
     events.emplace(std::move(*bus));
@@ -82,25 +67,9 @@ struct Stack {
     REQUIRE(state("Standby", 5s));
   }
 
-  harness::CommandResult vcu(std::vector<std::string> arguments) {
-    std::vector<std::string> argv{VCU};
-    argv.insert(argv.end(), arguments.begin(), arguments.end());
-    argv.emplace_back("--config");
-    argv.push_back(config.string());
-    return sut.run(argv);
-  }
-  void set(const std::string& key, const std::string& value) {
-    const auto result = vcu({"signal", "set", key, value});
-    REQUIRE_MESSAGE(contains(result.out, "accepted"), result.describe());
-  }
   void fault(const std::string& name, bool on) {
     const auto result = vcu({"sim", "fault", name, on ? "on" : "off"});
     REQUIRE_MESSAGE(contains(result.out, "accepted"), result.describe());
-  }
-  signals::SignalIndex index(const std::string& key) const {
-    const auto found = catalog->indexOf(key);
-    REQUIRE_MESSAGE(found, key);
-    return *found;
   }
   /// The value the stack sees: the command (override first) when there is one, else the bus plane.
   std::optional<double> value(const std::string& key) const {
