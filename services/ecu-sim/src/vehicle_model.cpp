@@ -72,6 +72,7 @@ Status VehicleModel::resolve() {
   in("VCU", "VCU_DCDC_SetV", m_dcdcSetV);
   in("VCU", "VCU_DCDC_MaxI", m_dcdcMaxI);
   in("CMD_MOT_0", "cmd_mot_request", m_motRequest);
+  in("CMD_MOT_2", "cmd_mot_n_ref", m_motSpeedRef);
   in("RQST_ES_PGN59904", "RQST_PGN", m_rqstPgn);
   out("HVESSS1_PGN61590", "HS_HiUBusCnctnSts", m_cnctnSts);
   out("HVESSS1_PGN61590", "HS_OperationalSts", m_operSts);
@@ -264,7 +265,7 @@ void VehicleModel::stepVic(std::int64_t nowNs, double dt, bool wake) {
   m_soc = std::clamp(m_soc - m_current * dt / 3600.0 / m_config->capacityAh * 100.0, 0.0, 100.0);
 }
 
-void VehicleModel::stepPowerNodes(std::int64_t, double) {
+void VehicleModel::stepPowerNodes(std::int64_t, double dt) {
   const double ocv = m_config->emptyVoltage + (m_config->fullVoltage - m_config->emptyVoltage) * m_soc / 100.0;
   const double pack = ocv - m_current * m_config->resistanceOhm;
   // PDU: contactors close on command only while the battery is connected
@@ -296,7 +297,10 @@ void VehicleModel::stepPowerNodes(std::int64_t, double) {
   const bool run = m_bus->get(m_motRequest) == 1 && busLive && !fault(Fault::Editron);
   m_bus->set(m_motFault, fault(Fault::Editron) ? 2 : 1);
   m_bus->set(m_motRun, run ? 1 : 0);
-  m_bus->set(m_motN, run ? 1500 : 0);
+  // the speed follows cmd_mot_n_ref with a 0.5 s time constant while running, else coasts to 0
+  const double reference = run && !std::isnan(m_bus->get(m_motSpeedRef)) ? m_bus->get(m_motSpeedRef) : 0.0;
+  m_motSpeed += (reference - m_motSpeed) * std::min(1.0, dt / 0.5);
+  m_bus->set(m_motN, m_motSpeed);
   m_bus->set(m_motUdc, busLive ? pack : 0);
   // VIC measurements
   m_bus->set(m_uLvl, pack);

@@ -114,7 +114,7 @@ class VehicleModel {
   // VCU inputs
   InputRef m_esRelay{}, m_consent{}, m_ccvsAny{}, m_hvesscAny{}, m_crashType{}, m_contactorA{}, m_contactorB{},
       m_bmsControl{}, m_bmsMaxCurrent{}, m_bmsMaxVoltage{}, m_dcdcCommand{}, m_dcdcSetV{}, m_dcdcMaxI{}, m_motRequest{},
-      m_rqstPgn{};
+      m_rqstPgn{}, m_motSpeedRef{};
   std::uint32_t m_timeDateId{};
   // VIC outputs
   OutputRef m_cnctnSts{}, m_operSts{}, m_posCntctr{}, m_negCntctr{}, m_permission{}, m_intChrgr{}, m_hvil{},
@@ -139,6 +139,7 @@ class VehicleModel {
   double m_socBeforeLow{};  ///< the SOC before soc_low / soc_high, restored when cleared
   double m_current{};
   bool m_closedA{}, m_closedB{};
+  double m_motSpeed{};  ///< Editron rpm, first order towards cmd_mot_n_ref
   std::int64_t m_lastStepNs{};
   std::int64_t m_timeRequestAtNs{};
   std::int64_t m_lastRqstNs{};
