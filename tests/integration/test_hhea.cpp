@@ -167,8 +167,11 @@ TEST_CASE("AC charging: the charger follows BMS_Control and its limits and stops
   CHECK(s.equals(CONNECTION, 5, 2s));
   CHECK(s.equals("VIC.HVESSS1_PGN61590.HS_IntChrgrSts", 1, 2s));
   CHECK(s.equals("Vehicle_Control_Unit.BMS.BMS_Control", 0, 2s));
-  // min(BMS_Max_Current 60, the VIC's 60 A), less the DC-DC's share of the pack current
-  CHECK(s.until("OBC.OBC.OBC_Output_Current", [](double amps) { return amps > 59 && amps <= 60; }, 3s));
+  // the VIC's limits (PropA_C3: 700 V, 50 A in simulation.json) forwarded to the charger
+  CHECK(s.equals("Vehicle_Control_Unit.BMS.BMS_Max_Current", 50, 2s));
+  CHECK(s.equals("Vehicle_Control_Unit.BMS.BMS_Max_Voltage", 700, 2s));
+  // the charger delivers them, less the DC-DC's share of the pack current
+  CHECK(s.until("OBC.OBC.OBC_Output_Current", [](double amps) { return amps > 49 && amps <= 50; }, 3s));
   const double before = *s.value(SOC);
   CHECK(s.until(SOC, [before](double soc) { return soc > before; }, 5s));  // charging raises the SOC
 

@@ -286,18 +286,35 @@ void Engine::setTimer(std::uint32_t timer, std::int64_t sinceNs, std::int64_t mo
   }
 }
 
+bool Engine::copiedValue(const Action& action, double& value) noexcept {
+  const auto source = m_access.read(action.source);
+  if (!source) return false;
+  if (const auto command = signals::effectiveCommand(*source)) {
+    value = command->value;
+  } else if (source->bus.updates > 0) {
+    value = source->bus.value;
+  } else {
+    return false;
+  }
+  const signals::SignalInfo& target = m_catalog[action.signal];
+  if (target.minimum < target.maximum) value = std::clamp(value, target.minimum, target.maximum);
+  return true;
+}
+
 bool Engine::runActions(const std::vector<Action>& actions, std::int64_t monoNs) {
   bool wrote = false;
   for (const Action& action : actions) {
     switch (action.kind) {
       case ActionKind::Nothing: break;
       case ActionKind::SetSignal: {
+        double value = action.value;
+        if (action.copy && !copiedValue(action, value)) break;  // the source has no value yet
         const auto snapshot = m_access.read(action.signal);
-        if (snapshot && snapshot->command.updates > 0 && snapshot->command.value == action.value &&
+        if (snapshot && snapshot->command.updates > 0 && snapshot->command.value == value &&
             snapshot->command.writer == FSM_WRITER) {
           break;  // already commanded: no write, no change to wake anyone
         }
-        m_access.writeCommand(action.signal, action.value, monoNs);
+        m_access.writeCommand(action.signal, value, monoNs);
         ++m_counters.commandsWritten;
         wrote = true;
         break;

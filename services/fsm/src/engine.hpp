@@ -155,6 +155,9 @@ class Engine {
   bool evalNode(std::uint32_t node, std::int64_t monoNs) noexcept;
   bool evalRaw(const ConditionNode& node, std::int64_t monoNs) noexcept;
   bool runActions(const std::vector<Action>& actions, std::int64_t monoNs);
+  /// A `from` action's value: the source's command (override first), else its bus value,
+  /// clamped to the target's range; false while the source has neither.
+  bool copiedValue(const Action& action, double& value) noexcept;
   void enter(std::uint32_t state, std::int64_t monoNs, std::int64_t realNs);
   void setTimer(std::uint32_t timer, std::int64_t sinceNs, std::int64_t monoNs) noexcept;
   void writeState(std::int64_t monoNs, std::int64_t realNs) noexcept;

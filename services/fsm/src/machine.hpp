@@ -76,6 +76,8 @@ struct Action {
   ActionKind kind{ActionKind::Nothing};
   signals::SignalIndex signal{};  ///< SetSignal: catalog index
   double value{};
+  bool copy{};                    ///< SetSignal from `source`'s value when it runs ("from")
+  signals::SignalIndex source{};
   std::string name;  ///< fault name
   std::string text;  ///< fault or event text
   ipc::FaultSeverity severity{ipc::FaultSeverity::Error};

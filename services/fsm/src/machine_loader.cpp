@@ -517,8 +517,14 @@ class Loader {
       return action;
     }
     if (json.contains("signal")) {
-      m_check.onlyKeys(json, path, {"signal", "value", "comment"});
+      m_check.onlyKeys(json, path, {"signal", "value", "from", "comment"});
       const auto key = m_check.string(json, path, "signal");
+      if (json.contains("from")) {
+        const auto source = m_check.string(json, path, "from");
+        if (json.contains("value")) m_check.error(JsonChecker::join(path, "value"), "give \"value\" or \"from\", not both");
+        if (!key || !source) return std::nullopt;
+        return copySignal(*key, *source, JsonChecker::join(path, "signal"), JsonChecker::join(path, "from"));
+      }
       const Json* value = m_check.member(json, path, "value", true);
       if (!key || value == nullptr) return std::nullopt;
       return setSignal(*key, *value, JsonChecker::join(path, "signal"), JsonChecker::join(path, "value"));
@@ -577,14 +583,13 @@ class Loader {
     return std::nullopt;
   }
 
-  std::optional<Action> setSignal(const std::string& key, const Json& value, const std::string& keyPath,
-                                  const std::string& valuePath) {
+  /// The catalog index of a signal an action may command, or empty (with the error).
+  std::optional<signals::SignalIndex> commandable(const std::string& key, const std::string& keyPath) {
     auto found = m_catalog.find(key);
     if (!found) {
       m_check.error(keyPath, found.error().message);
       return std::nullopt;
     }
-    const signals::SignalInfo& info = m_catalog[*found];
     if (internal(*found)) {
       for (const std::string_view prefix : STATUS_PREFIXES) {
         if (key.starts_with(prefix)) {
@@ -601,6 +606,29 @@ class Loader {
                                  ": an action can only command signals this VCU sends or internal signals");
       return std::nullopt;
     }
+    return *found;
+  }
+
+  /// {"signal": K, "from": SOURCE}: K commanded with SOURCE's value when the action runs.
+  std::optional<Action> copySignal(const std::string& key, const std::string& source, const std::string& keyPath,
+                                   const std::string& sourcePath) {
+    const auto target = commandable(key, keyPath);
+    auto from = m_catalog.find(source);
+    if (!from) m_check.error(sourcePath, from.error().message);
+    if (!target || !from) return std::nullopt;
+    Action action;
+    action.kind = ActionKind::SetSignal;
+    action.signal = *target;
+    action.copy = true;
+    action.source = *from;
+    return action;
+  }
+
+  std::optional<Action> setSignal(const std::string& key, const Json& value, const std::string& keyPath,
+                                  const std::string& valuePath) {
+    const auto found = commandable(key, keyPath);
+    if (!found) return std::nullopt;
+    const signals::SignalInfo& info = m_catalog[*found];
     const auto constant = signalValue(info, value, valuePath);
     if (!constant) return std::nullopt;
     if (info.minimum < info.maximum && (*constant < info.minimum || *constant > info.maximum)) {

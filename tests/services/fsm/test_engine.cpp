@@ -380,3 +380,23 @@ TEST_CASE("replace keeps the current state by name, or refuses and keeps the old
   bench.step();
   CHECK(bench.state() == "X");
 }
+
+TEST_CASE("a from action commands the source's value when it runs, clamped, and nothing while the source is silent") {
+  Bench bench;
+  bench.start(machineAB(R"({"key": "internal.operator.StartStop", "eq": 1})", R"(, "actions": [
+      {"signal": "Vehicle_Control_Unit.BMS.BMS_Max_Current", "from": "VIC.PropA_C3_PGN61184.IChLimLong"},
+      {"signal": "Vehicle_Control_Unit.BMS.BMS_Max_Voltage", "from": "VIC.PropA_C3_PGN61184.UChLimLong"}])"));
+  bench.bus("VIC.PropA_C3_PGN61184.IChLimLong", 42.5);  // UChLimLong never received
+  bench.command(fsmtest::START_STOP, 1);
+  bench.step();
+  CHECK(bench.state() == "B");
+  CHECK(bench.commanded("Vehicle_Control_Unit.BMS.BMS_Max_Current") == 42.5);
+  CHECK_FALSE(bench.commanded("Vehicle_Control_Unit.BMS.BMS_Max_Voltage"));
+  std::vector<Error> diagnostics;
+  CHECK_FALSE(bench.hhea.compile(machineAB(R"({"key": "internal.operator.StartStop", "eq": 1})",
+                                           R"(, "actions": [{"signal": "Vehicle_Control_Unit.BMS.BMS_Max_Current",
+                                               "from": "VIC.PropA_C3_PGN61184.IChLimLng", "value": 3}])"),
+                                 &diagnostics));
+  CHECK(fsmtest::listing(diagnostics).find("not both") != std::string::npos);
+  CHECK(fsmtest::listing(diagnostics).find("did you mean") != std::string::npos);
+}

@@ -9,7 +9,9 @@
 #include "diagnostics.hpp"
 #include "fsm_commands.hpp"
 #include "gpio_commands.hpp"
+#include "record_commands.hpp"
 #include "sim_commands.hpp"
+#include "top_commands.hpp"
 #include "schedule_commands.hpp"
 #include "signal_commands.hpp"
 #include "status_commands.hpp"
@@ -73,6 +75,8 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerFsmCommands(app, context);
     registerGpioCommands(app, context);
     registerSimCommands(app, context);
+    registerRecordCommands(app, context);
+    registerTopCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);
