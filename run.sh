@@ -7,6 +7,7 @@
 #   ./run.sh --for SECONDS        stop after SECONDS
 #   ./run.sh --isolated           in private mount and network namespaces (LCM multicast stays
 #                                 on loopback; needed where multicast must not reach the network)
+#   ./run.sh --record DIR         record the session: every bus as candump -L, the LCM events
 #   ./run.sh --bus socketcan:can0 the vehicle bus on real hardware (no simulated vehicle)
 #   ./run.sh --config FILE        another vehicle (default config/hhea/vehicle.json)
 #   ./run.sh --check              only check the configuration (DBC, FSM) and exit
@@ -16,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
 root=$PWD
 
-headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0
+headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0; record=""
 config=config/hhea/vehicle.json
 args=("$@")
 while [ $# -gt 0 ]; do
@@ -26,9 +27,10 @@ while [ $# -gt 0 ]; do
     --for) seconds=${2:?--for needs seconds}; shift ;;
     --isolated) isolated=1 ;;
     --bus) bus=${2:?--bus needs socketcan:IFACE}; shift ;;
+    --record) record=$(readlink -f "${2:?--record needs a folder}"); shift ;;
     --config) config=${2:?--config needs a file}; shift ;;
     --check) check=1 ;;
-    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
   esac
   shift
@@ -84,6 +86,7 @@ stop() {
   [ $stopped -eq 1 ] && return
   stopped=1
   echo "== stopping"
+  if [ -n "${recorder:-}" ]; then kill -INT "$recorder" 2>/dev/null; wait "$recorder" 2>/dev/null; fi
   supervisorctl -c "$run/openvcu.conf" shutdown >/dev/null 2>&1 || kill -TERM "$supervisor" 2>/dev/null || true
   wait "$supervisor" 2>/dev/null || true
   # every service has ended: the signal table and its lock go (iox-roudi removed its own)
@@ -101,6 +104,12 @@ for _ in $(seq 1 30); do
   [ "$beating" -ge "$expected" ] && break
 done
 "$vcu" top --once --config "$config" || true
+
+recorder=""
+if [ -n "$record" ]; then
+  "$vcu" record "$record" --force --config "$config" &
+  recorder=$!
+fi
 
 drive() {
   local set=("$vcu" signal set --config "$config")
