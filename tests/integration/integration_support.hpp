@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -77,6 +79,17 @@ inline std::optional<signals::BusValue> waitForBus(const signals::SignalTable& t
     if (left <= std::chrono::nanoseconds::zero()) return std::nullopt;
     epoch = table.waitForChange(epoch, std::chrono::duration_cast<std::chrono::nanoseconds>(left));
   }
+}
+
+/// The index of state `name` in the HHEA machine (internal.fsm.state is the file-order index).
+inline double hheaStateIndex(const std::string& name) {
+  std::ifstream in(std::filesystem::path(OPENVCU_SOURCE_DIR) / "config" / "hhea" / "fsm.json");
+  const nlohmann::json machine = nlohmann::json::parse(in);
+  for (std::size_t i = 0; i < machine["states"].size(); ++i) {
+    if (machine["states"][i]["name"] == name) return static_cast<double>(i);
+  }
+  FAIL("no state " << name);
+  return -1;
 }
 
 /// A stack on a configuration file, seen from the test: the configuration and its catalog

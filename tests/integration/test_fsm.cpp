@@ -75,56 +75,19 @@ fs::path copyConfig(const std::string& machine) {
   return folder / "vehicle.json";
 }
 
-struct Fixture {
-  harness::Harness sut;
-  fs::path config;
-  std::optional<config::VehicleConfig> vehicle;
-  std::optional<signals::Catalog> catalog;
-  std::optional<signals::SignalTable> table;
+struct Fixture : ConfiguredStack {
   std::optional<ipc::EventBus> events;
   std::vector<ipc::FsmTransition> transitions;
 
-  explicit Fixture(const std::string& machine) : config(copyConfig(machine)) {
-    auto loaded = config::loadVehicleConfig(config.string());
-    REQUIRE_STATUS(loaded);
-    vehicle.emplace(std::move(*loaded));
-    auto built = config::buildCatalog(*vehicle);
-    REQUIRE_STATUS(built);
-    catalog.emplace(std::move(*built));
-    auto opened = signals::SignalTable::open(*catalog, "hhea");
-    REQUIRE_STATUS(opened);
-    table.emplace(std::move(*opened));
+  explicit Fixture(const std::string& machine) : ConfiguredStack(copyConfig(machine)) {
+    openTable();
     auto bus = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, "hhea");
     REQUIRE_STATUS(bus);
     events.emplace(std::move(*bus));
     REQUIRE(events->onFsmTransition([this](const ipc::FsmTransition& transition) { transitions.push_back(transition); }));
   }
 
-  harness::Process& startFsm() {
-    auto process = sut.start(harness::ProcessSpec{
-        .name = "fsm", .argv = {FSM, "--config", config.string()}, .notifyReadiness = true, .captureOutput = true});
-    REQUIRE_STATUS(process);
-    return **process;
-  }
-
-  harness::CommandResult vcu(std::vector<std::string> arguments) {
-    std::vector<std::string> argv{VCU};
-    argv.insert(argv.end(), arguments.begin(), arguments.end());
-    argv.emplace_back("--config");
-    argv.push_back(config.string());
-    return sut.run(argv);
-  }
-
-  void set(const std::string& key, const std::string& value) {
-    const auto result = vcu({"signal", "set", key, value});
-    REQUIRE_MESSAGE(contains(result.out, "accepted"), result.describe());
-  }
-
-  signals::SignalIndex index(const std::string& key) const {
-    const auto found = catalog->indexOf(key);
-    REQUIRE_MESSAGE(found, key);
-    return *found;
-  }
+  harness::Process& startFsm() { return startService("fsm", FSM); }
 
   /// Waits (table change futex, no fixed sleep) until internal.fsm.state == `state`;
   /// returns the bus value written with it, or empty on timeout.

@@ -34,16 +34,6 @@ namespace {
 const std::string FSM = FSM_BINARY;
 const std::string GPIO = GPIO_BINARY;
 
-/// The index of `name` in the HHEA machine (internal.fsm.state is the file-order index).
-double stateIndex(const std::string& name) {
-  std::ifstream in(fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea" / "fsm.json");
-  const nlohmann::json machine = nlohmann::json::parse(in);
-  for (std::size_t i = 0; i < machine["states"].size(); ++i) {
-    if (machine["states"][i]["name"] == name) return static_cast<double>(i);
-  }
-  FAIL("no state " << name);
-  return -1;
-}
 
 struct Fixture : ConfiguredStack {
   Fixture() : ConfiguredStack(copyHheaConfig(fs::temp_directory_path() / "hhea")) { openTable(); }
@@ -68,7 +58,7 @@ TEST_CASE("the Cl15 relay follows the state machine with its 2 s delays and a ki
   Fixture f;
   f.start("fsm", FSM);
   harness::Process& first = f.start("gpio", GPIO);
-  REQUIRE(waitForBus(*f.table, f.index("internal.fsm.state"), stateIndex("Standby"), 5s));
+  REQUIRE(waitForBus(*f.table, f.index("internal.fsm.state"), hheaStateIndex("Standby"), 5s));
   REQUIRE(waitForBus(*f.table, f.index("internal.gpio.Cl15"), 0, 5s));
 
   f.set("internal.operator.StartStop", "Start");

@@ -38,15 +38,6 @@ const char* const INVERTERS[] = {"HVLP_SA71.HS2_Status_Feedback.InverterStatus",
                                  "HVLP_SA73.HS2_Status_Feedback_3.InverterStatus",
                                  "HVLP_SA74.HS2_Status_Feedback_4.InverterStatus"};
 
-double stateIndex(const std::string& name) {
-  std::ifstream in(fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea" / "fsm.json");
-  const nlohmann::json machine = nlohmann::json::parse(in);
-  for (std::size_t i = 0; i < machine["states"].size(); ++i) {
-    if (machine["states"][i]["name"] == name) return static_cast<double>(i);
-  }
-  FAIL("no state " << name);
-  return -1;
-}
 
 struct Stack : ConfiguredStack {
   std::optional<ipc::EventBus> events;
@@ -94,7 +85,7 @@ struct Stack : ConfiguredStack {
     return until(key, [expected](double v) { return v == expected; }, timeout);
   }
   bool state(const std::string& name, std::chrono::milliseconds timeout) {
-    return equals("internal.fsm.state", stateIndex(name), timeout);
+    return equals("internal.fsm.state", hheaStateIndex(name), timeout);
   }
   std::string stateNow() {
     const auto current = value("internal.fsm.state");
