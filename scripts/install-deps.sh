@@ -29,6 +29,12 @@ PACKAGES=(
   qemu-system-x86 busybox-static cpio kmod make gcc-12 bc xz-utils can-utils
   # ./run.sh runs the stack under supervisord
   supervisor
+  # the Qt 6 HMI (services/hmi) and its offscreen / Xvfb tests and screenshots
+  qt6-base-dev qt6-declarative-dev qt6-charts-dev qml6-module-qtquick qml6-module-qtqml
+  qml6-module-qtquick-controls qml6-module-qtquick-layouts qml6-module-qtquick-window
+  qml6-module-qtquick-templates qml6-module-qtqml-workerscript qml6-module-qtqml-models
+  qml6-module-qtcharts qml6-module-qttest qml6-module-qtquick-shapes qt6-qpa-plugins
+  libgl-dev fonts-dejavu-core x11-apps imagemagick
 )
 
 missing=()

@@ -1,49 +1,33 @@
 #!/bin/bash
 # Fault injection by killing (inside run_isolated.sh): the HHEA stack under supervisord with
 # the simulated vehicle, driven to Driving; then SIGKILL of a service at a random time, one
-# after another (can-rx, fsm, gpio, ecu-sim, can-tx in a random order; ROUNDS times), and:
+# after another (can-rx, fsm, gpio, ecu-sim, can-tx in a random order, then iox-roudi;
+# ROUNDS times), and:
 #   - every killed service is running again with a new pid and beating;
 #   - after the death of vcu-fsm, the FSM is in the state it was in before;
 #   - while vcu-can-tx lives, the keep-alive and safety messages miss no cycle because
 #     another service died (can-tx's own per-message `missed` counters do not move across a
 #     kill; a kill whose restart took over 3 s is reported as a machine stall instead);
-#   - the restart time (kill -> heartbeat of the new process) per kill, p50 and max.
+#   - the restart time (kill -> heartbeat of the new process) per kill, p50 and max;
+#   - iox-roudi: supervisord restarts it, every iceoryx client (can-rx, can-tx, ecu-sim)
+#     sees the new RouDi within a heartbeat and exits with code 75, supervisord starts it
+#     again; vcu-fsm and vcu-gpio keep running (same pid); the vehicle is back in Driving
+#     (after a FaultReset when the sim bus outage put the FSM into a fault state).
 #   soak_test.sh [ROUNDS] [SEED]      (ctest: 1 round; the long run: e.g. 20 rounds)
-# Not covered: killing iox-roudi (the services' iceoryx clients do not reconnect to a new
-# RouDi; see services/*/README.md, known limits).
 set -uo pipefail
 rounds=${1:-1}; seed=${2:-$RANDOM}
-root=$(cd "$(dirname "$0")/../.." && pwd)
-bin=${OPENVCU_BIN:-$root/build/bin}
-vcu=$bin/vcu
-config=$root/config/hhea/vehicle.json
-run=$(mktemp -d)
-export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run
-sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
-ctl() { supervisorctl -c "$run/openvcu.conf" "$@"; }
-fail() { echo "soak: FAIL: $*"; ctl shutdown >/dev/null 2>&1; exit 1; }
-supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
-supervisor=$!
-trap 'ctl shutdown >/dev/null 2>&1; wait $supervisor 2>/dev/null' EXIT
+NAME=soak
+# shellcheck source=stack_lib.sh
+. "$(dirname "$0")/stack_lib.sh"
 RANDOM=$seed
 echo "soak: seed $seed, $rounds round(s); logs $run"
-
-beats() { "$vcu" status --config "$config" --wait 1.2 2>/dev/null; }
-state() { "$vcu" top --once --config "$config" 2>/dev/null | sed -n 's/^FSM *\([^(]*\).*/\1/p' | sed 's/ *$//'; }
-for _ in $(seq 1 30); do [ "$(beats | grep -c '^vcu-')" -ge 5 ] && break; done
-[ "$(beats | grep -c '^vcu-')" -ge 5 ] || fail "the stack did not come up"
-# waits (each look takes vcu top's 1.5 s) until the FSM is in state $1, at most 20 looks
-wait_state() { for _ in $(seq 1 20); do [ "$(state)" = "$1" ] && return 0; done; return 1; }
-"$vcu" signal set internal.operator.StartStop Start --config "$config" >/dev/null
-wait_state Ready || fail "not Ready after Start: $(state)"
-"$vcu" signal set internal.operator.ConnectDriving 1 --config "$config" >/dev/null
-wait_state Driving || fail "not Driving before the kills: $(state)"
+drive
 
 # can-tx's per-message missed-cycle counters of the keep-alive and safety messages
 missed() { beats | grep '^vcu-can-tx' | grep -o 'tx\.\(S1_ES_PGN61427\|CCVS1_PGN65265\|HVESSC1_PGN6912\|CN_PGN61483\)\.missed=[0-9]*' | sort; }
 baseline=$(missed)
 echo "soak: can-tx missed counters before the kills: $(echo $baseline)"
-times=(); stalls=0
+times=(); roudi_times=(); stalls=0
 for round in $(seq 1 "$rounds"); do
   order=$(printf '%s\n' can-rx fsm gpio ecu-sim can-tx | awk -v s="$RANDOM" 'BEGIN{srand(s)} {print rand() "\t" $0}' | sort | cut -f2)
   for service in $order; do
@@ -87,9 +71,55 @@ for round in $(seq 1 "$rounds"); do
       fi
     fi
   done
+  # ---- iox-roudi: the frame streams' broker, and on the simulated bus the bus itself
+  sleep "0.$(( RANDOM % 9 + 1 ))"
+  declare -A oldpid
+  for p in roudi can-rx can-tx ecu-sim fsm gpio; do oldpid[$p]=$(ctl pid "$p"); done
+  kill -KILL "${oldpid[roudi]}"
+  killed=$(date +%s%N)
+  back=""
+  for _ in $(seq 1 60); do
+    status=$("$vcu" status --config "$config" --wait 1.1 2>/dev/null)
+    back=yes
+    for p in roudi can-rx can-tx ecu-sim; do
+      new=$(ctl pid "$p" 2>/dev/null)
+      if [ -z "$new" ] || [ "$new" = "${oldpid[$p]}" ] || ! [ "$new" -gt 0 ] 2>/dev/null; then back=""; break; fi
+      if [ "$p" != roudi ] && ! echo "$status" | grep -q "^vcu-$p *$new "; then back=""; break; fi
+    done
+    [ -n "$back" ] && break
+  done
+  [ -n "$back" ] || fail "round $round: after the death of iox-roudi not every iceoryx client came back: $(ctl status | tr '\n' '|')"
+  ms=$(( ($(date +%s%N) - killed) / 1000000 ))
+  roudi_times+=("$ms")
+  for p in fsm gpio; do
+    [ "$(ctl pid "$p")" = "${oldpid[$p]}" ] || fail "vcu-$p (no iceoryx client) was restarted by the death of iox-roudi"
+  done
+  grep -q "iox-roudi was restarted" "$run/can-tx.log" || fail "vcu-can-tx's log does not say why it ended"
+  echo "soak: round $round: SIGKILL iox-roudi (${oldpid[roudi]}) -> RouDi, can-rx, can-tx, ecu-sim restarted and beating after $ms ms; fsm and gpio kept their pids"
+  # the sim bus was down while RouDi was: the vehicle may have left Driving
+  landed=$(state)
+  if [ "$landed" != Driving ]; then
+    case "$landed" in
+      Ready|Connecting\ Driving) ;;
+      *) signal_set internal.operator.FaultReset 1
+         wait_state Ready || fail "round $round: after the RouDi outage the FSM is in '$(state)' (was '$landed') and FaultReset did not bring it to Ready" ;;
+    esac
+    signal_set internal.operator.ConnectDriving 0
+    signal_set internal.operator.ConnectDriving 1
+    wait_state Driving || fail "round $round: not Driving again after the RouDi outage: $(state)"
+  fi
+  recovered=$(( ($(date +%s%N) - killed) / 1000000 ))
+  if [ "$landed" = Driving ]; then
+    echo "soak:   the FSM stayed in Driving through the outage (looked $recovered ms after the kill)"
+  else
+    echo "soak:   the FSM was in '$landed' after the outage; Driving again $recovered ms after the kill"
+  fi
 done
+
 sorted=$(printf '%s\n' "${times[@]}" | sort -n)
 count=${#times[@]}
 p50=$(echo "$sorted" | sed -n "$(( (count + 1) / 2 ))p"); max=$(echo "$sorted" | tail -1)
+rmax=$(printf '%s\n' "${roudi_times[@]}" | sort -n | tail -1)
+echo "soak: iox-roudi killed ${#roudi_times[@]} time(s): every iceoryx client restarted, max $rmax ms until all beat"
 echo "soak: $count kills, every service back; restart (kill -> new heartbeat) p50 $p50 ms, max $max ms; keep-alive and safety messages: no missed cycle attributable to a death ($stalls machine stall(s) seen)"
 echo "soak: PASS"

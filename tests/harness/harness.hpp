@@ -143,6 +143,8 @@ class Harness {
   /// Starts `iox-roudi -c <config>` (default: config/iceoryx/roudi.toml of the source tree)
   /// and waits until its socket answers; fails at once if it exits (a bad config).
   Status startRoudi(const std::string& configPath = {});
+  /// The RouDi of the last startRoudi(), or nullptr (to kill it: roudi()->signal(SIGKILL)).
+  [[nodiscard]] Process* roudi() noexcept { return m_roudi; }
 
   /// Starts a process; with spec.notifyReadiness waits for its READY=1.
   Result<Process*> start(ProcessSpec spec, std::chrono::milliseconds readyTimeout = READY_TIMEOUT);

@@ -11,6 +11,7 @@
 
 namespace harness = openvcu::harness;
 using namespace openvcu::integration;
+using namespace std::chrono_literals;
 
 namespace {
 
@@ -65,6 +66,28 @@ TEST_CASE("a SIGKILLed fixture service restarts, re-attaches to the same table a
   CHECK_MESSAGE(heartbeatCount(sut) > beatsBefore, "the heartbeat count continues after the restart");
   const auto again = vcu(sut, {"signal", "set", "internal.test.level", "43"});
   CHECK_MESSAGE(again.exitCode() == 0, again.describe());
+}
+
+TEST_CASE("a service outlives a dead iox-roudi and ends with exit code 75 once a new RouDi is up, saying why") {
+  SKIP_UNLESS_ISOLATED();
+  harness::Harness sut;
+  harness::Process& fixture = startStack(sut);
+  REQUIRE(sut.roudi()->signal(SIGKILL));
+  REQUIRE(sut.roudi()->waitForExit(5s));
+  // RouDi down, not yet back: nothing to restart against, the service keeps serving
+  CHECK_FALSE(fixture.waitForExit(2500ms));
+  CHECK(heartbeatCount(sut) >= 2.0);
+
+  REQUIRE_STATUS(sut.startRoudi());
+  // the next heartbeat tick (1 s) sees the new socket
+  const auto ended = fixture.waitForExit(5s);
+  REQUIRE_MESSAGE(ended, fixture.output());
+  CHECK_MESSAGE((ended->exited && ended->code == 75), ended->toString());
+  CHECK_MESSAGE(contains(fixture.output(), "iox-roudi was restarted"), fixture.output());
+
+  // and a new process registers with the new RouDi as the supervisor would start it
+  auto again = sut.start(fixtureSpec());
+  CHECK_STATUS(again);
 }
 
 TEST_CASE("SIGTERM stops the fixture service in order: STOPPING=1, a log line and exit code 0") {

@@ -12,7 +12,7 @@ set -uo pipefail
 
 OUT=$1
 # shellcheck disable=SC1091
-. "$OUT/guest.env"   # VCU_CAN_RX VCU_CAN_TX VCU_GPIO VCU_FSM VCU IOX_ROUDI SRC
+. "$OUT/guest.env"   # VCU_CAN_RX VCU_CAN_TX VCU_GPIO VCU_FSM VCU_ECU_SIM VCU IOX_ROUDI SRC
 export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 HERE=$SRC/tests/kernel
 CFG=$OUT/vehicle.json   # merged below from config/hhea/vehicle.json + data/vehicle-overrides.json
@@ -299,8 +299,88 @@ else
   result link_down_up FAIL "state while down '$state_down', after up '$state_up', HV_DC_1_U_V $(plane bus PDU.PDU_Tx_2.HV_DC_1_U_V); can-rx log: $(grep -i 'vcan0\|down\|up' "$OUT/can-rx.log" | tail -4 | tr '\n' '|')"
 fi
 
-t "checks done"
 "$VCU" status --config "$CFG" > "$OUT/status.txt" 2>&1   # counters (can-tx missed cycles, ...) for the logs
+t "single-feature checks done"
+
+# ---------------------------------------------------------------- 6. the HHEA sequence with the simulated vehicle on vcan0
+# A fresh stack (own instance: a new table, so the FSM starts in Standby) with every service
+# and vcu-ecu-sim, all on vcan0 through SocketCAN: no stand-ins. Operator switches as in
+# tests/integration/test_hhea.cpp: Start -> Ready (keep-alive, Cl15 on gpio-sim, the VIC
+# wakes) -> Connect Driving -> Driving (the VIC accepts the J1939-76 pairs, contactors,
+# inverters 6-3-5) -> disconnect -> Stop -> Standby. Timeouts are generous: emulation.
+cleanup; pids=()
+HCFG=$OUT/vehicle-hhea.json
+$PY - "$CFG" "$HCFG" <<'PYEOF'
+import json, sys
+config = json.load(open(sys.argv[1]))
+config["instance"] = "kvmhhea"
+config["buses"] = [bus for bus in config["buses"] if bus["name"] == "vehicle"]
+config.pop("receive", None)
+json.dump(config, open(sys.argv[2], "w"), indent=2)
+PYEOF
+# the states' indexes, looked up once (a python start costs ~0.5 s in the VM)
+declare -A STATE
+while IFS='=' read -r name index; do STATE[$name]=$index; done < <($PY -c "import json,sys
+for i, x in enumerate(json.load(open(sys.argv[1]))['states']): print('%s=%d' % (x['name'], i))" "$SRC/config/hhea/fsm.json")
+state_is() { plane_is_h bus internal.fsm.state "${STATE[$1]}"; }
+plane_h() { "$VCU" signal get "$2" --config "$HCFG" 2>&1 | awk -v p="$1" '$1 == p {print $2; exit}'; }
+plane_is_h() { [[ "$(plane_h "$1" "$2")" == "$3" ]]; }
+set_h() { "$VCU" signal set "$1" "$2" --config "$HCFG" 2>&1; }
+hhea_ok=1; hhea_steps=()
+step() { # name command...: one step of the sequence, recorded
+  if "${@:2}"; then hhea_steps+=("$1 ok"); else hhea_steps+=("$1 FAILED"); hhea_ok=0; fi
+}
+if start roudi-hhea "RouDi is ready" "$IOX_ROUDI" -c "$SRC/config/iceoryx/roudi.toml"; then
+  for svc in can-rx:$VCU_CAN_RX can-tx:$VCU_CAN_TX fsm:$VCU_FSM gpio:$VCU_GPIO ecu-sim:$VCU_ECU_SIM; do
+    start "hhea-${svc%%:*}" ready "${svc#*:}" --config "$HCFG" || { hhea_ok=0; hhea_steps+=("${svc%%:*} did not start"); }
+  done
+else
+  hhea_ok=0; hhea_steps+=("RouDi did not start")
+fi
+if [[ $hhea_ok == 1 ]]; then
+  candump -L -r 8388608 vcan0 > /tmp/hhea.log 2>&1 &
+  dump_pid=$!
+  t "HHEA stack on vcan0 ready"
+  step standby wait_for 10 state_is Standby
+  step "Start: $(set_h internal.operator.StartStop Start)" true
+  # Waking lasts the relay's 2 s on-delay: a look (two process starts in the VM) may miss it,
+  # so the keep-alive the FSM commands on entering Waking is what shows it was there
+  step keep-alive wait_for 10 plane_is_h command internal.tx.keepAlive 1
+  step cl15-line wait_for 10 plane_is_h bus internal.gpio.Cl15 1
+  step vic-awaiting wait_for 15 plane_is_h bus VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts 0
+  step ready wait_for 20 state_is Ready
+  t "HHEA: Ready"
+  step "ConnectDriving: $(set_h internal.operator.ConnectDriving 1)" true
+  step driving wait_for 20 state_is Driving
+  step vic-connected wait_for 10 plane_is_h bus VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts 1
+  step contactors-a wait_for 10 plane_is_h bus PDU.PDU_Tx_1.GroupA_Contactors_State 1
+  step contactors-b wait_for 10 plane_is_h bus PDU.PDU_Tx_1.GroupB_Contactors_State 1
+  step inverter-71-enabled wait_for 15 plane_is_h bus HVLP_SA71.HS2_Status_Feedback.InverterStatus 10
+  step inverter-74-enabled wait_for 15 plane_is_h bus HVLP_SA74.HS2_Status_Feedback_4.InverterStatus 10
+  t "HHEA: Driving"
+  "$VCU" status --config "$HCFG" > "$OUT/status-hhea-driving.txt" 2>&1
+  step "ConnectDriving off: $(set_h internal.operator.ConnectDriving 0)" true
+  step ready-again wait_for 20 state_is Ready
+  step vic-disconnected wait_for 10 plane_is_h bus VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts 0
+  step "Stop: $(set_h internal.operator.StartStop Stop)" true
+  step standby-again wait_for 20 state_is Standby
+  step cl15-off wait_for 10 plane_is_h bus internal.gpio.Cl15 0
+  kill "$dump_pid"; wait "$dump_pid" 2>/dev/null
+  cp /tmp/hhea.log "$OUT/hhea.log"
+  # the frames really crossed vcan0: the VIC's HVESSS1 (0x14F096F3, SA F3) and the VCU's
+  # keep-alive CCVS1 and safety pairs (SA 21) in candump's own record
+  vic_frames=$(grep -Ec ' vcan0 [0-9A-F]{2}F096F3#' "$OUT/hhea.log")
+  vcu_frames=$(grep -Ec ' vcan0 [0-9A-F]{6}21#' "$OUT/hhea.log")
+  pairs=$(grep -o 'vic_pairs_ok=[0-9]*\|vic_pairs_refused=[0-9]*' "$OUT/status-hhea-driving.txt" | tr '\n' ' ')
+  step vic-frames-on-vcan0 test "$vic_frames" -gt 0
+  step vcu-frames-on-vcan0 test "$vcu_frames" -gt 0
+  step vic-accepted-pairs grep -Eq 'vic_pairs_ok=[1-9]' "$OUT/status-hhea-driving.txt"
+fi
+detail="${hhea_steps[*]}; candump vcan0: ${vic_frames:-?} HVESSS1 frames from the VIC, ${vcu_frames:-?} frames from the VCU (SA 21); ${pairs:-}"
+if [[ $hhea_ok == 1 ]]; then result hhea_start_drive_sequence PASS "$detail"
+else result hhea_start_drive_sequence FAIL "$detail; state $(plane_h bus internal.fsm.state)"; fi
+
+t "checks done"
 cleanup; trap - EXIT
 echo 0 > "$SIMCFG/live"; rmdir "$SIMCFG/bank0" "$SIMCFG"
 echo "RESULT: $pass passed, $fail failed${failed[*]:+ (${failed[*]})}"

@@ -1,11 +1,14 @@
 #include "openvcu/ipc/runtime.hpp"
 
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
+#include <optional>
 #include <thread>
 
 #include "iceoryx_hoofs/log/logmanager.hpp"
@@ -16,10 +19,27 @@ namespace openvcu::ipc {
 
 namespace {
 
+/// Which socket file RouDi had bound when this process registered.
+struct SocketIdentity {
+  dev_t device{};
+  ino_t inode{};
+  std::int64_t changeNs{};
+  bool operator==(const SocketIdentity&) const = default;
+};
+
 struct RuntimeState {
   bool initialized{false};
   std::string name;
+  std::optional<SocketIdentity> roudiSocket;
 };
+
+std::optional<SocketIdentity> socketIdentity() noexcept {
+  struct stat info {};
+  const std::string path(ROUDI_SOCKET_PATH);
+  if (::stat(path.c_str(), &info) != 0) return std::nullopt;
+  return SocketIdentity{info.st_dev, info.st_ino,
+                        static_cast<std::int64_t>(info.st_ctim.tv_sec) * 1'000'000'000 + info.st_ctim.tv_nsec};
+}
 
 RuntimeState& state() {
   static RuntimeState instance;
@@ -92,6 +112,7 @@ Status Runtime::init(std::string_view appName, std::chrono::milliseconds waitFor
       iox::RuntimeName_t(iox::cxx::TruncateToCapacity, appName.data(), appName.size()));
   current.initialized = true;
   current.name = std::string(appName);
+  current.roudiSocket = socketIdentity();
   return {};
 }
 
@@ -104,6 +125,14 @@ std::string Runtime::name() {
 }
 
 bool Runtime::roudiReachable() noexcept {
+  return probeRoudi() == 0;
+}
+
+bool Runtime::roudiReplaced() noexcept {
+  const RuntimeState& current = state();
+  if (!current.initialized || !current.roudiSocket) return false;
+  const auto now = socketIdentity();
+  if (!now || *now == *current.roudiSocket) return false;
   return probeRoudi() == 0;
 }
 

@@ -99,7 +99,7 @@ Status Service::start() {
   auto heartbeatTimer = PeriodicTimer::create(HEARTBEAT_PERIOD);
   if (!heartbeatTimer) return heartbeatTimer.error();
   m_heartbeatTimer.emplace(std::move(*heartbeatTimer));
-  if (auto added = m_loop->addTimer(*m_heartbeatTimer, [this](const TimerTick&) { m_heartbeat->beat(); }); !added) {
+  if (auto added = m_loop->addTimer(*m_heartbeatTimer, [this](const TimerTick&) { onHeartbeatTick(); }); !added) {
     return added;
   }
   if (const auto maybeInterval = m_notifier.watchdogInterval()) {
@@ -151,6 +151,18 @@ void Service::markReady() {
                 (m_notifier.enabled() ? ", sending READY=1 to " + m_notifier.socketPath() : std::string()) + ")");
   m_notifier.ready(m_heartbeat->status());
   m_heartbeat->beat();
+}
+
+void Service::onHeartbeatTick() {
+  m_heartbeat->beat();
+  // Once a second: a RouDi restarted under this process has cut its iceoryx ports off for
+  // good (iceoryx 2.0 cannot re-register them), so end with a code the supervisor restarts.
+  if (m_info.usesFrameStreams && !m_stopping && ipc::Runtime::roudiReplaced()) {
+    m_logger.error("iox-roudi was restarted (" + std::string(ipc::ROUDI_SOCKET_PATH) +
+                   " is a new socket): this process's frame streams are cut off; exiting with code " +
+                   std::to_string(static_cast<int>(ExitCode::RoudiRestarted)) + " for the supervisor to restart it");
+    m_loop->stop(static_cast<int>(ExitCode::RoudiRestarted));
+  }
 }
 
 void Service::onShutdownSignal() {

@@ -44,6 +44,14 @@ class Runtime {
   /// reachable by this user). Cheap: one socket() + connect(); sends nothing.
   static bool roudiReachable() noexcept;
 
+  /// true when iox-roudi's socket is no longer the one this process registered with
+  /// (another inode or change time: a new RouDi bound it) and the new RouDi answers.
+  /// The process's ports belong to the dead RouDi and iceoryx 2.0 cannot move them, so the
+  /// caller must end the process and let its supervisor start it again. false before
+  /// init() and while no RouDi answers (the old one may be down only for a moment).
+  /// Cheap: one stat() and, only when the socket changed, one connect().
+  static bool roudiReplaced() noexcept;
+
   /// Polls roudiReachable() every few milliseconds until it is true or `timeout` passed.
   /// Tests and supervisors use it as the readiness check after starting iox-roudi.
   static bool waitForRoudi(std::chrono::milliseconds timeout) noexcept;

@@ -30,6 +30,9 @@ enum class ExitCode : int {
   Ok = 0,       ///< stopped on request (SIGTERM, SIGINT) or --help/--version
   Failure = 1,  ///< start-up failed: configuration, table, event bus, RouDi
   Usage = 2,    ///< the command line itself was wrong
+  /// iox-roudi was restarted under a running service: its iceoryx ports are cut off and
+  /// cannot re-register, so it exits for the supervisor to start it again (EX_TEMPFAIL)
+  RoudiRestarted = 75,
 };
 
 /// The environment variable naming the configuration when --config is not given.

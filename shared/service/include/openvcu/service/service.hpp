@@ -114,6 +114,7 @@ class Service {
   Service(ServiceInfo info, ServiceOptions options, ShutdownSignals signals);
   Status start();
   void onShutdownSignal();
+  void onHeartbeatTick();
   void beginStopping(const std::string& reason);
 
   ServiceInfo m_info;

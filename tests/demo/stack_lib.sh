@@ -1,0 +1,35 @@
+#!/bin/bash
+# Sourced by the supervised-stack tests (soak_test.sh, replace_vic_test.sh), inside
+# run_isolated.sh: starts the HHEA stack with the simulated vehicle under supervisord and
+# gives the helpers they share. Before sourcing, set NAME (the prefix of every output line).
+#   ctl ARGS...       supervisorctl on this stack
+#   fail TEXT         prints "NAME: FAIL: TEXT", stops the stack, exits 1
+#   beats             `vcu status` (every service's last heartbeat)
+#   state             the FSM state by name (`vcu top --once`)
+#   wait_state NAME   until the FSM is in NAME: each look takes vcu top's 1.5 s, at most 20
+#   drive             Start -> Ready -> Connect Driving -> Driving, or fail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+bin=${OPENVCU_BIN:-$root/build/bin}
+vcu=$bin/vcu
+config=$root/config/hhea/vehicle.json
+run=$(mktemp -d)
+export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run
+sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
+ctl() { supervisorctl -c "$run/openvcu.conf" "$@"; }
+fail() { echo "$NAME: FAIL: $*"; ctl shutdown >/dev/null 2>&1; exit 1; }
+supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
+supervisor=$!
+trap 'ctl shutdown >/dev/null 2>&1; wait $supervisor 2>/dev/null' EXIT
+
+beats() { "$vcu" status --config "$config" --wait 1.2 2>/dev/null; }
+state() { "$vcu" top --once --config "$config" 2>/dev/null | sed -n 's/^FSM *\([^(]*\).*/\1/p' | sed 's/ *$//'; }
+wait_state() { for _ in $(seq 1 20); do [ "$(state)" = "$1" ] && return 0; done; return 1; }
+signal_set() { "$vcu" signal set "$1" "$2" --config "$config" >/dev/null; }
+drive() {
+  for _ in $(seq 1 30); do [ "$(beats | grep -c '^vcu-')" -ge 5 ] && break; done
+  [ "$(beats | grep -c '^vcu-')" -ge 5 ] || fail "the stack did not come up"
+  signal_set internal.operator.StartStop Start
+  wait_state Ready || fail "not Ready after Start: $(state)"
+  signal_set internal.operator.ConnectDriving 1
+  wait_state Driving || fail "not Driving: $(state)"
+}
