@@ -100,11 +100,28 @@ struct FsmAppImpl {
 
   // ---- engine thread ----------------------------------------------------------------------
 
+  /// A table watch on the signals the machine's conditions read and on the reload key, so
+  /// the engine sleeps through every other write of the table (can-rx writes thousands a
+  /// second, almost none of them the machine's).
+  signals::SignalWatch watchMachine() {
+    std::vector<signals::SignalIndex> indexes;
+    for (const SignalRef& ref : engine->machine().signals) indexes.push_back(ref.index);
+    if (const auto reloads = runtime.catalog().indexOf("internal.fsm.reloads")) indexes.push_back(*reloads);
+    signals::SignalWatch watch = runtime.table().watch(indexes);
+    if (!watch.dedicated()) {
+      runtime.log().warning("no free watch entry in the signal table: woken by every table write");
+    }
+    return watch;
+  }
+
   void runEngine() {
-    signals::SignalTable& table = runtime.table();
+    signals::SignalWatch watch = watchMachine();
     while (!stopping.load(std::memory_order_relaxed)) {
-      const std::uint32_t epoch = table.changeEpoch();
-      takeReload();
+      const std::uint32_t epoch = watch.epoch();
+      if (takeReload()) {
+        watch = watchMachine();  // the new machine reads other signals
+        continue;
+      }
       engine->step(signals::monotonicNowNs(), realtimeNs());
       publishOutputs();
       mirrorCounters();
@@ -112,13 +129,14 @@ struct FsmAppImpl {
       const std::int64_t deadline = engine->nextDeadlineNs();
       std::chrono::nanoseconds timeout = LONGEST_SLEEP;
       if (deadline != NO_DEADLINE) timeout = std::min(timeout, std::chrono::nanoseconds(std::max<std::int64_t>(deadline - now, 0)));
-      if (timeout.count() > 0) (void)table.waitForChange(epoch, timeout);
+      if (timeout.count() > 0) (void)watch.wait(epoch, timeout);
     }
   }
 
-  void takeReload() {
+  /// true when a new machine was taken (or refused) for a pending reload.
+  bool takeReload() {
     std::unique_lock lock(reloadMutex);
-    if (!pendingMachine) return;
+    if (!pendingMachine) return false;
     Machine machine = std::move(*pendingMachine);
     pendingMachine.reset();
     lock.unlock();
@@ -126,6 +144,7 @@ struct FsmAppImpl {
     lock.lock();
     reloadResult = std::move(result);
     reloadDone.notify_all();
+    return true;
   }
 
   void publishOutputs() {

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <thread>
+#include <vector>
 
 #include "controller.hpp"
 
@@ -119,16 +120,25 @@ struct GpioAppImpl {
 
   /// Outputs (and the sim chip's inputs): woken by table changes and output deadlines.
   void runOutputs() {
-    signals::SignalTable& table = runtime.table();
+    // Woken only by the lines' bound signals and the sim chip's input keys, not by every
+    // write of the table.
+    std::vector<signals::SignalIndex> indexes;
+    for (const config::GpioLine& line : runtime.config().gpio.lines) {
+      for (const std::string& key : {line.signal, line.simKey()}) {
+        if (const auto index = runtime.catalog().indexOf(key)) indexes.push_back(*index);
+      }
+    }
+    signals::SignalWatch watch = runtime.table().watch(indexes);
+    if (!watch.dedicated()) runtime.log().warning("no free watch entry in the signal table: woken by every table write");
     while (!stopping.load(std::memory_order_relaxed)) {
-      const std::uint32_t epoch = table.changeEpoch();
+      const std::uint32_t epoch = watch.epoch();
       chip->tableChanged();
       const std::int64_t now = signals::monotonicNowNs();
       controller->updateOutputs(now);
       const std::int64_t deadline = controller->nextOutputDeadlineNs();
       std::int64_t timeout = LONGEST_SLEEP_NS;
       if (deadline != NO_DEADLINE) timeout = std::clamp<std::int64_t>(deadline - now, 0, LONGEST_SLEEP_NS);
-      if (timeout > 0) (void)table.waitForChange(epoch, std::chrono::nanoseconds(timeout));
+      if (timeout > 0) (void)watch.wait(epoch, std::chrono::nanoseconds(timeout));
     }
   }
 

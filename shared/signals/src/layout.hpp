@@ -63,6 +63,9 @@ struct Entry {
 struct alignas(CACHE_LINE_BYTES) Plane {
   AtomicWord head;  ///< tickets handed out so far = the ticket of the newest started write
   AtomicWord mark;  ///< ticket << 8 | quality: the quality of write `ticket`, set afterwards
+  /// Bit i: watch entry i (TableHeader::watches) is woken by writes of this plane. Set and
+  /// cleared by SignalTable::watch and ~SignalWatch; read by every writer of the plane.
+  AtomicWord watchers;
   std::array<Entry, RING_SIZE> ring;
 };
 static_assert(std::is_standard_layout_v<Plane>);
@@ -78,6 +81,18 @@ struct Slot {
 static_assert(std::is_standard_layout_v<Slot>);
 static_assert(sizeof(Slot) == 9 * CACHE_LINE_BYTES);
 static_assert(alignof(Slot) == CACHE_LINE_BYTES);
+
+/// How many SignalWatch entries a table has (bits of Plane::watchers).
+inline constexpr std::size_t MAX_WATCHES = 32;
+
+/// One watch's change notification and its owner (SignalTable::watch). All three fields
+/// are accessed through std::atomic_ref.
+struct alignas(CACHE_LINE_BYTES) WatchEntry {
+  std::uint32_t changeWord;  ///< futex word: epoch << 1 | waiters flag (notifier.hpp)
+  std::int32_t ownerPid;     ///< 0: free
+  std::int64_t aliveNs;      ///< CLOCK_MONOTONIC of the owner's claim or latest wait
+};
+static_assert(sizeof(WatchEntry) == CACHE_LINE_BYTES);
 
 /// The segment starts with this header; the slots follow at offset sizeof(TableHeader).
 /// All fields but `magic` and `changeWord` are written once by the creator before it
@@ -95,9 +110,12 @@ struct alignas(CACHE_LINE_BYTES) TableHeader {
   /// Change notification (futex word, on its own cache line): epoch << 1 | waiters flag.
   /// Accessed through std::atomic_ref because the kernel needs a plain 32-bit word.
   alignas(CACHE_LINE_BYTES) std::uint32_t changeWord;
+  /// Watches: change notification for chosen signals only (SignalTable::watch).
+  std::array<WatchEntry, MAX_WATCHES> watches;
 };
 static_assert(std::is_standard_layout_v<TableHeader>);
-static_assert(sizeof(TableHeader) == 2 * CACHE_LINE_BYTES);
+static_assert(sizeof(TableHeader) == (2 + MAX_WATCHES) * CACHE_LINE_BYTES);
+static_assert(MAX_WATCHES <= 64);  // bits of Plane::watchers
 static_assert(std::is_trivially_destructible_v<TableHeader> && std::is_trivially_destructible_v<Slot>);
 static_assert(std::atomic_ref<std::uint32_t>::is_always_lock_free);
 static_assert(offsetof(TableHeader, changeWord) % std::atomic_ref<std::uint32_t>::required_alignment == 0);

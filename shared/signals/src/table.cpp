@@ -1,12 +1,16 @@
 #include "openvcu/signals/table.hpp"
 
+#include <signal.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <bit>
+#include <cerrno>
 #include <new>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include "layout.hpp"
 #include "notifier.hpp"
@@ -213,11 +217,27 @@ TableInfo SignalTable::info() const {
 
 // ---- writers ----------------------------------------------------------------------------
 
+// Why the watchers mask may be loaded relaxed after the table's epoch add (and why a new
+// watch cannot miss a write that raced its creation): watch() stores its bits and then
+// does an acq_rel add on the same changeWord that every writer adds to after its write.
+// Those adds are totally ordered: if the writer's comes first, the watch's add acquires the
+// writer's release and the watcher's first look sees the value; if the watch's comes first,
+// the writer's add acquires the watch's release and this load sees the bit.
+void SignalTable::notify(detail::Plane& plane) noexcept {
+  detail::notifyChange(m_header->changeWord);
+  std::uint64_t mask = plane.watchers.load(std::memory_order_relaxed);
+  while (mask != 0) {
+    const int bit = std::countr_zero(mask);
+    mask &= mask - 1;
+    detail::notifyChange(m_header->watches[static_cast<std::size_t>(bit)].changeWord);
+  }
+}
+
 bool SignalTable::writeBus(SignalIndex index, double value, std::int64_t timestampNs, std::uint16_t source,
                            Quality quality) noexcept {
   if (index >= m_slotCount) return false;
   detail::writePlane(m_slots[index].bus, payload(value, timestampNs, busAux(source, quality)));
-  detail::notifyChange(m_header->changeWord);
+  notify(m_slots[index].bus);
   return true;
 }
 
@@ -227,28 +247,28 @@ bool SignalTable::markBusQuality(SignalIndex index, Quality quality) noexcept {
   detail::Record current;
   if (!detail::readPlane(plane, current) || current.ticket == 0) return false;
   detail::markQuality(plane, current.ticket, static_cast<std::uint8_t>(quality));
-  detail::notifyChange(m_header->changeWord);
+  notify(plane);
   return true;
 }
 
 bool SignalTable::writeCommand(SignalIndex index, double value, std::int64_t timestampNs, WriterId writer) noexcept {
   if (index >= m_slotCount) return false;
   detail::writePlane(m_slots[index].command, payload(value, timestampNs, writer));
-  detail::notifyChange(m_header->changeWord);
+  notify(m_slots[index].command);
   return true;
 }
 
 bool SignalTable::setOverride(SignalIndex index, double value, std::int64_t timestampNs, WriterId writer) noexcept {
   if (index >= m_slotCount) return false;
   detail::writePlane(m_slots[index].override, payload(value, timestampNs, overrideAux(writer, true)));
-  detail::notifyChange(m_header->changeWord);
+  notify(m_slots[index].override);
   return true;
 }
 
 bool SignalTable::clearOverride(SignalIndex index, std::int64_t timestampNs, WriterId writer) noexcept {
   if (index >= m_slotCount) return false;
   detail::writePlane(m_slots[index].override, payload(0.0, timestampNs, overrideAux(writer, false)));
-  detail::notifyChange(m_header->changeWord);
+  notify(m_slots[index].override);
   return true;
 }
 
@@ -301,6 +321,112 @@ std::uint32_t SignalTable::changeEpoch() const noexcept {
 std::uint32_t SignalTable::waitForChange(std::uint32_t lastEpoch, std::chrono::nanoseconds timeout) const noexcept {
   if (m_header == nullptr) return lastEpoch;
   return detail::waitForEpochChange(m_header->changeWord, lastEpoch, timeout);
+}
+
+// ---- watches ----------------------------------------------------------------------------
+
+namespace {
+
+/// true when the owner of an entry is gone: its pid does not exist and it has not renewed
+/// its lease for WATCH_LEASE. (An entry whose dead owner's pid was reused by a live process
+/// stays taken until that process ends: a lost entry, never a stolen one.)
+bool abandoned(std::int32_t owner, std::int64_t aliveNs, std::int64_t nowNs) noexcept {
+  const std::int64_t leaseNs = std::chrono::nanoseconds(WATCH_LEASE).count();
+  if (nowNs - aliveNs < leaseNs) return false;
+  return ::kill(owner, 0) != 0 && errno == ESRCH;
+}
+
+void forEachPlane(detail::Slot& slot, const auto& action) noexcept {
+  action(slot.bus);
+  action(slot.command);
+  action(slot.override);
+}
+
+}  // namespace
+
+SignalWatch SignalTable::watch(std::span<const SignalIndex> indexes) {
+  SignalWatch result;
+  result.m_header = m_header;
+  result.m_slots = m_slots;
+  if (m_header == nullptr) return result;
+  for (const SignalIndex index : indexes) {
+    if (index < m_slotCount) result.m_indexes.push_back(index);
+  }
+  const auto self = static_cast<std::int32_t>(::getpid());
+  const std::int64_t now = monotonicNowNs();
+  for (std::size_t i = 0; i < detail::MAX_WATCHES && result.m_entry < 0; ++i) {
+    detail::WatchEntry& entry = m_header->watches[i];
+    std::atomic_ref<std::int32_t> owner(entry.ownerPid);
+    std::int32_t current = owner.load(std::memory_order_acquire);
+    const std::int64_t alive = std::atomic_ref<std::int64_t>(entry.aliveNs).load(std::memory_order_relaxed);
+    if (current != 0 && !abandoned(current, alive, now)) continue;
+    if (!owner.compare_exchange_strong(current, self, std::memory_order_acq_rel)) continue;
+    std::atomic_ref<std::int64_t>(entry.aliveNs).store(now, std::memory_order_relaxed);
+    result.m_entry = static_cast<int>(i);
+  }
+  if (result.m_entry < 0) return result;  // falls back to the table's epoch
+
+  const std::uint64_t bit = std::uint64_t{1} << result.m_entry;
+  std::vector<bool> wanted(m_slotCount, false);
+  for (const SignalIndex index : result.m_indexes) wanted[index] = true;
+  for (std::uint32_t index = 0; index < m_slotCount; ++index) {
+    forEachPlane(m_slots[index], [&](detail::Plane& plane) {
+      if (wanted[index]) {
+        plane.watchers.fetch_or(bit, std::memory_order_relaxed);
+      } else if ((plane.watchers.load(std::memory_order_relaxed) & bit) != 0) {
+        plane.watchers.fetch_and(~bit, std::memory_order_relaxed);  // a previous owner's
+      }
+    });
+  }
+  // Orders the bits before the caller's first look (see notify()).
+  detail::notifyChange(m_header->changeWord);
+  return result;
+}
+
+SignalWatch::SignalWatch(SignalWatch&& other) noexcept
+    : m_header(std::exchange(other.m_header, nullptr)),
+      m_slots(std::exchange(other.m_slots, nullptr)),
+      m_indexes(std::move(other.m_indexes)),
+      m_entry(std::exchange(other.m_entry, -1)) {}
+
+SignalWatch& SignalWatch::operator=(SignalWatch&& other) noexcept {
+  if (this != &other) {
+    release();
+    m_header = std::exchange(other.m_header, nullptr);
+    m_slots = std::exchange(other.m_slots, nullptr);
+    m_indexes = std::move(other.m_indexes);
+    m_entry = std::exchange(other.m_entry, -1);
+  }
+  return *this;
+}
+
+SignalWatch::~SignalWatch() {
+  release();
+}
+
+void SignalWatch::release() noexcept {
+  if (m_header == nullptr || m_entry < 0) return;
+  const std::uint64_t bit = std::uint64_t{1} << m_entry;
+  for (const SignalIndex index : m_indexes) {
+    forEachPlane(m_slots[index], [bit](detail::Plane& plane) { plane.watchers.fetch_and(~bit, std::memory_order_relaxed); });
+  }
+  std::atomic_ref<std::int32_t>(m_header->watches[static_cast<std::size_t>(m_entry)].ownerPid)
+      .store(0, std::memory_order_release);
+  m_entry = -1;
+}
+
+std::uint32_t SignalWatch::epoch() const noexcept {
+  if (m_header == nullptr) return 0;
+  if (m_entry < 0) return detail::currentEpoch(m_header->changeWord);
+  return detail::currentEpoch(m_header->watches[static_cast<std::size_t>(m_entry)].changeWord);
+}
+
+std::uint32_t SignalWatch::wait(std::uint32_t lastEpoch, std::chrono::nanoseconds timeout) noexcept {
+  if (m_header == nullptr) return lastEpoch;
+  if (m_entry < 0) return detail::waitForEpochChange(m_header->changeWord, lastEpoch, timeout);
+  detail::WatchEntry& entry = m_header->watches[static_cast<std::size_t>(m_entry)];
+  std::atomic_ref<std::int64_t>(entry.aliveNs).store(monotonicNowNs(), std::memory_order_relaxed);
+  return detail::waitForEpochChange(entry.changeWord, lastEpoch, timeout);
 }
 
 }  // namespace openvcu::signals

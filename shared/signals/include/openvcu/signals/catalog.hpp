@@ -29,7 +29,7 @@ namespace openvcu::signals {
 /// Version of the shared-memory layout (header, slot and plane formats). It is part of
 /// every layout hash, so processes built with different layouts never attach to each
 /// other's tables. Bump it whenever src/layout.hpp changes.
-inline constexpr std::uint32_t SIGNAL_TABLE_FORMAT_VERSION = 1;
+inline constexpr std::uint32_t SIGNAL_TABLE_FORMAT_VERSION = 2;  // 2: watches
 
 /// Position of a signal in its catalog and of its slot in the table (0-based, dense).
 using SignalIndex = std::uint32_t;

@@ -23,8 +23,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "openvcu/core/result.hpp"
 #include "openvcu/signals/catalog.hpp"
@@ -34,6 +36,7 @@ namespace openvcu::signals {
 namespace detail {
 struct TableHeader;
 struct Slot;
+struct Plane;
 }  // namespace detail
 
 enum class Quality : std::uint8_t {
@@ -97,6 +100,9 @@ struct EffectiveCommand {
 /// CLOCK_MONOTONIC in nanoseconds (vDSO, no system call on Linux).
 [[nodiscard]] std::int64_t monotonicNowNs() noexcept;
 
+/// How long a watch entry whose owner's pid is gone stays reserved after its last wait.
+inline constexpr std::chrono::seconds WATCH_LEASE{10};
+
 enum class OpenMode : std::uint8_t {
   /// Services: attach; create the table if it is missing or was left incomplete by a
   /// killed creator; replace a table of another configuration only when no process is
@@ -132,6 +138,46 @@ struct TableInfo {
 /// @note thread-safe and process-safe: any number of threads and processes may call any
 ///       method concurrently. Every per-signal method is noexcept, allocation-free,
 ///       lock-free and free of system calls (except the wake described at waitForChange).
+/// A watch on chosen signals (SignalTable::watch): its epoch moves when one of them is
+/// written on any plane or has its quality marked, and not for the rest of the table's
+/// traffic, so a thread that reacts to a few signals sleeps while can-rx writes hundreds.
+///
+///   signals::SignalWatch watch = table.watch(myIndexes);
+///   for (;;) { const auto epoch = watch.epoch(); react(); (void)watch.wait(epoch, 250ms); }
+///
+/// @note restricted thread-safe: one waiting thread. Move-only; destroy it before the
+///       SignalTable it came from is unmapped.
+class SignalWatch {
+ public:
+  SignalWatch() = default;
+  SignalWatch(SignalWatch&& other) noexcept;
+  SignalWatch& operator=(SignalWatch&& other) noexcept;
+  SignalWatch(const SignalWatch&) = delete;
+  SignalWatch& operator=(const SignalWatch&) = delete;
+  /// Clears its bits from the watched slots and frees its entry.
+  ~SignalWatch();
+
+  /// true when it owns a watch entry; false when it fell back to the table's epoch (no free
+  /// entry, or a default-constructed watch): then every write wakes it. Correct either way.
+  [[nodiscard]] bool dedicated() const noexcept { return m_entry >= 0; }
+  /// The entry it owns (0..31), -1 when not dedicated.
+  [[nodiscard]] int entry() const noexcept { return m_entry; }
+  /// The watch's change epoch (31 bits, wrapping).
+  [[nodiscard]] std::uint32_t epoch() const noexcept;
+  /// Sleeps until epoch() != lastEpoch or `timeout` passed; returns epoch(). Also renews the
+  /// entry's lease (see SignalTable::watch).
+  std::uint32_t wait(std::uint32_t lastEpoch, std::chrono::nanoseconds timeout) noexcept;
+
+ private:
+  friend class SignalTable;
+  void release() noexcept;
+
+  detail::TableHeader* m_header{nullptr};
+  detail::Slot* m_slots{nullptr};
+  std::vector<SignalIndex> m_indexes;  ///< watched, in range, for release()
+  int m_entry{-1};
+};
+
 class SignalTable {
  public:
   /// Attaches to (or creates, see OpenMode) the table "/openvcu-<instance>" for `catalog`.
@@ -207,9 +253,20 @@ class SignalTable {
   ///       call for the first change after a waiter went to sleep and none otherwise.
   std::uint32_t waitForChange(std::uint32_t lastEpoch, std::chrono::nanoseconds timeout) const noexcept;
 
+  /// A watch on `indexes` (indexes out of range are ignored): woken only by writes and
+  /// quality marks of those signals. Takes one of the table's 32 watch entries: a free
+  /// one, or one whose owner is gone (its pid no longer exists) and has not waited for
+  /// WATCH_LEASE. Clears the bits a previous owner
+  /// left in every slot, then sets its own. With no entry free the watch falls back to the
+  /// table's epoch (dedicated() false). Writers pay one load per write for watches, plus one
+  /// atomic add per watch of the written slot (and a wake-up only for a sleeping watch).
+  /// @note start-up only: allocates, walks every slot once.
+  SignalWatch watch(std::span<const SignalIndex> indexes);
+
  private:
   SignalTable(int lockFd, void* base, std::size_t bytes, std::string name, bool created) noexcept;
   void release() noexcept;
+  void notify(detail::Plane& plane) noexcept;
 
   int m_lockFd{-1};  ///< holds LOCK_SH on the lock file for as long as we are attached
   void* m_base{nullptr};
