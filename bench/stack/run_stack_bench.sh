@@ -44,3 +44,6 @@ for n in "${names[@]}"; do
     "$(echo "$(kb RssAnon)/1024" | bc -l)" "$(echo "$(kb RssFile)/1024" | bc -l)" "$(echo "$(kb RssShmem)/1024" | bc -l)"
 done
 echo "services without roudi: $total % of one core"
+# the same figures as an operator sees them (vcu top: CPU over its own 1.5 s window)
+echo "vcu top --once (cross-check):"
+"$bin/vcu" top --once --config "$config" | sed -n '/^SERVICE/,/^$/p'
