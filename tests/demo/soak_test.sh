@@ -28,12 +28,17 @@ missed() { beats | grep '^vcu-can-tx' | grep -o 'tx\.\(S1_ES_PGN61427\|CCVS1_PGN
 baseline=$(missed)
 echo "soak: can-tx missed counters before the kills: $(echo $baseline)"
 times=(); roudi_times=(); stalls=0
+# supervisord counts a death within startsecs (3 s) of a start as a failed start and backs
+# off (1 s, 2 s, 3 s, ... before the next try): a kill is aimed only at a process that
+# supervisord already calls RUNNING, so the figures are restart times, not back-off times
+wait_running() { for _ in $(seq 1 50); do ctl status "$1" | grep -q RUNNING && return 0; sleep 0.2; done; fail "$1 not RUNNING"; }
 for round in $(seq 1 "$rounds"); do
   order=$(printf '%s\n' can-rx fsm gpio ecu-sim can-tx | awk -v s="$RANDOM" 'BEGIN{srand(s)} {print rand() "\t" $0}' | sort | cut -f2)
   for service in $order; do
     sleep "0.$(( RANDOM % 9 + 1 ))"
     before=$(state)
     [ "$service" != can-tx ] && baseline=$(missed)
+    wait_running "$service"
     old=$(ctl pid "$service")
     [ "$old" -gt 0 ] 2>/dev/null || fail "$service has no pid"
     kill -KILL "$old"
@@ -74,7 +79,7 @@ for round in $(seq 1 "$rounds"); do
   # ---- iox-roudi: the frame streams' broker, and on the simulated bus the bus itself
   sleep "0.$(( RANDOM % 9 + 1 ))"
   declare -A oldpid
-  for p in roudi can-rx can-tx ecu-sim fsm gpio; do oldpid[$p]=$(ctl pid "$p"); done
+  for p in roudi can-rx can-tx ecu-sim fsm gpio; do wait_running "$p"; oldpid[$p]=$(ctl pid "$p"); done
   kill -KILL "${oldpid[roudi]}"
   killed=$(date +%s%N)
   back=""

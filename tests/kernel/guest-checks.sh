@@ -283,6 +283,35 @@ else
   result j1939_tp_dm1 FAIL "$(cat "$OUT/dm1.txt"); activeDtcs $(plane bus internal.dm1.VIC.activeDtcs), firstSpn $(plane bus internal.dm1.VIC.firstSpn), firstFmi $(plane bus internal.dm1.VIC.firstFmi)"
 fi
 
+# ---------------------------------------------------------------- 5c. J1939 TP: RTS/CTS from the kernel's can-j1939 to the VCU
+# The VIC (SA 0xF3) sends 20 bytes of PropA (PGN 0xEF00, PDU1) to the VCU (0x21): the kernel
+# opens the session with TP.CM RTS and sends the TP.DT packets only as vcu-can-rx grants them
+# with CTS; vcu-can-rx closes it with EndOfMsgAck. Seen on the wire (candump of TP.CM) and in
+# can-rx's counter of completed sessions.
+tp_count() { "$VCU" status --config "$CFG" 2>&1 | grep -o 'vehicle\.tp_completed=[0-9]*' | head -1 | cut -d= -f2; }
+tp_before=$(tp_count)
+candump -L vcan0,00EC0000:00FF0000 > "$OUT/tp_cm.txt" 2>&1 &
+dpid=$!; sleep 0.3
+$PY - > "$OUT/rts.txt" 2>&1 <<'EOF'
+import socket
+payload = bytes(range(1, 21))
+s = socket.socket(socket.AF_CAN, socket.SOCK_DGRAM, socket.CAN_J1939)
+s.settimeout(5)
+s.bind(("vcan0", socket.J1939_NO_NAME, socket.J1939_NO_PGN, 0xF3))
+print("sent", s.sendto(payload, ("vcan0", socket.J1939_NO_NAME, 0xEF00, 0x21)), "bytes to 0x21")
+EOF
+wait_for 5 grep -Eq 'ECF321#13' "$OUT/tp_cm.txt"
+sleep 0.2; kill "$dpid" 2>/dev/null; wait "$dpid" 2>/dev/null
+tp_grew() { local now; now=$(tp_count); [[ -n $now && $now -gt ${tp_before:-0} ]]; }
+wait_for 3 tp_grew
+tp_after=$(tp_count)
+if grep -Eq 'EC21F3#10' "$OUT/tp_cm.txt" && grep -Eq 'ECF321#11' "$OUT/tp_cm.txt" && grep -Eq 'ECF321#13' "$OUT/tp_cm.txt" \
+   && tp_grew; then
+  result j1939_tp_rts_cts PASS "kernel RTS (20 bytes, PGN EF00, F3 -> 21), can-rx CTS and EndOfMsgAck on the wire, vehicle.tp_completed $tp_before -> $tp_after"
+else
+  result j1939_tp_rts_cts FAIL "$(tr '\n' ' ' < "$OUT/rts.txt"); TP.CM seen: $(tr '\n' '|' < "$OUT/tp_cm.txt"); tp_completed $tp_before -> $tp_after"
+fi
+
 # ---------------------------------------------------------------- 4c. link down / up
 ip link set vcan0 down
 wait_for 5 plane_is bus internal.bus.vehicle.state 4; down_seen=$?   # 4 = Down
