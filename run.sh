@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The first command: installs what is missing, builds, and runs the openvcu stack on the
 # simulated HHEA vehicle under supervisord, in the foreground, until Ctrl-C.
-#   ./run.sh                      the stack + the simulated vehicle, a live status view
+#   ./run.sh                      the stack + the simulated vehicle, a live status view, and
+#                                 the Qt HMI when a display is available (DISPLAY/WAYLAND_DISPLAY)
 #   ./run.sh --scenario drive     also drive it: Start -> Connect Driving -> AC charging -> Stop
-#   ./run.sh --headless           no status view: a status line every 5 s
+#   ./run.sh --headless           no HMI, no status view: a status line every 5 s
 #   ./run.sh --for SECONDS        stop after SECONDS
 #   ./run.sh --isolated           in private mount and network namespaces (LCM multicast stays
 #                                 on loopback; needed where multicast must not reach the network)
@@ -46,7 +47,10 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   cmake --build build -j "$(nproc 2>/dev/null || echo 2)" | tail -1
   if [ $isolated -eq 1 ]; then
     # the same sandbox as the tests: fresh /dev/shm and /tmp, lo only, PID namespace
-    exec tests/harness/run_isolated.sh --keep "$root" -- "$root/run.sh" "${args[@]}"
+    keep=(--keep "$root")
+    # the X server's socket folder, so that the HMI reaches the display from the sandbox
+    [ -n "${DISPLAY:-}" ] && [ -d /tmp/.X11-unix ] && keep+=(--keep /tmp/.X11-unix)
+    exec tests/harness/run_isolated.sh "${keep[@]}" -- "$root/run.sh" "${args[@]}"
   fi
 fi
 
@@ -77,7 +81,12 @@ sed -e "s/^;user=root.*/$( [ "$(id -u)" = 0 ] && echo 'user=root' || echo ';not 
 if [ -n "$bus" ]; then
   sed -i -e '/^\[program:ecu-sim\]/,/^$/s/^autorestart=true/autostart=false\nautorestart=true/' "$run/openvcu.conf"
 fi
-echo "== starting the stack under supervisord (logs: $run)"
+hmi=0
+if [ $headless -eq 0 ] && [ -x "$bin/vcu-hmi" ] && { [ -n "${DISPLAY:-}" ] || [ -n "${WAYLAND_DISPLAY:-}" ]; }; then
+  hmi=1
+  sed -i -e '/^\[program:hmi\]/,/^$/s/^autostart=false/autostart=true/' "$run/openvcu.conf"
+fi
+echo "== starting the stack under supervisord (logs: $run)$( [ $hmi -eq 1 ] && echo ', with the HMI')"
 supervisord -n -c "$run/openvcu.conf" &
 supervisor=$!
 

@@ -1,0 +1,437 @@
+#include "display_logic.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "openvcu/config/json.hpp"
+
+namespace openvcu::hmi {
+namespace {
+
+bool contains(std::string_view text, std::string_view part) {
+  return text.find(part) != std::string_view::npos;
+}
+
+std::string lastComponent(std::string_view key) {
+  const auto dot = key.rfind('.');
+  return std::string(dot == std::string_view::npos ? key : key.substr(dot + 1));
+}
+
+/// Only one numeric conversion (%f %e %g with flags, width, precision) and nothing that reads memory (%s, %n).
+bool safeNumberFormat(std::string_view format) {
+  int conversions = 0;
+  for (std::size_t i = 0; i < format.size(); ++i) {
+    if (format[i] != '%') continue;
+    if (i + 1 < format.size() && format[i + 1] == '%') {
+      ++i;
+      continue;
+    }
+    std::size_t j = i + 1;
+    while (j < format.size() && std::string_view("-+ #0123456789.").find(format[j]) != std::string_view::npos) ++j;
+    if (j >= format.size() || std::string_view("fFeEgG").find(format[j]) == std::string_view::npos) return false;
+    ++conversions;
+    i = j;
+  }
+  return conversions == 1 && format.size() < 32;
+}
+
+/// Collects every signal key a condition reads: {"key": K, ...} and {"internal.x": value}.
+void collectKeys(const config::Json& node, std::set<std::string, std::less<>>& keys) {
+  if (node.is_array()) {
+    for (const auto& element : node) collectKeys(element, keys);
+    return;
+  }
+  if (!node.is_object()) return;
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    if (it.key() == "key" && it->is_string()) keys.insert(it->get<std::string>());
+    if (it.key().find('.') != std::string::npos) keys.insert(it.key());
+    collectKeys(*it, keys);
+  }
+}
+
+}  // namespace
+
+std::string_view statusName(ValueStatus status) noexcept {
+  switch (status) {
+    case ValueStatus::Ready:
+      return "Ready";
+    case ValueStatus::Stale:
+      return "Stale";
+    case ValueStatus::NotConnected:
+      return "NotConnected";
+    case ValueStatus::Error:
+      return "Error";
+  }
+  return "Error";
+}
+
+ValueStatus classify(const signals::SlotSnapshot& slot, std::int64_t nowNs, std::int64_t staleAfterNs) noexcept {
+  if (slot.bus.updates > 0) {
+    if (slot.bus.quality != signals::Quality::Valid) return ValueStatus::Stale;
+    if (staleAfterNs > 0 && nowNs - slot.bus.timestampNs > staleAfterNs) return ValueStatus::Stale;
+    return ValueStatus::Ready;
+  }
+  if (slot.command.updates > 0 || slot.override.active) return ValueStatus::Ready;
+  return ValueStatus::NotConnected;
+}
+
+std::optional<double> shownValue(const signals::SlotSnapshot& slot) noexcept {
+  if (slot.bus.updates > 0) return slot.bus.value;
+  if (const auto command = signals::effectiveCommand(slot)) return command->value;
+  return std::nullopt;
+}
+
+std::optional<std::string> valueText(const signals::SignalInfo& signal, double value) {
+  if (!std::isfinite(value) || std::trunc(value) != value || std::fabs(value) > 9.0e18) return std::nullopt;
+  const auto integral = static_cast<std::int64_t>(value);
+  for (const auto& [number, text] : signal.valueTexts) {
+    if (number == integral) return text;
+  }
+  return std::nullopt;
+}
+
+std::string formatValue(const signals::SignalInfo& signal, double value, std::string_view format) {
+  if (auto maybeText = valueText(signal, value)) return *maybeText;
+  std::array<char, 64> text{};
+  if (format.empty()) {
+    const auto [end, ec] = std::to_chars(text.data(), text.data() + text.size() - 1, value);
+    if (ec != std::errc{}) return "?";
+    *end = '\0';
+  } else {
+    const std::string spec = safeNumberFormat(format) ? std::string(format) : std::string("%g");
+    std::snprintf(text.data(), text.size(), spec.c_str(), value);
+  }
+  std::string out = text.data();
+  if (!signal.unit.empty()) out += " " + signal.unit;
+  return out;
+}
+
+std::string shortLabel(std::string_view key) {
+  // "HVLP_SA71.HS2_Status_Feedback.InverterStatus" -> "HVLP_SA71 InverterStatus";
+  // "internal.relay.Cl15" -> "relay Cl15"
+  const auto first = key.find('.');
+  const auto last = key.rfind('.');
+  if (first == std::string_view::npos) return std::string(key);
+  if (key.starts_with("internal.")) {
+    const auto previous = key.rfind('.', last - 1);
+    return std::string(key.substr(previous + 1, last - previous - 1)) + " " + std::string(key.substr(last + 1));
+  }
+  return std::string(key.substr(0, first)) + " " + std::string(key.substr(last + 1));
+}
+
+TextTone toneOf(std::string_view text) noexcept {
+  // the good words first: "No fault (Normal)" is good although it contains "fault"
+  for (const std::string_view good :
+       {"Normal", "normal", "No fault", "No error", "OK", "Ok", "Closed", "Connected", "Ready"}) {
+    if (contains(text, good)) return TextTone::Good;
+  }
+  for (const std::string_view bad : {"Fault", "fault", "Error", "error", "Fail", "fail", "Alarm", "alarm"}) {
+    if (contains(text, bad)) return TextTone::Bad;
+  }
+  return TextTone::Neutral;
+}
+
+std::int64_t staleAfterFor(const signals::SignalInfo& signal, std::int64_t busTimeoutNs) noexcept {
+  return signal.kind == signals::SignalKind::Bus ? busTimeoutNs : 0;
+}
+
+// ---- dashboard file ------------------------------------------------------------------
+
+Result<DashboardConfig> parseDashboardConfig(std::string_view text, const std::string& source,
+                                             const signals::Catalog& catalog) {
+  auto jsonResult = config::parseJson(text, source);
+  if (!jsonResult) return jsonResult.error();
+  const config::Json& root = *jsonResult;
+  config::JsonChecker check(source);
+  DashboardConfig result;
+  if (!check.isObject(root, "")) return check.firstError();
+  check.onlyKeys(root, "", {"comment", "dials", "header", "status", "items", "staleAfterMs"});
+  const auto knownKey = [&](const std::string& key, const std::string& path) {
+    if (key.empty()) return;
+    if (const auto found = catalog.find(key); !found) check.error(path, found.error().message);
+  };
+  if (const config::Json* dials = check.member(root, "", "dials", false); dials && check.isObject(*dials, "/dials")) {
+    check.onlyKeys(*dials, "/dials", {"voltage", "current", "power"});
+    result.voltageKey = check.string(*dials, "/dials", "voltage", false).value_or("");
+    result.currentKey = check.string(*dials, "/dials", "current", false).value_or("");
+    result.powerKey = check.string(*dials, "/dials", "power", false).value_or("");
+    knownKey(result.voltageKey, "/dials/voltage");
+    knownKey(result.currentKey, "/dials/current");
+    knownKey(result.powerKey, "/dials/power");
+  }
+  if (const config::Json* header = check.member(root, "", "header", false);
+      header && check.isObject(*header, "/header")) {
+    check.onlyKeys(*header, "/header", {"soc", "soh", "charger"});
+    result.socKey = check.string(*header, "/header", "soc", false).value_or("");
+    result.sohKey = check.string(*header, "/header", "soh", false).value_or("");
+    result.chargerKey = check.string(*header, "/header", "charger", false).value_or("");
+    knownKey(result.socKey, "/header/soc");
+    knownKey(result.sohKey, "/header/soh");
+    knownKey(result.chargerKey, "/header/charger");
+  }
+  if (const config::Json* status = check.array(root, "", "status", false)) {
+    for (std::size_t i = 0; i < status->size(); ++i) {
+      const std::string path = config::JsonChecker::join("/status", i);
+      if (!(*status)[i].is_string()) {
+        check.error(path, "must be a signal key (a string)");
+        continue;
+      }
+      result.statusKeys.push_back((*status)[i].get<std::string>());
+      knownKey(result.statusKeys.back(), path);
+    }
+  }
+  if (const auto stale = check.number(root, "", "staleAfterMs", false)) {
+    if (*stale < 100 || *stale > 3'600'000) {
+      check.error("/staleAfterMs", "must be between 100 and 3600000 ms");
+    } else {
+      result.staleAfterMs = static_cast<std::int64_t>(*stale);
+    }
+  }
+  if (const config::Json* items = check.array(root, "", "items", true)) {
+    for (std::size_t i = 0; i < items->size(); ++i) {
+      const std::string path = config::JsonChecker::join("/items", i);
+      const config::Json& item = (*items)[i];
+      if (!check.isObject(item, path)) continue;
+      check.onlyKeys(item, path, {"key", "label", "unit", "format", "comment"});
+      DashboardItem entry;
+      entry.key = check.string(item, path, "key").value_or("");
+      knownKey(entry.key, path + "/key");
+      entry.label = check.string(item, path, "label", false).value_or(lastComponent(entry.key));
+      const auto index = catalog.indexOf(entry.key);
+      entry.unit = check.string(item, path, "unit", false).value_or(index ? catalog[*index].unit : "");
+      entry.format = check.string(item, path, "format", false).value_or("%.1f");
+      if (!safeNumberFormat(entry.format)) {
+        check.error(path + "/format", "'" + entry.format + "' must be one printf number conversion, e.g. \"%.1f\"");
+      }
+      result.items.push_back(std::move(entry));
+    }
+  }
+  if (!check.ok()) return check.firstError();
+  return result;
+}
+
+Result<DashboardConfig> loadDashboardConfig(const std::string& path, const signals::Catalog& catalog) {
+  std::ifstream in(path);
+  if (!in) return Error{"cannot read the dashboard file", Location{path, 0, 0, {}}};
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseDashboardConfig(text.str(), path, catalog);
+}
+
+// ---- state machine rules -------------------------------------------------------------
+
+Result<FsmRules> FsmRules::parse(std::string_view text, const std::string& source) {
+  auto jsonResult = config::parseJson(text, source);
+  if (!jsonResult) return jsonResult.error();
+  const config::Json& root = *jsonResult;
+  if (!root.is_object() || !root.contains("states") || !root["states"].is_array()) {
+    return Error{"must be an object with a \"states\" array", Location::json(source, "/states")};
+  }
+  FsmRules rules;
+  for (std::size_t i = 0; i < root["states"].size(); ++i) {
+    const config::Json& state = root["states"][i];
+    if (!state.is_object() || !state.contains("name") || !state["name"].is_string()) {
+      return Error{"a state needs a \"name\"", Location::json(source, "/states/" + std::to_string(i))};
+    }
+    State entry;
+    entry.name = state["name"].get<std::string>();
+    if (state.contains("transitions") && state["transitions"].is_array()) {
+      for (const auto& transition : state["transitions"]) {
+        if (transition.is_object() && transition.contains("condition"))
+          collectKeys(transition["condition"], entry.reads);
+      }
+    }
+    rules.m_states.push_back(std::move(entry));
+  }
+  return rules;
+}
+
+Result<FsmRules> FsmRules::load(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return Error{"cannot read the FSM file", Location{path, 0, 0, {}}};
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse(text.str(), path);
+}
+
+std::string FsmRules::stateName(double index) const {
+  if (index >= 0 && index < static_cast<double>(m_states.size()) && std::trunc(index) == index) {
+    return m_states[static_cast<std::size_t>(index)].name;
+  }
+  std::array<char, 32> text{};
+  std::snprintf(text.data(), text.size(), "state %g", index);
+  return text.data();
+}
+
+bool FsmRules::stateReads(double index, std::string_view key) const {
+  if (!(index >= 0 && index < static_cast<double>(m_states.size()))) return false;
+  const auto& reads = m_states[static_cast<std::size_t>(index)].reads;
+  return reads.find(key) != reads.end();
+}
+
+// ---- service health ------------------------------------------------------------------
+
+HealthTracker::HealthTracker(std::vector<std::string> expected, std::int64_t staleAfterNs)
+    : m_staleAfterNs(staleAfterNs) {
+  for (std::string& name : expected) {
+    ServiceHealth service;
+    service.name = std::move(name);
+    m_services.push_back(std::move(service));
+  }
+}
+
+bool HealthTracker::onHeartbeat(const ipc::Heartbeat& beat, std::int64_t receivedMonoNs) {
+  auto it = std::find_if(m_services.begin(), m_services.end(),
+                         [&](const ServiceHealth& service) { return service.name == beat.service; });
+  const bool added = it == m_services.end();
+  if (added) {
+    ServiceHealth service;
+    service.name = beat.service;
+    m_services.push_back(std::move(service));
+    it = m_services.end() - 1;
+  }
+  if (it->pid != 0 && it->pid != beat.pid) ++it->restarts;
+  it->pid = beat.pid;
+  it->uptimeMs = beat.uptimeMs;
+  it->lastBeatMonoNs = receivedMonoNs;
+  it->status = beat.status;
+  ++it->heartbeats;
+  return added;
+}
+
+ValueStatus HealthTracker::statusOf(const ServiceHealth& service, std::int64_t nowNs) const noexcept {
+  if (service.lastBeatMonoNs < 0) return ValueStatus::NotConnected;
+  const std::int64_t age = nowNs - service.lastBeatMonoNs;
+  if (age > 3 * m_staleAfterNs) return ValueStatus::NotConnected;
+  if (age > m_staleAfterNs) return ValueStatus::Stale;
+  if (service.status.starts_with("stopping")) return ValueStatus::NotConnected;
+  return ValueStatus::Ready;
+}
+
+const ServiceHealth* HealthTracker::find(std::string_view name) const noexcept {
+  for (const ServiceHealth& service : m_services) {
+    if (service.name == name) return &service;
+  }
+  return nullptr;
+}
+
+// ---- commands --------------------------------------------------------------------------
+
+CommandTracker::CommandTracker(std::string issuer, std::int64_t firstId, std::int64_t timeoutNs)
+    : m_issuer(std::move(issuer)), m_nextId(firstId > 0 ? firstId : 1), m_timeoutNs(timeoutNs) {}
+
+void CommandTracker::prepare(ipc::CommandRequest& request, std::int64_t nowNs) {
+  request.requestId = m_nextId++;
+  request.issuer = m_issuer;
+  m_pending[request.requestId] = nowNs + m_timeoutNs;
+}
+
+std::optional<std::pair<std::int64_t, CommandOutcome>> CommandTracker::onAck(const ipc::CommandAck& ack) {
+  if (ack.issuer != m_issuer) return std::nullopt;
+  const auto it = m_pending.find(ack.requestId);
+  if (it == m_pending.end()) return std::nullopt;
+  m_pending.erase(it);
+  CommandOutcome outcome;
+  if (ack.accepted) {
+    outcome.state = CommandOutcome::State::Accepted;
+    outcome.text = "accepted by " + ack.responder;
+  } else {
+    outcome.state = CommandOutcome::State::Refused;
+    outcome.text = "refused by " + ack.responder + ": " + ack.reason;
+  }
+  return std::make_pair(ack.requestId, std::move(outcome));
+}
+
+std::vector<std::pair<std::int64_t, CommandOutcome>> CommandTracker::expire(std::int64_t nowNs) {
+  std::vector<std::pair<std::int64_t, CommandOutcome>> expired;
+  for (auto it = m_pending.begin(); it != m_pending.end();) {
+    if (nowNs >= it->second) {
+      std::array<char, 64> text{};
+      std::snprintf(text.data(), text.size(), "no answer within %.1f s", static_cast<double>(m_timeoutNs) / 1e9);
+      expired.emplace_back(it->first, CommandOutcome{CommandOutcome::State::TimedOut, text.data()});
+      it = m_pending.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  return expired;
+}
+
+// ---- log ring --------------------------------------------------------------------------
+
+LogBuffer::LogBuffer(std::size_t capacity) : m_capacity(capacity > 0 ? capacity : 1) {}
+
+bool LogBuffer::add(ipc::LogRecord record) {
+  m_records.push_back(std::move(record));
+  if (m_records.size() <= m_capacity) return false;
+  m_records.pop_front();
+  return true;
+}
+
+std::vector<std::size_t> LogBuffer::select(std::string_view service, ipc::LogLevel minimum) const {
+  std::vector<std::size_t> indices;
+  for (std::size_t i = 0; i < m_records.size(); ++i) {
+    const ipc::LogRecord& record = m_records[i];
+    if (record.level < minimum) continue;
+    if (!service.empty() && record.service != service) continue;
+    indices.push_back(i);
+  }
+  return indices;
+}
+
+std::string LogBuffer::exportText(const std::vector<std::size_t>& indices) const {
+  std::string out;
+  for (const std::size_t index : indices) {
+    if (index >= m_records.size()) continue;
+    const ipc::LogRecord& record = m_records[index];
+    out += formatUtc(record.timestampNs) + " " + std::string(levelName(record.level)) + " " + record.service + ": " +
+           record.text + "\n";
+  }
+  return out;
+}
+
+std::set<std::string> LogBuffer::services() const {
+  std::set<std::string> names;
+  for (const ipc::LogRecord& record : m_records) names.insert(record.service);
+  return names;
+}
+
+std::string_view levelName(ipc::LogLevel level) noexcept {
+  switch (level) {
+    case ipc::LogLevel::Trace:
+      return "trace";
+    case ipc::LogLevel::Debug:
+      return "debug";
+    case ipc::LogLevel::Info:
+      return "info";
+    case ipc::LogLevel::Warning:
+      return "warning";
+    case ipc::LogLevel::Error:
+      return "error";
+    case ipc::LogLevel::Critical:
+      return "critical";
+  }
+  return "?";
+}
+
+std::string formatUtc(std::int64_t realtimeNs) {
+  const std::int64_t seconds =
+      realtimeNs >= 0 ? realtimeNs / 1'000'000'000 : (realtimeNs - 999'999'999) / 1'000'000'000;
+  const std::int64_t milliseconds = (realtimeNs - seconds * 1'000'000'000) / 1'000'000;
+  const auto time = static_cast<time_t>(seconds);
+  tm parts{};
+  ::gmtime_r(&time, &parts);
+  std::array<char, 96> text{};
+  std::snprintf(text.data(), text.size(), "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", parts.tm_year + 1900, parts.tm_mon + 1,
+                parts.tm_mday, parts.tm_hour, parts.tm_min, parts.tm_sec, static_cast<int>(milliseconds));
+  return text.data();
+}
+
+}  // namespace openvcu::hmi

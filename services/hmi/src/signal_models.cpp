@@ -1,0 +1,692 @@
+#include "signal_models.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/config/json.hpp"
+#include "openvcu/j1939/id.hpp"
+
+namespace openvcu::hmi {
+namespace {
+
+QString toQ(const std::string& text) {
+  return QString::fromStdString(text);
+}
+
+/// Reads one slot; empty without a table.
+std::optional<signals::SlotSnapshot> readSlot(std::optional<signals::SignalIndex> index) {
+  StackConnection* stack = StackConnection::instance();
+  if (!stack || !index || !stack->table()) return std::nullopt;
+  return stack->table()->read(*index);
+}
+
+QString hex(std::uint32_t value, int digits) {
+  return QStringLiteral("0x%1")
+      .arg(value, digits, 16, QLatin1Char('0'))
+      .toUpper()
+      .replace(QStringLiteral("0X"), QStringLiteral("0x"));
+}
+
+}  // namespace
+
+// ---- SignalValue ---------------------------------------------------------------------
+
+SignalValue::SignalValue(QObject* parent) : QObject(parent) {
+  if (StackConnection* stack = StackConnection::instance()) {
+    connect(stack, &StackConnection::displayTick, this, &SignalValue::refresh);
+  }
+}
+
+void SignalValue::setKey(const QString& key) {
+  if (key == m_key) return;
+  m_key = key;
+  m_index.reset();
+  m_error.clear();
+  if (StackConnection* stack = StackConnection::instance(); stack && !key.isEmpty()) {
+    const auto found = stack->catalog().find(key.toStdString());
+    if (found) {
+      m_index = *found;
+    } else {
+      m_error = toQ(found.error().message);
+    }
+  }
+  Q_EMIT keyChanged();
+  refresh();
+}
+
+void SignalValue::setStaleAfterMs(double milliseconds) {
+  m_staleAfterNs = static_cast<std::int64_t>(milliseconds * 1e6);
+  Q_EMIT keyChanged();
+}
+
+QString SignalValue::unit() const {
+  StackConnection* stack = StackConnection::instance();
+  return stack && m_index ? toQ(stack->catalog()[*m_index].unit) : QString();
+}
+double SignalValue::minimum() const {
+  StackConnection* stack = StackConnection::instance();
+  return stack && m_index ? stack->catalog()[*m_index].minimum : 0.0;
+}
+double SignalValue::maximum() const {
+  StackConnection* stack = StackConnection::instance();
+  return stack && m_index ? stack->catalog()[*m_index].maximum : 0.0;
+}
+
+void SignalValue::refresh() {
+  ModelStatus::Value status = ModelStatus::NotConnected;
+  double value = m_value;
+  QString text = QStringLiteral("--");
+  if (!m_error.isEmpty()) {
+    status = ModelStatus::Error;
+  } else if (const auto slot = readSlot(m_index)) {
+    status =
+        ModelStatus::from(classify(*slot, signals::monotonicNowNs(),
+                                   staleAfterFor(StackConnection::instance()->catalog()[*m_index], m_staleAfterNs)));
+    if (const auto shown = shownValue(*slot)) {
+      value = *shown;
+      text = toQ(formatValue(StackConnection::instance()->catalog()[*m_index], value, "%.1f"));
+    }
+  }
+  if (status == m_status && value == m_value && text == m_text) return;
+  m_status = status;
+  m_value = value;
+  m_text = text;
+  Q_EMIT changed();
+}
+
+// ---- DashboardSettings ------------------------------------------------------------------
+
+DashboardSettings::DashboardSettings(QObject* parent) : QObject(parent) {
+  StackConnection* stack = StackConnection::instance();
+  if (!stack) {
+    m_status = ModelStatus::NotConnected;
+    return;
+  }
+  const std::string& path = stack->settings().dashboardPath;
+  if (path.empty()) return;
+  auto loaded = loadDashboardConfig(path, stack->catalog());
+  if (!loaded) {
+    m_status = ModelStatus::Error;
+    m_error = toQ(loaded.error().toString());
+    return;
+  }
+  m_config = std::move(*loaded);
+}
+
+// ---- SignalListModel -------------------------------------------------------------------
+
+SignalListModel::SignalListModel(QObject* parent) : QAbstractListModel(parent) {
+  if (StackConnection* stack = StackConnection::instance()) {
+    connect(stack, &StackConnection::displayTick, this, &SignalListModel::refresh);
+  }
+}
+
+int SignalListModel::rowCount(const QModelIndex& parent) const {
+  return parent.isValid() ? 0 : static_cast<int>(m_rows.size());
+}
+
+QVariant SignalListModel::data(const QModelIndex& index, int role) const {
+  if (!index.isValid() || index.row() >= static_cast<int>(m_rows.size())) return {};
+  const Row& row = m_rows[static_cast<std::size_t>(index.row())];
+  switch (role) {
+    case KeyRole:
+      return toQ(row.item.key);
+    case LabelRole:
+    case Qt::DisplayRole:
+      return toQ(row.item.label);
+    case TextRole:
+      return row.text;
+    case StatusRole:
+      return static_cast<int>(row.status);
+    case ToneRole:
+      return static_cast<int>(row.tone);
+    case DetailRole: {
+      StackConnection* stack = StackConnection::instance();
+      if (!stack || !row.index) return QStringLiteral("unknown signal");
+      const signals::SignalInfo& info = stack->catalog()[*row.index];
+      QString detail = toQ(info.key) + QStringLiteral("\nrange ") + QString::number(info.minimum) +
+                       QStringLiteral(" .. ") + QString::number(info.maximum) + QLatin1Char(' ') + toQ(info.unit);
+      if (!info.comment.empty()) detail += QLatin1Char('\n') + toQ(info.comment);
+      for (const auto& [number, text] : info.valueTexts) {
+        detail += QStringLiteral("\n%1 = %2").arg(number).arg(toQ(text));
+      }
+      detail += QStringLiteral("\nstatus: ") + toQ(std::string(statusName(row.status)));
+      return detail;
+    }
+    default:
+      return {};
+  }
+}
+
+QHash<int, QByteArray> SignalListModel::roleNames() const {
+  return {{KeyRole, "key"},   {LabelRole, "label"},  {TextRole, "valueText"}, {StatusRole, "valueStatus"},
+          {ToneRole, "tone"}, {DetailRole, "detail"}};
+}
+
+QStringList SignalListModel::keys() const {
+  QStringList list;
+  for (const Row& row : m_rows) list << toQ(row.item.key);
+  return list;
+}
+
+void SignalListModel::setKeys(const QStringList& keys) {
+  std::vector<DashboardItem> items;
+  for (const QString& key : keys) {
+    DashboardItem item;
+    item.key = key.toStdString();
+    item.label = shortLabel(item.key);
+    item.format = "%.1f";
+    items.push_back(std::move(item));
+  }
+  m_dashboard = false;
+  setRows(std::move(items));
+}
+
+void SignalListModel::setDashboard(bool dashboard) {
+  m_dashboard = dashboard;
+  if (!dashboard) return;
+  DashboardSettings settings;
+  m_staleAfterNs = static_cast<std::int64_t>(settings.staleAfterMs() * 1e6);
+  if (settings.status() == ModelStatus::Error) {
+    m_status = ModelStatus::Error;
+    m_error = settings.errorString();
+    Q_EMIT statusChanged();
+  }
+  setRows(settings.config().items);
+}
+
+void SignalListModel::setRows(std::vector<DashboardItem> items) {
+  beginResetModel();
+  m_rows.clear();
+  StackConnection* stack = StackConnection::instance();
+  for (DashboardItem& item : items) {
+    Row row;
+    if (stack) row.index = stack->catalog().indexOf(item.key);
+    row.item = std::move(item);
+    m_rows.push_back(std::move(row));
+  }
+  endResetModel();
+  Q_EMIT keysChanged();
+  refresh();
+}
+
+void SignalListModel::refresh() {
+  StackConnection* stack = StackConnection::instance();
+  ModelStatus::Value status = ModelStatus::NotConnected;
+  if (stack && stack->table()) status = ModelStatus::Ready;
+  if (m_status == ModelStatus::Error) status = ModelStatus::Error;
+  const std::int64_t now = signals::monotonicNowNs();
+  bool anyStale = false;
+  for (std::size_t i = 0; i < m_rows.size(); ++i) {
+    Row& row = m_rows[i];
+    QString text = QStringLiteral("--");
+    ValueStatus valueStatus = row.index ? ValueStatus::NotConnected : ValueStatus::Error;
+    TextTone tone = TextTone::Neutral;
+    if (const auto slot = readSlot(row.index)) {
+      valueStatus = classify(*slot, now, staleAfterFor(stack->catalog()[*row.index], m_staleAfterNs));
+      if (const auto shown = shownValue(*slot)) {
+        signals::SignalInfo info = stack->catalog()[*row.index];
+        if (!row.item.unit.empty()) info.unit = row.item.unit;
+        const std::string formatted = formatValue(info, *shown, row.item.format);
+        text = toQ(formatted);
+        if (valueText(info, *shown)) tone = toneOf(formatted);
+      }
+    }
+    if (valueStatus == ValueStatus::Stale) anyStale = true;
+    if (text != row.text || valueStatus != row.status || tone != row.tone) {
+      row.text = text;
+      row.status = valueStatus;
+      row.tone = tone;
+      const QModelIndex changed = index(static_cast<int>(i));
+      Q_EMIT dataChanged(changed, changed, {TextRole, StatusRole, ToneRole});
+    }
+  }
+  if (status == ModelStatus::Ready && anyStale) status = ModelStatus::Stale;
+  if (status != m_status) {
+    m_status = status;
+    Q_EMIT statusChanged();
+  }
+}
+
+// ---- SignalTreeModel --------------------------------------------------------------------
+
+SignalTreeModel::SignalTreeModel(QObject* parent) : QAbstractListModel(parent) {
+  build();
+  rebuildVisible();
+  if (StackConnection* stack = StackConnection::instance()) {
+    connect(stack, &StackConnection::displayTick, this, &SignalTreeModel::refresh);
+  }
+}
+
+SignalTreeModel::Node SignalTreeModel::makeNode(int depth, int parent, QString name, QString detail) {
+  Node node;
+  node.depth = depth;
+  node.parent = parent;
+  node.name = std::move(name);
+  node.detail = std::move(detail);
+  return node;
+}
+
+void SignalTreeModel::build() {
+  StackConnection* stack = StackConnection::instance();
+  if (!stack) return;
+  const config::VehicleConfig& vehicle = stack->config();
+  for (const config::BusConfig& bus : vehicle.buses) {
+    const int busNode = static_cast<int>(m_nodes.size());
+    m_nodes.push_back(makeNode(0, -1, toQ(bus.name), toQ(bus.link.toString())));
+    m_nodes.back().expanded = true;
+    std::map<std::string, std::vector<std::size_t>> byNode;
+    for (const std::size_t messageIndex : bus.messages) {
+      const dbc::Message& message = vehicle.database.messages[messageIndex];
+      byNode[message.transmitter].push_back(messageIndex);
+    }
+    for (const auto& [nodeName, messages] : byNode) {
+      const int nodeRow = static_cast<int>(m_nodes.size());
+      m_nodes.push_back(makeNode(1, busNode, toQ(nodeName), QStringLiteral("%1 messages").arg(messages.size())));
+      for (const std::size_t messageIndex : messages) {
+        const dbc::Message& message = vehicle.database.messages[messageIndex];
+        QString detail = hex(message.id, message.extended ? 8 : 3);
+        if (message.isJ1939()) detail += QStringLiteral("  PGN %1").arg(j1939::pgnOf(message.id));
+        detail += message.cycleTimeMs ? QStringLiteral("  cycle %1 ms").arg(*message.cycleTimeMs)
+                                      : QStringLiteral("  no cycle");
+        const int messageRow = static_cast<int>(m_nodes.size());
+        m_nodes.push_back(makeNode(2, nodeRow, toQ(message.name), detail));
+        for (const dbc::Signal& signal : message.signals) {
+          const std::string key = config::signalKey(message, signal);
+          const auto index = stack->catalog().indexOf(key);
+          if (!index) continue;
+          if (!m_nodes[static_cast<std::size_t>(messageRow)].rateIndex)
+            m_nodes[static_cast<std::size_t>(messageRow)].rateIndex = index;
+          m_nodes.push_back(makeNode(3, messageRow, toQ(signal.name), toQ(signal.unit)));
+          m_nodes.back().key = toQ(key);
+          m_nodes.back().index = index;
+        }
+      }
+    }
+  }
+  m_status = ModelStatus::NotConnected;
+}
+
+void SignalTreeModel::rebuildVisible() {
+  beginResetModel();
+  m_visible.clear();
+  const bool searching = !m_search.isEmpty();
+  if (searching) {
+    for (Node& node : m_nodes) node.matches = false;
+    for (std::size_t i = 0; i < m_nodes.size(); ++i) {
+      Node& node = m_nodes[i];
+      if (node.name.contains(m_search, Qt::CaseInsensitive) || node.key.contains(m_search, Qt::CaseInsensitive)) {
+        node.matches = true;
+        for (int parent = node.parent; parent >= 0; parent = m_nodes[static_cast<std::size_t>(parent)].parent) {
+          m_nodes[static_cast<std::size_t>(parent)].matches = true;
+        }
+      }
+    }
+  }
+  for (std::size_t i = 0; i < m_nodes.size(); ++i) {
+    const Node& node = m_nodes[i];
+    if (searching) {
+      if (node.matches) m_visible.push_back(static_cast<int>(i));
+      continue;
+    }
+    bool shown = true;
+    for (int parent = node.parent; parent >= 0; parent = m_nodes[static_cast<std::size_t>(parent)].parent) {
+      if (!m_nodes[static_cast<std::size_t>(parent)].expanded) {
+        shown = false;
+        break;
+      }
+    }
+    if (shown) m_visible.push_back(static_cast<int>(i));
+  }
+  endResetModel();
+}
+
+void SignalTreeModel::setSearch(const QString& search) {
+  if (search == m_search) return;
+  m_search = search;
+  Q_EMIT searchChanged();
+  rebuildVisible();
+}
+
+void SignalTreeModel::toggle(int row) {
+  if (row < 0 || row >= static_cast<int>(m_visible.size())) return;
+  Node& node = m_nodes[static_cast<std::size_t>(m_visible[static_cast<std::size_t>(row)])];
+  if (node.depth == 3) return;
+  node.expanded = !node.expanded;
+  rebuildVisible();
+}
+
+int SignalTreeModel::rowCount(const QModelIndex& parent) const {
+  return parent.isValid() ? 0 : static_cast<int>(m_visible.size());
+}
+
+QVariant SignalTreeModel::data(const QModelIndex& index, int role) const {
+  if (!index.isValid() || index.row() >= static_cast<int>(m_visible.size())) return {};
+  const Node& node = m_nodes[static_cast<std::size_t>(m_visible[static_cast<std::size_t>(index.row())])];
+  switch (role) {
+    case DepthRole:
+      return node.depth;
+    case NameRole:
+    case Qt::DisplayRole:
+      return node.name;
+    case DetailRole:
+      if (node.depth == 2 && node.rateHz >= 0)
+        return node.detail + QStringLiteral("  measured %1 Hz").arg(node.rateHz, 0, 'f', 1);
+      return node.detail;
+    case ValueRole:
+      return node.value;
+    case KeyRole:
+      return node.key;
+    case ExpandedRole:
+      return node.expanded;
+    case StatusRole:
+      return static_cast<int>(node.status);
+    case CommentRole: {
+      StackConnection* stack = StackConnection::instance();
+      return stack && node.index ? toQ(stack->catalog()[*node.index].comment) : QString();
+    }
+    default:
+      return {};
+  }
+}
+
+QHash<int, QByteArray> SignalTreeModel::roleNames() const {
+  return {{DepthRole, "depth"}, {NameRole, "name"},         {DetailRole, "detail"},      {ValueRole, "valueText"},
+          {KeyRole, "key"},     {ExpandedRole, "expanded"}, {StatusRole, "valueStatus"}, {CommentRole, "comment"}};
+}
+
+void SignalTreeModel::refresh() {
+  StackConnection* stack = StackConnection::instance();
+  const ModelStatus::Value status = stack && stack->table() ? ModelStatus::Ready : ModelStatus::NotConnected;
+  if (status != m_status) {
+    m_status = status;
+    Q_EMIT statusChanged();
+  }
+  if (!stack || !stack->table()) return;
+  const std::int64_t now = signals::monotonicNowNs();
+  // Only the visible rows are read: the tree may hold thousands of signals.
+  for (std::size_t row = 0; row < m_visible.size(); ++row) {
+    Node& node = m_nodes[static_cast<std::size_t>(m_visible[row])];
+    bool changed = false;
+    if (node.depth == 3 && node.index) {
+      const auto slot = stack->table()->read(*node.index);
+      if (!slot) continue;
+      const ValueStatus valueStatus = classify(*slot, now, staleAfterFor(stack->catalog()[*node.index], 2'000'000'000));
+      QString text = QStringLiteral("--");
+      if (const auto shown = shownValue(*slot)) text = toQ(formatValue(stack->catalog()[*node.index], *shown, ""));
+      changed = text != node.value || valueStatus != node.status;
+      node.value = text;
+      node.status = valueStatus;
+    } else if (node.depth == 2 && node.rateIndex) {
+      const auto bus = stack->table()->readBus(*node.rateIndex);
+      if (!bus) continue;
+      if (node.lastRateNs == 0) {
+        node.lastRateNs = now;
+        node.lastUpdates = bus->updates;
+      } else if (now - node.lastRateNs >= 1'000'000'000) {
+        const double rate =
+            static_cast<double>(bus->updates - node.lastUpdates) * 1e9 / static_cast<double>(now - node.lastRateNs);
+        changed = std::fabs(rate - node.rateHz) > 0.05;
+        node.rateHz = rate;
+        node.lastRateNs = now;
+        node.lastUpdates = bus->updates;
+      }
+    }
+    if (changed) {
+      const QModelIndex at = index(static_cast<int>(row));
+      Q_EMIT dataChanged(at, at, {ValueRole, StatusRole, DetailRole});
+    }
+  }
+}
+
+// ---- ScheduleModel ----------------------------------------------------------------------
+
+ScheduleModel::ScheduleModel(QObject* parent) : QAbstractListModel(parent) {
+  build();
+  if (StackConnection* stack = StackConnection::instance()) {
+    connect(stack, &StackConnection::displayTick, this, &ScheduleModel::refresh);
+    connect(stack, &StackConnection::commandFinished, this, [this](qint64 id, bool accepted, const QString& text) {
+      const auto it = m_pending.find(id);
+      if (it == m_pending.end()) return;
+      const Pending pending = it->second;
+      m_pending.erase(it);
+      if (accepted && pending.cycleMs > 0) {
+        const QString message = m_rows[static_cast<std::size_t>(pending.row)].message;
+        for (std::size_t i = 0; i < m_rows.size(); ++i) {
+          if (m_rows[i].message != message) continue;
+          m_rows[i].cycleMs = pending.cycleMs;
+          Q_EMIT dataChanged(index(static_cast<int>(i)), index(static_cast<int>(i)), {CycleRole});
+        }
+      }
+      m_lastResult = pending.what + QStringLiteral(": ") + text;
+      Q_EMIT statusChanged();
+    });
+  }
+}
+
+void ScheduleModel::build() {
+  StackConnection* stack = StackConnection::instance();
+  if (!stack) return;
+  const config::VehicleConfig& vehicle = stack->config();
+  std::map<std::string, int> deltaByMessage;
+  if (!vehicle.scheduleFile.empty()) {
+    auto json = config::readJsonFile(vehicle.scheduleFile);
+    if (!json) {
+      m_status = ModelStatus::Error;
+      m_error = toQ(json.error().toString());
+    } else if (json->is_object() && json->contains("messages") && (*json)["messages"].is_object()) {
+      for (auto it = (*json)["messages"].begin(); it != (*json)["messages"].end(); ++it) {
+        const config::Json& entry = *it;
+        if (entry.is_object() && entry.contains("safety") && entry["safety"].is_object() &&
+            entry["safety"].contains("deltaUs") && entry["safety"]["deltaUs"].is_number()) {
+          deltaByMessage[it.key()] = entry["safety"]["deltaUs"].get<int>();
+        }
+      }
+    }
+  }
+  for (const config::BusConfig& bus : vehicle.buses) {
+    for (const std::size_t messageIndex : bus.messages) {
+      const dbc::Message& message = vehicle.database.messages[messageIndex];
+      const auto senders = message.transmitters();
+      if (std::find(senders.begin(), senders.end(), vehicle.node) == senders.end()) continue;
+      const auto delta = deltaByMessage.find(message.name);
+      for (const dbc::Signal& signal : message.signals) {
+        Row row;
+        row.message = toQ(message.name);
+        row.signal = toQ(signal.name);
+        const std::string key = config::signalKey(message, signal);
+        row.key = toQ(key);
+        row.index = stack->catalog().indexOf(key);
+        if (!row.index) continue;
+        row.cycleMs = message.cycleTimeMs ? static_cast<int>(*message.cycleTimeMs) : 0;
+        row.pair = delta != deltaByMessage.end();
+        row.deltaUs = row.pair ? delta->second : 0;
+        m_rows.push_back(std::move(row));
+      }
+    }
+  }
+}
+
+int ScheduleModel::rowCount(const QModelIndex& parent) const {
+  return parent.isValid() ? 0 : static_cast<int>(m_rows.size());
+}
+
+QVariant ScheduleModel::data(const QModelIndex& index, int role) const {
+  if (!index.isValid() || index.row() >= static_cast<int>(m_rows.size())) return {};
+  const Row& row = m_rows[static_cast<std::size_t>(index.row())];
+  switch (role) {
+    case MessageRole:
+      return row.message;
+    case SignalRole:
+    case Qt::DisplayRole:
+      return row.signal;
+    case CycleRole:
+      return row.cycleMs;
+    case PairRole:
+      return row.pair;
+    case DeltaRole:
+      return row.deltaUs;
+    case ValueRole:
+      return row.value;
+    case OverrideRole:
+      return row.overrideText;
+    case OverriddenRole:
+      return row.overridden;
+    case KeyRole:
+      return row.key;
+    case RangeRole: {
+      StackConnection* stack = StackConnection::instance();
+      if (!stack || !row.index) return QString();
+      const signals::SignalInfo& info = stack->catalog()[*row.index];
+      return QStringLiteral("%1 .. %2 %3").arg(info.minimum).arg(info.maximum).arg(toQ(info.unit));
+    }
+    default:
+      return {};
+  }
+}
+
+QHash<int, QByteArray> ScheduleModel::roleNames() const {
+  return {{MessageRole, "message"},
+          {SignalRole, "signal"},
+          {CycleRole, "cycleMs"},
+          {PairRole, "shmPair"},
+          {DeltaRole, "deltaUs"},
+          {ValueRole, "valueText"},
+          {OverrideRole, "overrideText"},
+          {OverriddenRole, "overridden"},
+          {KeyRole, "key"},
+          {RangeRole, "range"}};
+}
+
+void ScheduleModel::refresh() {
+  StackConnection* stack = StackConnection::instance();
+  const ModelStatus::Value status = m_status == ModelStatus::Error               ? ModelStatus::Error
+                                    : stack && stack->table() && stack->events() ? ModelStatus::Ready
+                                                                                 : ModelStatus::NotConnected;
+  if (status != m_status) {
+    m_status = status;
+    Q_EMIT statusChanged();
+  }
+  if (!stack || !stack->table()) return;
+  for (std::size_t i = 0; i < m_rows.size(); ++i) {
+    Row& row = m_rows[i];
+    const auto slot = stack->table()->read(*row.index);
+    if (!slot) continue;
+    const signals::SignalInfo& info = stack->catalog()[*row.index];
+    QString value = QStringLiteral("--");
+    if (slot->bus.updates > 0) {
+      value = toQ(formatValue(info, slot->bus.value, ""));
+    } else if (const auto command = signals::effectiveCommand(*slot)) {
+      value = toQ(formatValue(info, command->value, ""));
+    }
+    const bool overridden = slot->override.active;
+    const QString overrideText = overridden ? toQ(formatValue(info, slot->override.value, "")) : QString();
+    if (value == row.value && overridden == row.overridden && overrideText == row.overrideText) continue;
+    row.value = value;
+    row.overridden = overridden;
+    row.overrideText = overrideText;
+    Q_EMIT dataChanged(index(static_cast<int>(i)), index(static_cast<int>(i)),
+                       {ValueRole, OverrideRole, OverriddenRole});
+  }
+}
+
+QString ScheduleModel::send(ipc::CommandRequest request, const QString& what) {
+  StackConnection* stack = StackConnection::instance();
+  if (!stack) return QStringLiteral("not connected");
+  request.text = "vcu-hmi ECU setup";
+  const std::int64_t id = stack->sendCommand(std::move(request));
+  if (id < 0) return QStringLiteral("not sent: no event bus");
+  m_pending[id] = Pending{.row = 0, .cycleMs = 0, .what = what};
+  m_lastResult = what + QStringLiteral(": waiting for the answer");
+  Q_EMIT statusChanged();
+  return {};
+}
+
+QString ScheduleModel::setCycle(int row, const QString& milliseconds) {
+  if (row < 0 || row >= static_cast<int>(m_rows.size())) return QStringLiteral("no such row");
+  bool ok = false;
+  const int cycle = milliseconds.trimmed().toInt(&ok);
+  if (!ok || cycle < 1 || cycle > 60000) return QStringLiteral("cycle must be a whole number of ms in 1..60000");
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::ScheduleCycle;
+  request.key = m_rows[static_cast<std::size_t>(row)].message.toStdString();
+  request.value = cycle;
+  const QString what =
+      QStringLiteral("cycle of %1 to %2 ms").arg(m_rows[static_cast<std::size_t>(row)].message).arg(cycle);
+  const QString refused = send(std::move(request), what);
+  if (refused.isEmpty() && !m_pending.empty()) {
+    auto last = std::prev(m_pending.end());
+    last->second.row = row;
+    last->second.cycleMs = cycle;
+  }
+  return refused;
+}
+
+std::optional<double> ScheduleModel::checkedValue(int row, const QString& text, QString* refusal) const {
+  StackConnection* stack = StackConnection::instance();
+  if (row < 0 || row >= static_cast<int>(m_rows.size()) || !stack) {
+    *refusal = QStringLiteral("no such row");
+    return std::nullopt;
+  }
+  const signals::SignalInfo& info = stack->catalog()[*m_rows[static_cast<std::size_t>(row)].index];
+  bool ok = false;
+  double number = text.trimmed().toDouble(&ok);
+  if (!ok) {
+    for (const auto& [raw, name] : info.valueTexts) {
+      if (QString::fromStdString(name) == text.trimmed()) {
+        number = static_cast<double>(raw);
+        ok = true;
+      }
+    }
+  }
+  if (!ok || !std::isfinite(number)) {
+    *refusal = QStringLiteral("'%1' is not a number").arg(text);
+    return std::nullopt;
+  }
+  if (info.minimum < info.maximum && (number < info.minimum || number > info.maximum)) {
+    *refusal = QStringLiteral("%1 is outside the range [%2, %3] %4")
+                   .arg(number)
+                   .arg(info.minimum)
+                   .arg(info.maximum)
+                   .arg(toQ(info.unit));
+    return std::nullopt;
+  }
+  return number;
+}
+
+QString ScheduleModel::setOverride(int row, const QString& value) {
+  QString refusal;
+  const auto number = checkedValue(row, value, &refusal);
+  if (!number) return refusal;
+  const Row& entry = m_rows[static_cast<std::size_t>(row)];
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::SetOverride;
+  request.key = entry.key.toStdString();
+  request.value = *number;
+  return send(std::move(request), QStringLiteral("override %1 = %2").arg(entry.signal).arg(*number));
+}
+
+QString ScheduleModel::setDefault(int row, const QString& value) {
+  QString refusal;
+  const auto number = checkedValue(row, value, &refusal);
+  if (!number) return refusal;
+  const Row& entry = m_rows[static_cast<std::size_t>(row)];
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::ScheduleDefault;
+  request.key = entry.key.toStdString();
+  request.value = *number;
+  return send(std::move(request), QStringLiteral("schedule value of %1 = %2").arg(entry.signal).arg(*number));
+}
+
+QString ScheduleModel::clearOverride(int row) {
+  if (row < 0 || row >= static_cast<int>(m_rows.size())) return QStringLiteral("no such row");
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::ClearOverride;
+  request.key = m_rows[static_cast<std::size_t>(row)].key.toStdString();
+  return send(std::move(request),
+              QStringLiteral("clear override of %1").arg(m_rows[static_cast<std::size_t>(row)].signal));
+}
+
+}  // namespace openvcu::hmi

@@ -1,0 +1,287 @@
+#pragma once
+// Models that show signal values from the table, read at display rate (StackConnection's
+// displayTick), never per CAN frame: one value (SignalValue), a list of values (the
+// dashboard grid and the vehicle status table: SignalListModel), the dashboard's dial keys
+// (DashboardSettings), the DBC tree (SignalTreeModel) and the transmit schedule
+// (ScheduleModel). Every model has `status` (ModelStatus) and `errorString`.
+// @note GUI thread only.
+
+#include <QAbstractListModel>
+#include <QObject>
+#include <QQmlEngine>
+#include <QString>
+#include <QStringList>
+#include <map>
+#include <optional>
+#include <vector>
+
+#ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
+#include "display_logic.hpp"
+#include "stack_connection.hpp"
+#endif
+
+namespace openvcu::hmi {
+
+/// One signal for a dial or the header. QML: SignalValue { key: "VIC...HS_FastUpdSOC" }.
+class SignalValue : public QObject {
+  Q_OBJECT
+  QML_ELEMENT
+  Q_PROPERTY(QString key READ key WRITE setKey NOTIFY keyChanged)
+  Q_PROPERTY(double staleAfterMs READ staleAfterMs WRITE setStaleAfterMs NOTIFY keyChanged)
+  Q_PROPERTY(double value READ value NOTIFY changed)
+  Q_PROPERTY(QString text READ text NOTIFY changed)
+  Q_PROPERTY(QString unit READ unit NOTIFY keyChanged)
+  Q_PROPERTY(double minimum READ minimum NOTIFY keyChanged)
+  Q_PROPERTY(double maximum READ maximum NOTIFY keyChanged)
+  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY changed)
+  Q_PROPERTY(QString errorString READ errorString NOTIFY changed)
+ public:
+  explicit SignalValue(QObject* parent = nullptr);
+  [[nodiscard]] QString key() const { return m_key; }
+  void setKey(const QString& key);
+  [[nodiscard]] double staleAfterMs() const noexcept { return static_cast<double>(m_staleAfterNs) / 1e6; }
+  void setStaleAfterMs(double milliseconds);
+  [[nodiscard]] double value() const noexcept { return m_value; }
+  [[nodiscard]] QString text() const { return m_text; }
+  [[nodiscard]] QString unit() const;
+  [[nodiscard]] double minimum() const;
+  [[nodiscard]] double maximum() const;
+  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
+  [[nodiscard]] QString errorString() const { return m_error; }
+  /// Reads the table now (also on every display tick).
+  Q_INVOKABLE void refresh();
+ Q_SIGNALS:
+  void keyChanged();
+  void changed();
+
+ private:
+  QString m_key;
+  std::optional<sig::SignalIndex> m_index;
+  std::int64_t m_staleAfterNs{2'000'000'000};
+  double m_value{};
+  QString m_text{QStringLiteral("--")};
+  ModelStatus::Value m_status{ModelStatus::NotConnected};
+  QString m_error;
+};
+
+/// The dashboard file's dials and tiles (--dashboard FILE). Status Error with the file's
+/// error when it is refused; the HMI then runs with the defaults.
+class DashboardSettings : public QObject {
+  Q_OBJECT
+  QML_ELEMENT
+  Q_PROPERTY(QString voltageKey READ voltageKey CONSTANT)
+  Q_PROPERTY(QString currentKey READ currentKey CONSTANT)
+  Q_PROPERTY(QString powerKey READ powerKey CONSTANT)
+  Q_PROPERTY(QString socKey READ socKey CONSTANT)
+  Q_PROPERTY(QString sohKey READ sohKey CONSTANT)
+  Q_PROPERTY(QString chargerKey READ chargerKey CONSTANT)
+  Q_PROPERTY(QStringList statusKeys READ statusKeys CONSTANT)
+  Q_PROPERTY(double staleAfterMs READ staleAfterMs CONSTANT)
+  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status CONSTANT)
+  Q_PROPERTY(QString errorString READ errorString CONSTANT)
+ public:
+  explicit DashboardSettings(QObject* parent = nullptr);
+  [[nodiscard]] QString voltageKey() const { return QString::fromStdString(m_config.voltageKey); }
+  [[nodiscard]] QString currentKey() const { return QString::fromStdString(m_config.currentKey); }
+  [[nodiscard]] QString powerKey() const { return QString::fromStdString(m_config.powerKey); }
+  [[nodiscard]] QString socKey() const { return QString::fromStdString(m_config.socKey); }
+  [[nodiscard]] QString sohKey() const { return QString::fromStdString(m_config.sohKey); }
+  [[nodiscard]] QString chargerKey() const { return QString::fromStdString(m_config.chargerKey); }
+  [[nodiscard]] QStringList statusKeys() const {
+    QStringList keys;
+    for (const std::string& key : m_config.statusKeys) keys << QString::fromStdString(key);
+    return keys;
+  }
+  [[nodiscard]] double staleAfterMs() const noexcept { return static_cast<double>(m_config.staleAfterMs); }
+  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
+  [[nodiscard]] QString errorString() const { return m_error; }
+  [[nodiscard]] const DashboardConfig& config() const noexcept { return m_config; }
+
+ private:
+  DashboardConfig m_config;
+  ModelStatus::Value m_status{ModelStatus::Ready};
+  QString m_error;
+};
+
+/// A list of signals with their current text, status and tone. Either `keys` (the
+/// vehicle status table: labels are the keys' last components) or `dashboard: true` (the
+/// tiles of the dashboard file). Rows change only when their text or status changes.
+class SignalListModel : public QAbstractListModel {
+  Q_OBJECT
+  QML_ELEMENT
+  Q_PROPERTY(QStringList keys READ keys WRITE setKeys NOTIFY keysChanged)
+  Q_PROPERTY(bool dashboard READ dashboard WRITE setDashboard NOTIFY keysChanged)
+  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
+  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
+ public:
+  enum Role { KeyRole = Qt::UserRole + 1, LabelRole, TextRole, StatusRole, ToneRole, DetailRole };
+  explicit SignalListModel(QObject* parent = nullptr);
+  [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
+  [[nodiscard]] QVariant data(const QModelIndex& index, int role) const override;
+  [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
+  [[nodiscard]] QStringList keys() const;
+  void setKeys(const QStringList& keys);
+  [[nodiscard]] bool dashboard() const noexcept { return m_dashboard; }
+  void setDashboard(bool dashboard);
+  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
+  [[nodiscard]] QString errorString() const { return m_error; }
+  /// Reads the table now (also on every display tick).
+  Q_INVOKABLE void refresh();
+ Q_SIGNALS:
+  void keysChanged();
+  void statusChanged();
+
+ private:
+  struct Row {
+    DashboardItem item;
+    std::optional<sig::SignalIndex> index;
+    QString text{QStringLiteral("--")};
+    ValueStatus status{ValueStatus::NotConnected};
+    TextTone tone{TextTone::Neutral};
+  };
+  void setRows(std::vector<DashboardItem> items);
+  std::vector<Row> m_rows;
+  bool m_dashboard{};
+  std::int64_t m_staleAfterNs{2'000'000'000};
+  ModelStatus::Value m_status{ModelStatus::NotConnected};
+  QString m_error;
+};
+
+/// The DBC tree flattened into rows with a depth (bus 0, node 1, message 2, signal 3) for a
+/// ListView: expand/collapse per row, a search that shows matching signals with their
+/// parents. Message rows show ID, PGN, DBC cycle and the measured rate (updates of the
+/// message's first signal per second); signal rows the current value.
+class SignalTreeModel : public QAbstractListModel {
+  Q_OBJECT
+  QML_ELEMENT
+  Q_PROPERTY(QString search READ search WRITE setSearch NOTIFY searchChanged)
+  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
+  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
+ public:
+  enum Role {
+    DepthRole = Qt::UserRole + 1,
+    NameRole,
+    DetailRole,
+    ValueRole,
+    KeyRole,
+    ExpandedRole,
+    StatusRole,
+    CommentRole
+  };
+  explicit SignalTreeModel(QObject* parent = nullptr);
+  [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
+  [[nodiscard]] QVariant data(const QModelIndex& index, int role) const override;
+  [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
+  [[nodiscard]] QString search() const { return m_search; }
+  void setSearch(const QString& search);
+  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
+  [[nodiscard]] QString errorString() const { return m_error; }
+  Q_INVOKABLE void toggle(int row);
+  /// Nodes of the whole tree (for tests): buses + nodes + messages + signals.
+  [[nodiscard]] std::size_t nodeCount() const noexcept { return m_nodes.size(); }
+ Q_SIGNALS:
+  void searchChanged();
+  void statusChanged();
+
+ private:
+  struct Node {
+    int depth{};
+    int parent{-1};
+    QString name;
+    QString detail;
+    QString key;  ///< signals only
+    std::optional<sig::SignalIndex> index;
+    bool expanded{};
+    bool matches{true};
+    // message rows: measured rate
+    std::optional<sig::SignalIndex> rateIndex;
+    std::uint64_t lastUpdates{};
+    std::int64_t lastRateNs{};
+    double rateHz{-1};
+    QString value;
+    ValueStatus status{ValueStatus::NotConnected};
+  };
+  static Node makeNode(int depth, int parent, QString name, QString detail);
+  void build();
+  void rebuildVisible();
+  void refresh();
+  std::vector<Node> m_nodes;
+  std::vector<int> m_visible;
+  QString m_search;
+  ModelStatus::Value m_status{ModelStatus::NotConnected};
+  QString m_error;
+};
+
+/// The transmit schedule of this VCU (the messages its DBC node transmits, with the cycle
+/// from the DBC, the J1939-76 pair of the schedule file) as rows of signals with the value
+/// commanded and the override. Edits are commands to can-tx and the owning services:
+/// setCycle (ScheduleCycle), setDefault (ScheduleDefault), setOverride / clearOverride;
+/// each is checked here first
+/// (range, integer ms) and then acknowledged or refused by the stack.
+class ScheduleModel : public QAbstractListModel {
+  Q_OBJECT
+  QML_ELEMENT
+  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
+  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
+  Q_PROPERTY(QString lastResult READ lastResult NOTIFY statusChanged)
+ public:
+  enum Role {
+    MessageRole = Qt::UserRole + 1,
+    SignalRole,
+    CycleRole,
+    PairRole,
+    DeltaRole,
+    ValueRole,
+    OverrideRole,
+    OverriddenRole,
+    KeyRole,
+    RangeRole
+  };
+  explicit ScheduleModel(QObject* parent = nullptr);
+  [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
+  [[nodiscard]] QVariant data(const QModelIndex& index, int role) const override;
+  [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
+  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
+  [[nodiscard]] QString errorString() const { return m_error; }
+  [[nodiscard]] QString lastResult() const { return m_lastResult; }
+  /// Each returns "" when sent (the outcome follows in lastResult) or the local refusal.
+  Q_INVOKABLE QString setCycle(int row, const QString& milliseconds);
+  Q_INVOKABLE QString setOverride(int row, const QString& value);
+  /// The schedule's value for the signal (sent while nothing commands it): ScheduleDefault.
+  Q_INVOKABLE QString setDefault(int row, const QString& value);
+  Q_INVOKABLE QString clearOverride(int row);
+ Q_SIGNALS:
+  void statusChanged();
+
+ private:
+  struct Row {
+    QString message;
+    QString signal;
+    QString key;
+    std::optional<sig::SignalIndex> index;
+    int cycleMs{};
+    bool pair{};
+    int deltaUs{};
+    QString value;
+    QString overrideText;
+    bool overridden{};
+  };
+  void build();
+  void refresh();
+  QString send(ipc::CommandRequest request, const QString& what);
+  /// The number typed for row `row` (a number or a value text), checked against the DBC
+  /// range; empty with *refusal set otherwise.
+  std::optional<double> checkedValue(int row, const QString& text, QString* refusal) const;
+  std::vector<Row> m_rows;
+  struct Pending {
+    int row{};
+    int cycleMs{};  ///< > 0: a cycle change to show once accepted
+    QString what;
+  };
+  std::map<qint64, Pending> m_pending;
+  ModelStatus::Value m_status{ModelStatus::NotConnected};
+  QString m_error;
+  QString m_lastResult;
+};
+
+}  // namespace openvcu::hmi

@@ -1,0 +1,93 @@
+import QtQuick
+import QtTest
+import OpenVcu.Models
+import OpenVcu.Hmi
+
+// The main interactions of the HMI screens without a running stack (issue 10).
+Item {
+    id: root
+    width: 720
+    height: 600
+
+    Component { id: vehicleTab; VehicleTab { anchors.fill: parent } }
+    Component { id: dashboardTab; DashboardTab { anchors.fill: parent } }
+    Component { id: canTab; CanDataTab { anchors.fill: parent } }
+    Component { id: setupTab; EcuSetupTab { anchors.fill: parent } }
+    Component { id: debugTab; DebugTab { anchors.fill: parent } }
+    Component { id: traceTab; TraceViewer { anchors.fill: parent } }
+    Component { id: keypadComponent; Keypad {} }
+    Component { id: scheduleComponent; ScheduleModel {} }
+
+    /// Depth-first search for an item whose `text` property equals (or contains) `text`.
+    function findText(item, text, exact) {
+        if (item.text !== undefined && (exact ? item.text === text : String(item.text).indexOf(text) >= 0))
+            return item
+        const children = item.children !== undefined ? item.children : []
+        for (let i = 0; i < children.length; ++i) {
+            const found = findText(children[i], text, exact)
+            if (found) return found
+        }
+        if (item.contentItem && item.contentItem !== item) return findText(item.contentItem, text, exact)
+        return null
+    }
+
+    TestCase {
+        name: "HmiScreens"
+        when: windowShown
+
+        function test_every_screen_loads() {
+            for (const component of [vehicleTab, dashboardTab, canTab, setupTab, debugTab, traceTab]) {
+                const screen = createTemporaryObject(component, root)
+                verify(screen !== null, "a screen failed to load")
+            }
+        }
+
+        function test_operator_switches_are_disabled_without_a_stack() {
+            const screen = createTemporaryObject(vehicleTab, root)
+            waitForRendering(screen)
+            const start = findText(screen, "Start / Stop", false)
+            verify(start !== null, "no Start / Stop switch")
+            verify(!start.enabled, "Start must be disabled while the stack is not connected")
+            verify(findText(screen, "Not connected", false) !== null, "the operator status says Not connected")
+        }
+
+        function test_dashboard_marks_values_never_received() {
+            const screen = createTemporaryObject(dashboardTab, root)
+            waitForRendering(screen)
+            verify(findText(screen, "Pack voltage (Not connected)", true) !== null, "the voltage dial is not marked")
+        }
+
+        function test_keypad_typing_gives_the_number() {
+            const keypad = createTemporaryObject(keypadComponent, root)
+            let accepted = ""
+            keypad.accepted.connect(function(text) { accepted = text })
+            keypad.show("cycle (ms)", "")
+            tryCompare(keypad, "opened", true)
+            for (const key of ["5", "0", "OK"]) {
+                const button = findText(keypad.contentItem, key, true)
+                verify(button !== null, "no key " + key)
+                mouseClick(button)
+            }
+            compare(accepted, "50")
+        }
+
+        function test_schedule_edits_are_checked_before_sending() {
+            const schedule = createTemporaryObject(scheduleComponent, root)
+            verify(schedule.rowCount() > 0)
+            compare(schedule.setCycle(0, "fast"), "cycle must be a whole number of ms in 1..60000")
+            compare(schedule.setCycle(0, "20"), "")  // sent: the answer follows in lastResult
+            compare(schedule.lastResult.indexOf("waiting for the answer") > 0, true)
+        }
+
+        function test_tapping_a_signal_in_the_tree_plots_it() {
+            const screen = createTemporaryObject(canTab, root)
+            waitForRendering(screen)
+            const plot = findChild(screen, "plot")
+            verify(plot !== null)
+            compare(plot.keys.length, 0)
+            compare(plot.toggleKey("VIC.HVESSD1_PGN61584.HS_ULvl"), "")
+            compare(plot.keys.length, 1)
+            compare(plot.legend.length, 1)
+        }
+    }
+}

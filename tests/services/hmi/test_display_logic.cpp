@@ -1,0 +1,253 @@
+// The HMI's display logic without Qt: value text and status, the dashboard file, the FSM
+// rules behind the operator switches, service health, command acknowledgements, the log
+// ring and the plot's decimation (issue 10).
+#include <doctest/doctest.h>
+
+#include <string>
+#include <vector>
+
+#include "display_logic.hpp"
+#include "plot_and_trace.hpp"
+
+using namespace openvcu;
+using namespace openvcu::hmi;
+
+namespace {
+
+constexpr std::int64_t SECOND_NS = 1'000'000'000;
+constexpr std::int64_t STALE_AFTER_NS = 2 * SECOND_NS;
+
+signals::Catalog smallCatalog() {
+  std::vector<signals::SignalInfo> infos;
+  infos.push_back({.key = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", .unit = "%", .minimum = 0, .maximum = 100});
+  signals::SignalInfo relay{
+      .key = "internal.relay.Cl15", .minimum = 0, .maximum = 1, .kind = signals::SignalKind::Internal};
+  relay.valueTexts = {{0, "Off"}, {1, "On"}};
+  infos.push_back(relay);
+  signals::SignalInfo contactor{.key = "internal.fault.Contactor", .kind = signals::SignalKind::Internal};
+  contactor.valueTexts = {{0, "Normal"}, {1, "Fault"}};
+  infos.push_back(contactor);
+  auto catalog = signals::Catalog::create(std::move(infos));
+  REQUIRE(catalog);
+  return std::move(*catalog);
+}
+
+signals::SlotSnapshot busSlot(double value, std::int64_t timestampNs, signals::Quality quality) {
+  signals::SlotSnapshot slot;
+  slot.bus = {.value = value, .timestampNs = timestampNs, .source = 0xF3, .quality = quality, .updates = 1};
+  return slot;
+}
+
+}  // namespace
+
+TEST_CASE("a fresh valid bus value is Ready, an old one Stale, a never written one NotConnected") {
+  const std::int64_t now = 100 * SECOND_NS;
+  CHECK(classify(busSlot(1, now - SECOND_NS, signals::Quality::Valid), now, STALE_AFTER_NS) == ValueStatus::Ready);
+  CHECK(classify(busSlot(1, now - 3 * SECOND_NS, signals::Quality::Valid), now, STALE_AFTER_NS) == ValueStatus::Stale);
+  CHECK(classify(busSlot(1, now, signals::Quality::Stale), now, STALE_AFTER_NS) == ValueStatus::Stale);
+  CHECK(classify(busSlot(1, now, signals::Quality::OutOfRange), now, STALE_AFTER_NS) == ValueStatus::Stale);
+  CHECK(classify(signals::SlotSnapshot{}, now, STALE_AFTER_NS) == ValueStatus::NotConnected);
+}
+
+TEST_CASE("a commanded value without a bus value is Ready and shown and the bus value wins when there is one") {
+  signals::SlotSnapshot slot;
+  slot.command = {.value = 1, .timestampNs = 5, .writer = 3, .updates = 1};
+  CHECK(classify(slot, 10 * SECOND_NS, STALE_AFTER_NS) == ValueStatus::Ready);
+  REQUIRE(shownValue(slot));
+  CHECK(*shownValue(slot) == 1);
+  slot.bus = {.value = 7, .timestampNs = 10 * SECOND_NS, .quality = signals::Quality::Valid, .updates = 2};
+  CHECK(*shownValue(slot) == 7);
+  CHECK_FALSE(shownValue(signals::SlotSnapshot{}));
+}
+
+TEST_CASE("values are formatted with the unit, or as their value text") {
+  const signals::Catalog catalog = smallCatalog();
+  CHECK(formatValue(catalog[0], 87.456, "%.1f") == "87.5 %");
+  CHECK(formatValue(catalog[1], 1, "%.1f") == "On");
+  CHECK(formatValue(catalog[1], 2, "") == "2");
+  CHECK(formatValue(catalog[0], 50, "%s") == "50 %");  // an unsafe format falls back to %g
+  CHECK(formatValue(catalog[0], 50, "%n") == "50 %");
+}
+
+TEST_CASE("value texts colour rows: Normal green, Fault and Error red, others neutral") {
+  CHECK(toneOf("Normal") == TextTone::Good);
+  CHECK(toneOf("Fault") == TextTone::Bad);
+  CHECK(toneOf("Communication Error") == TextTone::Bad);
+  CHECK(toneOf("Awaiting HV Req") == TextTone::Neutral);
+  CHECK(toneOf("No fault (Normal)") == TextTone::Good);  // #10: Editron's st_mot_fault 0
+}
+
+TEST_CASE("bus signals go stale with age and internal signals (written on change) only by quality") {
+  const signals::Catalog catalog = smallCatalog();
+  CHECK(staleAfterFor(catalog[0], STALE_AFTER_NS) == STALE_AFTER_NS);  // a DBC signal
+  CHECK(staleAfterFor(catalog[1], STALE_AFTER_NS) == 0);               // internal.relay.Cl15
+  const std::int64_t now = 100 * SECOND_NS;
+  CHECK(classify(busSlot(1, now - 50 * SECOND_NS, signals::Quality::Valid), now,
+                 staleAfterFor(catalog[1], STALE_AFTER_NS)) == ValueStatus::Ready);
+}
+
+TEST_CASE("row labels keep the node of bus keys and the group of internal keys") {
+  CHECK(shortLabel("HVLP_SA71.HS2_Status_Feedback.InverterStatus") == "HVLP_SA71 InverterStatus");
+  CHECK(shortLabel("internal.relay.Cl15") == "relay Cl15");
+  CHECK(shortLabel("plain") == "plain");
+}
+
+TEST_CASE("a dashboard file is read with defaults for label, unit and format") {
+  const signals::Catalog catalog = smallCatalog();
+  const auto sut = parseDashboardConfig(
+      R"({"dials": {"voltage": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"},
+          "items": [{"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"}, {"key": "internal.relay.Cl15", "label": "Cl15", "format": "%.0f"}]})",
+      "dash.json", catalog);
+  REQUIRE_MESSAGE(sut, sut.error().toString());
+  REQUIRE(sut->items.size() == 2);
+  CHECK(sut->items[0].label == "HS_FastUpdSOC");
+  CHECK(sut->items[0].unit == "%");
+  CHECK(sut->items[0].format == "%.1f");
+  CHECK(sut->items[1].label == "Cl15");
+  CHECK(sut->voltageKey == "VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
+  CHECK(sut->staleAfterMs == 2000);
+  CHECK(sut->socKey.empty());
+  CHECK(sut->statusKeys.empty());
+}
+
+TEST_CASE("a dashboard file names the header's and the status table's signals and they are checked too") {
+  const signals::Catalog catalog = smallCatalog();
+  const auto sut = parseDashboardConfig(
+      R"({"header": {"soc": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"}, "status": ["internal.relay.Cl15", "internal.fault.Contactor"], "items": []})",
+      "dash.json", catalog);
+  REQUIRE_MESSAGE(sut, sut.error().toString());
+  CHECK(sut->socKey == "VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
+  CHECK(sut->statusKeys == std::vector<std::string>{"internal.relay.Cl15", "internal.fault.Contactor"});
+  const auto badStatus = parseDashboardConfig(R"({"status": ["internal.relay.Cl15", 7], "items": []})", "d", catalog);
+  REQUIRE_FALSE(badStatus);
+  CHECK(badStatus.error().toString().find("/status/1") != std::string::npos);
+  const auto badHeader = parseDashboardConfig(R"({"header": {"soc": "nope"}, "items": []})", "d", catalog);
+  REQUIRE_FALSE(badHeader);
+  CHECK(badHeader.error().toString().find("/header/soc") != std::string::npos);
+}
+
+TEST_CASE("a dashboard file with an unknown key is refused with its JSON path and a suggestion") {
+  const signals::Catalog catalog = smallCatalog();
+  const auto sut = parseDashboardConfig(R"({"items": [{"key": "internal.relay.Cl16"}]})", "dash.json", catalog);
+  REQUIRE_FALSE(sut);
+  const std::string text = sut.error().toString();
+  CHECK_MESSAGE(text.find("/items/0/key") != std::string::npos, text);
+  CHECK_MESSAGE(text.find("did you mean 'internal.relay.Cl15'") != std::string::npos, text);
+}
+
+TEST_CASE("a dashboard file with bad JSON, a bad format or a mistyped member is refused, never thrown") {
+  const signals::Catalog catalog = smallCatalog();
+  CHECK_FALSE(parseDashboardConfig("{", "dash.json", catalog));
+  CHECK_FALSE(parseDashboardConfig(R"({"items": [{"key": "internal.relay.Cl15", "format": "%s"}]})", "d", catalog));
+  CHECK_FALSE(parseDashboardConfig(R"({"itemz": []})", "d", catalog));
+  CHECK_FALSE(parseDashboardConfig(R"({"items": [], "staleAfterMs": 5})", "d", catalog));
+  CHECK_FALSE(loadDashboardConfig("/nonexistent/dash.json", catalog));
+}
+
+TEST_CASE("the FSM rules name states by index and know which switches each state reads") {
+  const auto sut = FsmRules::parse(R"({"initialState": "Standby", "states": [
+      {"name": "Standby", "transitions": [{"condition": {"key": "internal.operator.StartStop", "eq": "Start"}, "nextState": "Ready"}]},
+      {"name": "Ready", "transitions": [{"condition": {"any": [{"internal.operator.ConnectDriving": 1}, {"key": "internal.operator.ACCharging", "eq": 1}]}, "nextState": "Standby"}]}]})",
+                                   "fsm.json");
+  REQUIRE_MESSAGE(sut, sut.error().toString());
+  CHECK(sut->stateName(0) == "Standby");
+  CHECK(sut->stateName(7) == "state 7");
+  CHECK(sut->stateReads(0, "internal.operator.StartStop"));
+  CHECK_FALSE(sut->stateReads(0, "internal.operator.ConnectDriving"));
+  CHECK(sut->stateReads(1, "internal.operator.ConnectDriving"));
+  CHECK(sut->stateReads(1, "internal.operator.ACCharging"));
+  CHECK_FALSE(sut->stateReads(5, "internal.operator.StartStop"));
+}
+
+TEST_CASE("the HHEA state machine offers Start in Standby and not Connect Driving") {
+  const auto sut = FsmRules::load(std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/fsm.json");
+  REQUIRE_MESSAGE(sut, sut.error().toString());
+  CHECK(sut->stateName(0) == "Standby");
+  CHECK(sut->stateReads(0, "internal.operator.StartStop"));
+  CHECK_FALSE(sut->stateReads(0, "internal.operator.ConnectDriving"));
+}
+
+TEST_CASE("an FSM file without states is refused with the reason") {
+  const auto sut = FsmRules::parse(R"({"initialState": "x"})", "fsm.json");
+  REQUIRE_FALSE(sut);
+  CHECK(sut.error().toString().find("states") != std::string::npos);
+}
+
+TEST_CASE(
+    "service health: expected services start NotConnected, beat Ready, late Stale, silent NotConnected, restarts "
+    "counted") {
+  HealthTracker sut({"vcu-fsm"}, STALE_AFTER_NS);
+  REQUIRE(sut.services().size() == 1);
+  CHECK(sut.statusOf(sut.services()[0], 0) == ValueStatus::NotConnected);
+  ipc::Heartbeat beat{.service = "vcu-fsm", .pid = 100, .uptimeMs = 10, .status = "ready"};
+  CHECK_FALSE(sut.onHeartbeat(beat, 10 * SECOND_NS));
+  const ServiceHealth& fsm = sut.services()[0];
+  CHECK(sut.statusOf(fsm, 11 * SECOND_NS) == ValueStatus::Ready);
+  CHECK(sut.statusOf(fsm, 13 * SECOND_NS) == ValueStatus::Stale);
+  CHECK(sut.statusOf(fsm, 17 * SECOND_NS) == ValueStatus::NotConnected);
+  beat.pid = 101;
+  sut.onHeartbeat(beat, 18 * SECOND_NS);
+  CHECK(sut.services()[0].restarts == 1);
+  CHECK(sut.statusOf(sut.services()[0], 18 * SECOND_NS) == ValueStatus::Ready);
+  beat.service = "vcu-other";
+  CHECK(sut.onHeartbeat(beat, 18 * SECOND_NS));
+  CHECK(sut.services().size() == 2);
+}
+
+TEST_CASE("a command is answered by its own ack only, refused with the reason, or times out") {
+  CommandTracker sut("vcu-hmi", 41, 2 * SECOND_NS);
+  ipc::CommandRequest first;
+  sut.prepare(first, 0);
+  ipc::CommandRequest second;
+  sut.prepare(second, 0);
+  CHECK(first.requestId == 41);
+  CHECK(second.requestId == 42);
+  CHECK(first.issuer == "vcu-hmi");
+  CHECK_FALSE(sut.onAck({.requestId = 41, .issuer = "vcu", .responder = "vcu-fsm", .accepted = true}));
+  const auto refused = sut.onAck({.requestId = 41,
+                                  .issuer = "vcu-hmi",
+                                  .responder = "vcu-fsm",
+                                  .accepted = false,
+                                  .reason = "not permitted in state Standby"});
+  REQUIRE(refused);
+  CHECK(refused->second.state == CommandOutcome::State::Refused);
+  CHECK(refused->second.text == "refused by vcu-fsm: not permitted in state Standby");
+  CHECK(sut.expire(SECOND_NS).empty());
+  const auto expired = sut.expire(3 * SECOND_NS);
+  REQUIRE(expired.size() == 1);
+  CHECK(expired[0].first == 42);
+  CHECK(expired[0].second.state == CommandOutcome::State::TimedOut);
+  CHECK(sut.pending() == 0);
+}
+
+TEST_CASE("the log ring keeps the newest records and filters by service and level") {
+  LogBuffer sut(3);
+  CHECK_FALSE(sut.add({.timestampNs = 1, .service = "vcu-fsm", .level = ipc::LogLevel::Info, .text = "a"}));
+  sut.add({.timestampNs = 2, .service = "vcu-can-rx", .level = ipc::LogLevel::Warning, .text = "b"});
+  sut.add({.timestampNs = 3, .service = "vcu-fsm", .level = ipc::LogLevel::Error, .text = "c"});
+  CHECK(sut.add({.timestampNs = 4, .service = "vcu-fsm", .level = ipc::LogLevel::Debug, .text = "d"}));
+  CHECK(sut.size() == 3);
+  CHECK(sut.select("", ipc::LogLevel::Trace).size() == 3);
+  CHECK(sut.select("vcu-fsm", ipc::LogLevel::Trace).size() == 2);
+  const auto errors = sut.select("", ipc::LogLevel::Warning);
+  REQUIRE(errors.size() == 2);
+  CHECK(sut.exportText(errors) ==
+        "1970-01-01T00:00:00.000Z warning vcu-can-rx: b\n1970-01-01T00:00:00.000Z error vcu-fsm: c\n");
+}
+
+TEST_CASE("the plot ring drops the oldest sample and decimation gives one min/max per pixel column") {
+  SampleRing ring(4);
+  for (int i = 0; i < 6; ++i) ring.push(i, i * 10);
+  REQUIRE(ring.size() == 4);
+  CHECK(ring.time(0) == 2);
+  CHECK(ring.value(3) == 50);
+  std::vector<float> out(2 * 3);
+  const std::size_t columns = decimate(ring, 2, 6, 2, out);  // [2,4) and [4,6)
+  REQUIRE(columns == 2);
+  CHECK(out[1] == 20);
+  CHECK(out[2] == 30);
+  CHECK(out[4] == 40);
+  CHECK(out[5] == 50);
+  std::vector<float> tooSmall(1);
+  CHECK(decimate(ring, 2, 6, 2, tooSmall) == 0);
+}

@@ -1,0 +1,246 @@
+// vcu-hmi on the whole simulated HHEA stack in the sandbox (issue 10): iox-roudi, vcu-can-rx,
+// vcu-can-tx, vcu-fsm, vcu-gpio, vcu-ecu-sim and vcu-hmi.
+//   - under Xvfb (its own display inside the sandbox), the vehicle driven to Driving: every
+//     tab saved as PNG in the build folder and checked for being non-trivial (size, number
+//     of distinct colours);
+//   - offscreen: every other service and iox-roudi SIGKILLed, the HMI lives on and reports
+//     them late; RouDi and the FSM restarted, the FSM reported Ready again;
+//   - in process: the HMI's own models on the real stack: the Start switch accepted by
+//     vcu-fsm and the state changing, raw frames both ways over iceoryx; a refused command
+//     shows vcu-fsm's reason; the ECU setup's cycle change and override accepted by can-tx.
+#include <doctest/doctest.h>
+#include <signal.h>
+#include <sys/stat.h>
+
+#include <QGuiApplication>
+#include <QImage>
+#include <QSignalSpy>
+#include <QTest>
+#include <chrono>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "frame_trace.hpp"
+#include "integration_support.hpp"
+#include "signal_models.hpp"
+#include "stack_connection.hpp"
+#include "stack_models.hpp"
+
+namespace harness = openvcu::harness;
+namespace fs = std::filesystem;
+using namespace openvcu::integration;
+using namespace std::chrono_literals;
+
+namespace {
+
+const std::vector<std::pair<std::string, std::string>> SERVICES = {{"can-rx", CAN_RX_BINARY},
+                                                                   {"can-tx", CAN_TX_BINARY},
+                                                                   {"fsm", FSM_BINARY},
+                                                                   {"gpio", GPIO_BINARY},
+                                                                   {"ecu-sim", ECU_SIM_BINARY}};
+const char* const TABS[] = {"tab-0-vehicle.png",   "tab-1-dashboard.png", "tab-2-can-data.png",
+                            "tab-3-ecu-setup.png", "tab-4-debug.png",     "tab-5-trace.png"};
+/// A screenshot with fewer distinct colours than this is a blank or a plain error screen.
+constexpr std::size_t MIN_COLOURS = 24;
+constexpr qint64 MIN_PNG_BYTES = 8 * 1024;
+
+struct HmiStack : ConfiguredStack {
+  std::vector<harness::Process*> services;
+  HmiStack() : ConfiguredStack(copyHheaConfig(fs::temp_directory_path() / "hhea")) {
+    REQUIRE_STATUS(sut.startRoudi());
+    for (const auto& [name, binary] : SERVICES) services.push_back(&startService(name, binary));
+    ::mkdir("/tmp/xdg", 0700);
+  }
+  harness::Process& startHmi(std::vector<std::string> extraArguments, std::vector<std::string> environment) {
+    std::vector<std::string> argv{HMI_BINARY, "--config", config.string(), "--dashboard", HMI_DASHBOARD};
+    argv.insert(argv.end(), extraArguments.begin(), extraArguments.end());
+    environment.emplace_back("XDG_RUNTIME_DIR=/tmp/xdg");
+    auto process = sut.start(harness::ProcessSpec{
+        .name = "hmi", .argv = argv, .environment = environment, .notifyReadiness = true, .captureOutput = true});
+    REQUIRE_STATUS(process);
+    return **process;
+  }
+};
+
+void ensureApplication() {
+  static int argc = 1;
+  static char name[] = "test_integration_hmi";
+  static char* argv[] = {name, nullptr};
+  if (!QCoreApplication::instance()) {
+    qputenv("QT_QPA_PLATFORM", "offscreen");
+    static QGuiApplication application(argc, argv);
+  }
+}
+
+std::size_t distinctColours(const QImage& image) {
+  std::set<QRgb> colours;
+  for (int y = 0; y < image.height(); y += 2) {
+    for (int x = 0; x < image.width(); x += 2) colours.insert(image.pixel(x, y));
+  }
+  return colours.size();
+}
+
+}  // namespace
+
+TEST_CASE("vcu-hmi under Xvfb with the whole stack saves a non-trivial screenshot of every tab") {
+  SKIP_UNLESS_ISOLATED();
+  if (!fs::exists("/usr/bin/Xvfb")) {
+    MESSAGE("Xvfb is not installed (apt-get install xvfb): skipped");
+    return;
+  }
+  HmiStack s;
+  // -displayfd: Xvfb picks a free display and writes its number when it accepts clients
+  auto xvfb = s.sut.start(harness::ProcessSpec{
+      .name = "xvfb",
+      .argv = {"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"},
+      .captureOutput = true});
+  REQUIRE_STATUS(xvfb);
+  std::optional<std::string> display;
+  for (int line = 0; line < 20 && !display; ++line) {  // warnings may come first
+    const auto text = (*xvfb)->readLine(10s);
+    REQUIRE_MESSAGE(text, "Xvfb did not report its display");
+    if (!text->empty() && text->find_first_not_of("0123456789") == std::string::npos) display = text;
+  }
+  REQUIRE(display);
+  // drive the vehicle first, so that the screens show live values (Start, then Connect Driving)
+  s.openTable();
+  s.set("internal.operator.StartStop", "Start");
+  REQUIRE(waitForBus(*s.table, s.index("internal.fsm.state"), hheaStateIndex("Ready"), 10s));
+  s.set("internal.operator.ConnectDriving", "1");
+  REQUIRE(waitForBus(*s.table, s.index("internal.fsm.state"), hheaStateIndex("Driving"), 10s));
+  fs::remove_all(HMI_SCREENSHOT_DIR);
+  harness::Process& hmi = s.startHmi(
+      {"--screenshot", HMI_SCREENSHOT_DIR, "--plot", "VIC.HVESSD1_PGN61584.HS_ULvl,VIC.HVESSD1_PGN61584.HS_I"},
+      {"DISPLAY=:" + *display, "QT_QPA_PLATFORM=xcb"});
+  REQUIRE_MESSAGE(hmi.waitForLine("service vcu-fsm: Ready", 15s), "the HMI never heard vcu-fsm");
+  REQUIRE_MESSAGE(hmi.waitForLine("screenshots done", 40s), "no screenshots");
+  for (const char* tab : TABS) {
+    const fs::path file = fs::path(HMI_SCREENSHOT_DIR) / tab;
+    REQUIRE_MESSAGE(fs::exists(file), file.string());
+    CHECK_MESSAGE(static_cast<qint64>(fs::file_size(file)) >= MIN_PNG_BYTES, file.string());
+    const QImage image(QString::fromStdString(file.string()));
+    REQUIRE_MESSAGE(!image.isNull(), file.string());
+    CHECK(image.width() == 720);
+    CHECK(image.height() == 600);
+    const std::size_t colours = distinctColours(image);
+    CHECK_MESSAGE(colours >= MIN_COLOURS, file.string() << ": " << colours << " colours");
+  }
+  CHECK(hmi.running());
+}
+
+TEST_CASE(
+    "vcu-hmi survives the death of every other service and of iox-roudi, reports them late and sees the FSM return") {
+  SKIP_UNLESS_ISOLATED();
+  HmiStack s;
+  harness::Process& hmi = s.startHmi({}, {"QT_QPA_PLATFORM=offscreen"});
+  REQUIRE_MESSAGE(hmi.waitForLine("service vcu-fsm: Ready", 15s), "the HMI never heard vcu-fsm");
+  REQUIRE(hmi.waitForLine("service vcu-ecu-sim: Ready", 10s));
+  for (harness::Process* process : s.services) {
+    REQUIRE(process->signal(SIGKILL));
+    REQUIRE(process->waitForExit(5s));
+  }
+  REQUIRE(s.sut.roudi() != nullptr);
+  REQUIRE(s.sut.roudi()->signal(SIGKILL));  // iox-roudi too: the HMI's frame streams lose it
+  REQUIRE(s.sut.roudi()->waitForExit(5s));
+  CHECK_MESSAGE(hmi.waitForLine("service vcu-fsm: Stale", 10s), "the HMI did not notice vcu-fsm's silence");
+  CHECK(hmi.running());
+  REQUIRE_STATUS(s.sut.startRoudi());
+  s.startService("fsm-restarted", FSM_BINARY);
+  CHECK_MESSAGE(hmi.waitForLine("service vcu-fsm: Ready", 10s), "the HMI did not see vcu-fsm return");
+  CHECK(hmi.running());
+}
+
+TEST_CASE(
+    "the HMI's operator switch starts the real FSM, shows its acceptance and the new state, and shows a refusal's "
+    "reason") {
+  SKIP_UNLESS_ISOLATED();
+  HmiStack s;
+  ensureApplication();
+  openvcu::hmi::StackSettings settings;
+  settings.configPath = s.config.string();
+  settings.frameStreams = true;
+  auto connection = openvcu::hmi::StackConnection::open(settings);
+  REQUIRE_STATUS(connection);
+  openvcu::hmi::FrameTraceModel frames;
+  openvcu::hmi::OperatorModel operators;
+  openvcu::hmi::FsmModel fsm;
+  const int start = operators.rowOf("internal.operator.StartStop");
+  const int drive = operators.rowOf("internal.operator.ConnectDriving");
+  REQUIRE(start >= 0);
+  REQUIRE(drive >= 0);
+  const auto role = [&](int row, int which) { return operators.data(operators.index(row), which); };
+  REQUIRE_MESSAGE(
+      QTest::qWaitFor([&] { return role(start, openvcu::hmi::OperatorModel::EnabledRole).toBool(); }, 10000),
+      "Start never offered");
+  CHECK(fsm.stateName() == "Standby");
+  CHECK_FALSE(role(drive, openvcu::hmi::OperatorModel::EnabledRole).toBool());  // Standby does not read it
+  CHECK(operators.toggle(start).isEmpty());
+  CHECK_MESSAGE(
+      QTest::qWaitFor(
+          [&] { return role(start, openvcu::hmi::OperatorModel::ResultRole).toString() == "accepted by vcu-fsm"; },
+          5000),
+      role(start, openvcu::hmi::OperatorModel::ResultRole).toString().toStdString());
+  CHECK_MESSAGE(QTest::qWaitFor([&] { return fsm.stateName() == "Waking" || fsm.stateName() == "Ready"; }, 5000),
+                fsm.stateName().toStdString());
+  CHECK(QTest::qWaitFor([&] { return fsm.rowCount() > 0; }, 3000));  // the transition heard on LCM
+  // raw frames over iceoryx: received (the simulated vehicle) and sent (can-tx's keep-alive group)
+  const auto sawDirection = [&](const char* direction) {
+    for (int row = 0; row < frames.rowCount(); ++row) {
+      if (frames.data(frames.index(row), openvcu::hmi::FrameTraceModel::DirectionRole).toString() == direction)
+        return true;
+    }
+    return false;
+  };
+  CHECK_MESSAGE(QTest::qWaitFor([&] { return sawDirection("Rx") && sawDirection("Tx"); }, 5000),
+                frames.errorString().toStdString());
+  CHECK(frames.status() == openvcu::hmi::ModelStatus::Ready);
+
+  QSignalSpy finished((*connection).get(), &openvcu::hmi::StackConnection::commandFinished);
+  openvcu::ipc::CommandRequest stateRequest;  // the FSM state is a status: refused
+  stateRequest.kind = openvcu::ipc::CommandKind::SetSignal;
+  stateRequest.key = "internal.fsm.state";
+  stateRequest.value = 1;
+  const std::int64_t id = (*connection)->sendCommand(stateRequest);
+  REQUIRE(id > 0);
+  REQUIRE(QTest::qWaitFor([&] { return finished.count() > 0; }, 5000));
+  CHECK(finished.at(0).at(0).toLongLong() == id);
+  CHECK_FALSE(finished.at(0).at(1).toBool());
+  CHECK_MESSAGE(finished.at(0).at(2).toString().startsWith("refused by vcu-fsm: "),
+                finished.at(0).at(2).toString().toStdString());
+}
+
+TEST_CASE("the ECU setup changes a cycle and sets and clears an override on the running can-tx without a restart") {
+  SKIP_UNLESS_ISOLATED();
+  HmiStack s;
+  ensureApplication();
+  openvcu::hmi::StackSettings settings;
+  settings.configPath = s.config.string();
+  auto connection = openvcu::hmi::StackConnection::open(settings);
+  REQUIRE_STATUS(connection);
+  openvcu::hmi::ScheduleModel sut;
+  int row = -1;
+  for (int i = 0; i < sut.rowCount(); ++i) {
+    if (sut.data(sut.index(i), openvcu::hmi::ScheduleModel::KeyRole).toString() ==
+        "Vehicle_Control_Unit.HC1_Demands.ControlWord") {
+      row = i;
+    }
+  }
+  REQUIRE(row >= 0);
+  REQUIRE(QTest::qWaitFor([&] { return sut.status() == openvcu::hmi::ModelStatus::Ready; }, 10000));
+  const auto answered = [&] { return !sut.lastResult().contains("waiting"); };
+  CHECK(sut.setCycle(row, "50").isEmpty());
+  REQUIRE(QTest::qWaitFor(answered, 5000));
+  CHECK_MESSAGE(sut.lastResult().contains("accepted by vcu-can-tx"), sut.lastResult().toStdString());
+  CHECK(sut.data(sut.index(row), openvcu::hmi::ScheduleModel::CycleRole).toInt() == 50);
+  CHECK(sut.setOverride(row, "5").isEmpty());
+  REQUIRE(QTest::qWaitFor(answered, 5000));
+  CHECK_MESSAGE(sut.lastResult().contains("accepted"), sut.lastResult().toStdString());
+  CHECK(QTest::qWaitFor([&] { return sut.data(sut.index(row), openvcu::hmi::ScheduleModel::OverriddenRole).toBool(); },
+                        3000));
+  CHECK(sut.clearOverride(row).isEmpty());
+  REQUIRE(QTest::qWaitFor(answered, 5000));
+  CHECK(QTest::qWaitFor([&] { return !sut.data(sut.index(row), openvcu::hmi::ScheduleModel::OverriddenRole).toBool(); },
+                        3000));
+}

@@ -1,0 +1,371 @@
+// The Qt models on the in-process event bus (memq://): no shared memory, RouDi or network.
+// The signal table is never created here (a private instance name), so every model shows
+// what it shows without a running stack. Issue 10.
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <QGuiApplication>
+#include <QSignalSpy>
+#include <QTemporaryDir>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "frame_trace.hpp"
+#include "hmi_app.hpp"
+#include "openvcu/ipc/event_bus.hpp"
+#include "plot_and_trace.hpp"
+#include "signal_models.hpp"
+#include "stack_connection.hpp"
+#include "stack_models.hpp"
+
+using namespace openvcu;
+using namespace openvcu::hmi;
+
+namespace {
+
+const std::string HHEA_CONFIG = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
+
+void ensureApplication() {
+  static int argc = 1;
+  static char name[] = "test_hmi_models";
+  static char* argv[] = {name, nullptr};
+  if (!QCoreApplication::instance()) {
+    qputenv("QT_QPA_PLATFORM", "offscreen");
+    static QGuiApplication application(argc, argv);
+  }
+}
+
+/// A stack connection on memq:// with an instance no table exists for.
+std::unique_ptr<StackConnection> openStack(const std::string& dashboard = {}, const std::string& supervisor = {}) {
+  ensureApplication();
+  StackSettings settings;
+  settings.configPath = HHEA_CONFIG;
+  settings.lcmUrl = "memq://";
+  settings.instance = "hmi-unit-" + std::to_string(::getpid());
+  settings.dashboardPath = dashboard;
+  settings.supervisorConfig = supervisor;
+  auto opened = StackConnection::open(settings);
+  REQUIRE_MESSAGE(opened, opened.error().toString());
+  return std::move(*opened);
+}
+
+void deliver(StackConnection& stack) {
+  stack.pumpEvents();
+  QCoreApplication::processEvents();
+}
+
+}  // namespace
+
+TEST_CASE("a missing or broken configuration is refused with a clear error, not a crash") {
+  ensureApplication();
+  StackSettings settings;
+  settings.configPath = "/nonexistent/vehicle.json";
+  const auto sut = StackConnection::open(settings);
+  REQUIRE_FALSE(sut);
+  CHECK(sut.error().toString().find("/nonexistent/vehicle.json") != std::string::npos);
+  settings.configPath = HHEA_CONFIG;
+  settings.instance = "bad name!";
+  CHECK_FALSE(StackConnection::open(settings));
+}
+
+TEST_CASE("without a signal table the models say NotConnected and every switch is disabled") {
+  auto stack = openStack();
+  CHECK(stack->tableStatus() == ModelStatus::NotConnected);
+  CHECK(stack->eventStatus() == ModelStatus::Ready);
+  OperatorModel sut;
+  CHECK(sut.rowCount() == 5);  // StartStop, ConnectDriving, ACCharging, DCCharging, Crash (not FaultReset)
+  const int start = sut.rowOf("internal.operator.StartStop");
+  REQUIRE(start >= 0);
+  CHECK_FALSE(sut.data(sut.index(start), OperatorModel::EnabledRole).toBool());
+  CHECK(sut.toggle(start) == "not allowed in the current state");
+  CHECK(sut.status() == ModelStatus::NotConnected);
+  SignalValue soc;
+  soc.setKey("VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
+  CHECK(soc.status() == ModelStatus::NotConnected);
+  CHECK(soc.text() == "--");
+  soc.setKey("VIC.HVESSD2_PGN61585.HS_FastUpdSoc");
+  CHECK(soc.status() == ModelStatus::Error);
+  CHECK(soc.errorString().contains("did you mean"));
+}
+
+TEST_CASE("log records, heartbeats, FSM transitions and faults from the bus reach their models") {
+  auto stack = openStack();
+  LogModel logs;
+  HealthModel health;
+  FsmModel fsm;
+  FaultModel faults;
+  ipc::EventBus& bus = *stack->events();
+  bus.publish(ipc::LogRecord{.service = "vcu-fsm", .level = ipc::LogLevel::Warning, .text = "state Fault"});
+  bus.publish(ipc::LogRecord{.service = "vcu-can-rx", .level = ipc::LogLevel::Info, .text = "ready"});
+  bus.publish(ipc::Heartbeat{
+      .service = "vcu-fsm", .instance = "x", .pid = ::getpid(), .uptimeMs = 1000, .counters = {}, .status = "ready"});
+  bus.publish(ipc::FsmTransition{.fromState = "Standby", .toState = "Waking", .cause = "operator Start"});
+  bus.publish(
+      ipc::FaultEvent{.name = "timeout.VIC", .source = "vcu-can-rx", .active = true, .text = "no frame for 1 s"});
+  deliver(*stack);
+  CHECK(logs.rowCount() == 2);
+  logs.setServiceFilter("vcu-fsm");
+  CHECK(logs.rowCount() == 1);
+  logs.setServiceFilter("");
+  logs.setMinimumLevel(static_cast<int>(ipc::LogLevel::Warning));
+  REQUIRE(logs.rowCount() == 1);
+  CHECK(logs.data(logs.index(0), LogModel::TextRole).toString() == "state Fault");
+  CHECK(health.connectionOf("vcu-fsm") == static_cast<int>(ValueStatus::Ready));
+  CHECK(health.connectionOf("vcu-can-tx") == static_cast<int>(ValueStatus::NotConnected));
+  REQUIRE(fsm.rowCount() == 1);
+  CHECK(fsm.data(fsm.index(0), FsmModel::ToRole).toString() == "Waking");
+  CHECK(faults.activeCount() == 1);
+  bus.publish(ipc::FaultEvent{.name = "timeout.VIC", .source = "vcu-can-rx", .active = false, .text = {}});
+  deliver(*stack);
+  CHECK(faults.activeCount() == 0);
+  QTemporaryDir folder;
+  const QString exported = folder.filePath("log.txt");
+  CHECK(logs.exportTo(exported).isEmpty());
+  CHECK(logs.exportTo("/nonexistent/dir/log.txt").contains("/nonexistent/dir/log.txt"));
+}
+
+TEST_CASE("a schedule change is checked here, sent as ScheduleCycle and shown once acknowledged") {
+  auto stack = openStack();
+  ScheduleModel sut;
+  REQUIRE(sut.rowCount() > 0);
+  const QString message = sut.data(sut.index(0), ScheduleModel::MessageRole).toString();
+  CHECK(sut.setCycle(0, "abc") == "cycle must be a whole number of ms in 1..60000");
+  CHECK(sut.setCycle(0, "0") == "cycle must be a whole number of ms in 1..60000");
+  CHECK(sut.setOverride(0, "1e9").contains("outside the range"));
+  CHECK(sut.setDefault(0, "1e9").contains("outside the range"));
+  CHECK(sut.setDefault(0, "abc").contains("is not a number"));
+  CHECK(sut.setDefault(-1, "1") == "no such row");
+  std::optional<ipc::CommandRequest> seen;
+  REQUIRE(stack->events()->onCommand([&](const ipc::CommandRequest& request) { seen = request; }));
+  CHECK(sut.setCycle(0, "50").isEmpty());
+  deliver(*stack);
+  REQUIRE(seen);
+  CHECK(seen->kind == ipc::CommandKind::ScheduleCycle);
+  CHECK(seen->key == message.toStdString());
+  CHECK(seen->value == 50);
+  CHECK(seen->issuer == "vcu-hmi");
+  stack->events()->publish(ipc::CommandAck{
+      .requestId = seen->requestId, .issuer = "vcu-hmi", .responder = "vcu-can-tx", .accepted = true, .reason = {}});
+  deliver(*stack);
+  CHECK(sut.data(sut.index(0), ScheduleModel::CycleRole).toInt() == 50);
+  CHECK(sut.lastResult().contains("accepted by vcu-can-tx"));
+}
+
+TEST_CASE("a refused command shows the responder's reason") {
+  auto stack = openStack();
+  QSignalSpy finished(stack.get(), &StackConnection::commandFinished);
+  std::optional<ipc::CommandRequest> seen;
+  REQUIRE(stack->events()->onCommand([&](const ipc::CommandRequest& request) { seen = request; }));
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::SetSignal;
+  request.key = "internal.operator.StartStop";
+  request.value = 1;
+  const std::int64_t id = stack->sendCommand(request);
+  deliver(*stack);
+  REQUIRE(seen);
+  CHECK(seen->requestId == id);
+  stack->events()->publish(
+      ipc::CommandAck{.requestId = id, .issuer = "vcu-hmi", .responder = "vcu-fsm", .accepted = false, .reason = "no"});
+  deliver(*stack);
+  REQUIRE(finished.count() == 1);
+  CHECK(finished.at(0).at(1).toBool() == false);
+  CHECK(finished.at(0).at(2).toString() == "refused by vcu-fsm: no");
+}
+
+TEST_CASE("the DBC tree lists bus and nodes and messages with ID and PGN and signals and search keeps parents") {
+  auto stack = openStack();
+  SignalTreeModel sut;
+  CHECK(sut.nodeCount() > 100);
+  const int collapsedRows = sut.rowCount();
+  sut.setSearch("HS_FastUpdSOC");
+  REQUIRE(sut.rowCount() == 4);  // bus, VIC, HVESSD2_PGN61585, the signal
+  CHECK(sut.data(sut.index(0), SignalTreeModel::DepthRole).toInt() == 0);
+  CHECK(sut.data(sut.index(2), SignalTreeModel::DetailRole).toString().contains("PGN 61585"));
+  CHECK(sut.data(sut.index(3), SignalTreeModel::KeyRole).toString() == "VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
+  sut.setSearch("");
+  CHECK(sut.rowCount() == collapsedRows);
+}
+
+TEST_CASE("the plot takes up to four known signals and says why it refuses more") {
+  auto stack = openStack();
+  SignalPlot sut;
+  CHECK(sut.toggleKey("VIC.HVESSD1_PGN61584.HS_ULvl").isEmpty());
+  CHECK(sut.toggleKey("VIC.HVESSD1_PGN61584.HS_I").isEmpty());
+  CHECK(sut.toggleKey("VIC.HVESSD2_PGN61585.HS_FastUpdSOC").isEmpty());
+  CHECK(sut.toggleKey("internal.relay.Cl15").isEmpty());
+  CHECK(sut.toggleKey("internal.fault.Contactor").contains("at most 4"));
+  CHECK(sut.keys().size() == 4);
+  CHECK(sut.toggleKey("internal.relay.Cl15").isEmpty());  // removes it
+  CHECK(sut.keys().size() == 3);
+  sut.setKeys({"no.such.key"});
+  CHECK(sut.keys().isEmpty());
+  CHECK(sut.errorString().contains("unknown signal"));
+  sut.setWindowSeconds(5);
+  CHECK(sut.windowSeconds() == 10);
+}
+
+TEST_CASE("the trace viewer loads a candump log, decodes it with the DBC and exports CSV") {
+  auto stack = openStack();
+  QTemporaryDir folder;
+  const std::string log = folder.filePath("drive.log").toStdString();
+  {
+    std::ofstream out(log);
+    out << "(1436509052.249713) can0 18FF50E5#0102030405060708\n"  // OBC status 0x18FF50E5
+        << "(1436509052.259713) can0 18FEF1F3#FFFFFFFFFFFFFFFF\n"
+        << "this line is broken\n";
+  }
+  TraceModel sut;
+  REQUIRE(sut.open(QString::fromStdString(log)));
+  sut.waitUntilLoaded();
+  CHECK(sut.rowCount() == 2);
+  CHECK(sut.status() == ModelStatus::Stale);  // one malformed line
+  CHECK(sut.errorString().contains("1 malformed"));
+  CHECK(sut.data(sut.index(0), TraceModel::IdRole).toString() == "18FF50E5");
+  CHECK(sut.data(sut.index(0), TraceModel::MessageRole).toString() == "OBC");
+  CHECK_FALSE(sut.data(sut.index(0), TraceModel::DecodedRole).toString().isEmpty());
+  const QString csv = folder.filePath("drive.csv");
+  CHECK(sut.exportCsv(csv).isEmpty());
+  std::ifstream in(csv.toStdString());
+  std::string header;
+  std::getline(in, header);
+  CHECK(header == "time_s,message,signal,value");
+  std::string first;
+  std::getline(in, first);
+  CHECK(first.rfind("0,OBC,", 0) == 0);
+
+  const QStringList names = sut.signalNames();
+  REQUIRE(names.contains("OBC.OBC_Start_State"));
+  TraceTimeline timeline;
+  timeline.setTrace(&sut);
+  CHECK(timeline.toggleKey("OBC.OBC_Start_State").isEmpty());
+  REQUIRE(timeline.legend().size() == 1);
+  CHECK(timeline.viewEnd() == doctest::Approx(0.01));          // the two frames are 10 ms apart
+  CHECK(timeline.toggleKey("OBC.OBC_Start_State").isEmpty());  // removed again
+  CHECK(timeline.legend().isEmpty());
+  CHECK(timeline.toggleKey("OBC.OBC_Start_State").isEmpty());
+  timeline.zoom(0.5, 0.5);
+  CHECK(timeline.viewEnd() - timeline.viewStart() == doctest::Approx(0.005));
+  timeline.reset();
+  CHECK(timeline.viewStart() == 0);
+  SampleRing ring;
+  CHECK_FALSE(sut.extract("NoSuch.Signal", ring));
+
+  TraceModel missing;
+  REQUIRE(missing.open("/nonexistent/drive.log"));
+  missing.waitUntilLoaded();
+  CHECK(missing.status() == ModelStatus::Error);
+  CHECK(missing.errorString().contains("/nonexistent/drive.log"));
+}
+
+TEST_CASE("a refused dashboard file puts the dashboard model in Error with the reason") {
+  QTemporaryDir folder;
+  const std::string path = folder.filePath("dash.json").toStdString();
+  {
+    std::ofstream out(path);
+    out << R"({"items": [{"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSoc"}]})";
+  }
+  auto stack = openStack(path);
+  DashboardSettings sut;
+  CHECK(sut.status() == ModelStatus::Error);
+  CHECK(sut.errorString().contains("/items/0/key"));
+  SignalListModel grid;
+  grid.setDashboard(true);
+  CHECK(grid.status() == ModelStatus::Error);
+}
+
+TEST_CASE("the shipped dashboard file is valid for the HHEA configuration") {
+  auto stack = openStack(std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/dashboard.json");
+  DashboardSettings sut;
+  CHECK_MESSAGE(sut.status() == ModelStatus::Ready, sut.errorString().toStdString());
+  CHECK(sut.config().items.size() >= 8);
+}
+
+TEST_CASE(
+    "the raw frame trace shows the newest frames first and filters by ID, PGN and node, and pause holds the view") {
+  auto stack = openStack();
+  FrameTraceModel sut;
+  CHECK(sut.status() == ModelStatus::NotConnected);  // frame streams are off in tests: no RouDi
+  FrameTraceModel::Entry entries[3]{};
+  entries[0].frame.id = 0x18FF50E5;  // OBC, PGN 65360
+  entries[0].frame.flags = can::FLAG_EXTENDED;
+  entries[0].frame.length = 8;
+  entries[1].frame.id = 0x18FEF1F3;  // PGN 65265
+  entries[1].frame.flags = can::FLAG_EXTENDED;
+  entries[1].frame.length = 8;
+  entries[1].sent = true;
+  entries[2].frame.id = 0x123;
+  entries[2].frame.length = 2;
+  sut.push(entries, 3);
+  sut.collect();
+  REQUIRE(sut.rowCount() == 3);
+  CHECK(sut.data(sut.index(0), FrameTraceModel::IdRole).toString() == "123");  // newest first
+  CHECK(sut.data(sut.index(1), FrameTraceModel::DirectionRole).toString() == "Tx");
+  CHECK(sut.data(sut.index(2), FrameTraceModel::NodeRole).toString() == "OBC");
+  CHECK_FALSE(sut.data(sut.index(2), FrameTraceModel::DecodedRole).toString().isEmpty());
+  sut.setIdFilter("0x18ff50");
+  CHECK(sut.rowCount() == 1);
+  sut.setIdFilter("");
+  sut.setPgnFilter("65265");
+  CHECK(sut.rowCount() == 1);
+  sut.setPgnFilter("");
+  sut.setNodeFilter("obc");
+  CHECK(sut.rowCount() == 1);
+  sut.setNodeFilter("");
+  sut.setPaused(true);
+  sut.push(entries, 3);
+  sut.collect();
+  CHECK(sut.rowCount() == 3);
+  sut.setPaused(false);
+  sut.push(entries, 1);
+  sut.collect();
+  CHECK(sut.rowCount() == 4);  // what arrived while paused is not shown later
+}
+
+TEST_CASE("the raw frame trace keeps at most SHOWN frames however many arrive") {
+  auto stack = openStack();
+  FrameTraceModel sut;
+  std::vector<FrameTraceModel::Entry> many(FrameTraceModel::RING + 100);
+  for (std::size_t i = 0; i < many.size(); ++i) many[i].frame.id = static_cast<std::uint32_t>(i & 0x7FF);
+  sut.push(many.data(), many.size());
+  sut.collect();
+  CHECK(sut.rowCount() == static_cast<int>(FrameTraceModel::SHOWN));
+}
+
+TEST_CASE("restart and power actions are fixed argv: known services only, reboot or poweroff only") {
+  {
+    auto stack = openStack();
+    SystemActions sut;
+    CHECK(sut.restartArgv("vcu-fsm").isEmpty());  // no --supervisor-config: not offered
+    CHECK(sut.restartService("vcu-fsm").contains("--supervisor-config"));
+  }
+  auto stack = openStack({}, "/etc/openvcu/openvcu.conf");
+  SystemActions sut;
+  CHECK(sut.restartArgv("vcu-fsm") ==
+        QStringList{"supervisorctl", "-c", "/etc/openvcu/openvcu.conf", "restart", "fsm"});
+  CHECK(sut.restartArgv("can-rx") ==
+        QStringList{"supervisorctl", "-c", "/etc/openvcu/openvcu.conf", "restart", "can-rx"});
+  CHECK(sut.restartArgv("fsm; rm -rf /").isEmpty());
+  CHECK(sut.restartArgv("vcu-unknown").isEmpty());
+  CHECK(sut.power("reboot; rm -rf /").startsWith("refused"));
+  CHECK(sut.power("halt").startsWith("refused"));
+}
+
+TEST_CASE("the command line refuses bad options with a message and checks the configuration before any display") {
+  const QString hhea = QString::fromStdString(HHEA_CONFIG);
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--size", "10x10"}));
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--tab", "9"}));
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--time-zone", "Mars/Olympus"}));
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--no-such-option"}));
+  const auto sut = parseCommandLine({"vcu-hmi", "--config", hhea, "--size", "800x480", "--tab", "2"});
+  REQUIRE_MESSAGE(sut, sut.error().toString());
+  CHECK(sut->width == 800);
+  CHECK(sut->height == 480);
+  CHECK(sut->tab == 2);
+  CHECK(sut->stack.frameStreams);
+  HmiOptions missing;
+  missing.stack.configPath = "/nonexistent/vehicle.json";
+  const auto checked = checkBeforeStart(missing);
+  REQUIRE_FALSE(checked);
+  CHECK(checked.error().toString().find("/nonexistent/vehicle.json") != std::string::npos);
+}
