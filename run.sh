@@ -50,6 +50,7 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
     keep=(--keep "$root")
     # the X server's socket folder, so that the HMI reaches the display from the sandbox
     [ -n "${DISPLAY:-}" ] && [ -d /tmp/.X11-unix ] && keep+=(--keep /tmp/.X11-unix)
+    case "${XAUTHORITY:-}" in /tmp/*) keep+=(--keep "$(dirname "$XAUTHORITY")") ;; esac
     exec tests/harness/run_isolated.sh "${keep[@]}" -- "$root/run.sh" "${args[@]}"
   fi
 fi
