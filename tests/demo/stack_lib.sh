@@ -8,6 +8,7 @@
 #   state             the FSM state by name (`vcu top --once`)
 #   wait_state NAME   until the FSM is in NAME: each look takes vcu top's 1.5 s, at most 20
 #   drive             Start -> Ready -> Connect Driving -> Driving, or fail
+#   hmi               1 when vcu-hmi is built and runs (offscreen) under supervisord
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 bin=${OPENVCU_BIN:-$root/build/bin}
 vcu=$bin/vcu
@@ -15,6 +16,12 @@ config=$root/config/hhea/vehicle.json
 run=$(mktemp -d)
 export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run
 sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
+# the HMI joins when it is built, offscreen (no display in the sandbox)
+hmi=0
+if [ -x "$bin/vcu-hmi" ]; then
+  hmi=1
+  sed -i -e '/^\[program:hmi\]/,/^$/s/^autostart=false/autostart=true\nenvironment=QT_QPA_PLATFORM="offscreen",XDG_RUNTIME_DIR="'"${run//\//\\/}"'"/' "$run/openvcu.conf"
+fi
 ctl() { supervisorctl -c "$run/openvcu.conf" "$@"; }
 fail() { echo "$NAME: FAIL: $*"; ctl shutdown >/dev/null 2>&1; exit 1; }
 supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
