@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "openvcu/core/result.hpp"
+#include "openvcu/service/logger.hpp"
 #include "openvcu/ipc/events.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
@@ -209,7 +210,7 @@ class LogBuffer {
 
 /// "trace", "debug", "info", "warning", "error", "critical".
 [[nodiscard]] std::string_view levelName(ipc::LogLevel level) noexcept;
-/// "2026-11-26T06:00:00.123Z" for CLOCK_REALTIME ns.
-[[nodiscard]] std::string formatUtc(std::int64_t realtimeNs);
+/// "2026-11-26T06:00:00.123Z" for CLOCK_REALTIME ns: the services' log format.
+using service::formatUtc;
 
 }  // namespace openvcu::hmi
