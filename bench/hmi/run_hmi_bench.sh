@@ -32,10 +32,10 @@ echo "hmi benchmark: $(nproc) cores, $(uname -r), $seconds s per run at full HHE
 echo "plot: $keys (window 30 s), CAN Data tab, 720x600"
 printf '%-10s %8s %8s %8s %10s\n' platform "fps p50" "fps min" "CPU %" "VmRSS MB"
 
-measure() {  # $1 = label, rest = environment
-  local label=$1
-  shift
-  env "$@" "$bin/vcu-hmi" --config "$config" --dashboard "$root/config/hhea/dashboard.json" --tab 2 \
+measure() {  # $1 = label, $2 = --renderer, rest = environment
+  local label=$1 renderer=$2
+  shift 2
+  env "$@" "$bin/vcu-hmi" --config "$config" --dashboard "$root/config/hhea/dashboard.json" --tab 2 --renderer "$renderer" \
     --plot "$keys" --report-fps --quit-after "$seconds" > "$run/$label.out" 2>&1 &
   local pid=$!
   sleep 2  # start-up is not measured
@@ -58,11 +58,11 @@ measure() {  # $1 = label, rest = environment
     "$(echo "$fps" | head -1)" "$(echo "100 * $used / $hz / ($t1 - $t0)" | bc -l)" "$(echo "$rss / 1024" | bc -l)"
 }
 
-measure offscreen QT_QPA_PLATFORM=offscreen
+measure offscreen software QT_QPA_PLATFORM=offscreen
 if command -v Xvfb >/dev/null; then
   Xvfb :7 -screen 0 1024x768x24 -nolisten tcp > "$run/xvfb.out" 2>&1 &
   xvfb_pid=$!
   for _ in $(seq 50); do [ -e /tmp/.X11-unix/X7 ] && break; sleep 0.1; done
-  measure xvfb-gl QT_QPA_PLATFORM=xcb DISPLAY=:7
-  measure xvfb-sw QT_QPA_PLATFORM=xcb DISPLAY=:7 QT_QUICK_BACKEND=software
+  measure xvfb-gl gpu QT_QPA_PLATFORM=xcb DISPLAY=:7
+  measure xvfb-sw software QT_QPA_PLATFORM=xcb DISPLAY=:7
 fi

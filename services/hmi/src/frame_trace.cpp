@@ -1,8 +1,13 @@
 #include "frame_trace.hpp"
 
+#include <unistd.h>
+
+#include <QCoreApplication>
 #include <algorithm>
+#include <string>
 
 #include "openvcu/ipc/runtime.hpp"
+#include "openvcu/service/options.hpp"
 #include "openvcu/ipc/waiter.hpp"
 #include "openvcu/j1939/id.hpp"
 
@@ -45,11 +50,13 @@ void FrameTraceModel::connectFrames() {
   if (!stack) return;
   if (m_thread.joinable()) {
     if (ipc::Runtime::roudiReplaced()) {
+      // iceoryx 2.0 cannot move this process's ports to the new RouDi: main() executes
+      // vcu-hmi again in place (same pid, same arguments) once the event loop has ended
       m_status = ModelStatus::Error;
-      m_error = QStringLiteral(
-          "iox-roudi was restarted: restart vcu-hmi to see frames again (iceoryx 2.0 cannot move its ports)");
+      m_error = QStringLiteral("iox-roudi was restarted: vcu-hmi restarts itself to see frames again");
       Q_EMIT statusChanged();
       m_connectTimer.stop();
+      QCoreApplication::exit(static_cast<int>(service::ExitCode::RoudiRestarted));
     }
     return;
   }
@@ -60,7 +67,10 @@ void FrameTraceModel::connectFrames() {
       Q_EMIT statusChanged();
       return;
     }
-    if (Status initialized = ipc::Runtime::init("vcu-hmi." + stack->config().instance); !initialized) {
+    // the pid makes the name unique: several HMIs may watch one stack (cab and bench)
+    if (Status initialized =
+            ipc::Runtime::init("vcu-hmi." + stack->config().instance + "." + std::to_string(::getpid()));
+        !initialized) {
       m_status = ModelStatus::Error;
       m_error = toQ(initialized.error().toString());
       Q_EMIT statusChanged();

@@ -38,6 +38,7 @@ struct HmiOptions {
   double quitAfterSeconds{};                    ///< > 0: quit after this long (benchmarks)
   QStringList plotKeys;                         ///< signals plotted from the start (benchmarks, demos)
   int tab{0};                                   ///< the tab shown first (0 Vehicle ... 5 Trace)
+  bool softwareRenderer{true};                  ///< --renderer software (default) or gpu
   bool exitNow{};                               ///< --help / --version were answered
   service::ShutdownSignals* shutdown{nullptr};  ///< SIGTERM/SIGINT as an fd (main installs it)
 };

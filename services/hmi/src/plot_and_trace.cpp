@@ -2,8 +2,13 @@
 
 #include <QFile>
 #include <QMetaObject>
+#include <QPainter>
+#include <QPolygonF>
+#include <QQuickWindow>
 #include <QSGFlatColorMaterial>
 #include <QSGGeometryNode>
+#include <QSGRenderNode>
+#include <QSGRendererInterface>
 #include <QUrl>
 #include <algorithm>
 #include <cmath>
@@ -18,6 +23,119 @@ namespace {
 
 const QColor SERIES_COLOURS[SignalPlot::MAX_SERIES] = {QColor(0x42, 0xa5, 0xf5), QColor(0xff, 0xa7, 0x26),
                                                        QColor(0x66, 0xbb, 0x6a), QColor(0xec, 0x40, 0x7a)};
+constexpr float LINE_MARGIN = 4;
+constexpr float LINE_WIDTH = 2;
+
+/// The plot lines where the scene graph has no graphics API (the software adaptation:
+/// QT_QPA_PLATFORM=offscreen, QT_QUICK_BACKEND=software), which does not draw geometry
+/// nodes: the same strips, painted with the QPainter the software renderer hands out.
+class PainterLinesNode : public QSGRenderNode {
+ public:
+  explicit PainterLinesNode(QQuickWindow* window) : m_window(window) {}
+
+  std::vector<QPolygonF> lines;  ///< one per series; resized in place, so no allocation once warm
+  QRectF bounds;
+
+  void render(const RenderState* state) override {
+    auto* painter = static_cast<QPainter*>(
+        m_window->rendererInterface()->getResource(m_window, QSGRendererInterface::PainterResource));
+    if (painter == nullptr) return;
+    painter->save();
+    if (const QRegion* clip = state->clipRegion(); clip != nullptr && !clip->isEmpty()) {
+      painter->setClipRegion(*clip, Qt::ReplaceClip);  // before the transform
+    }
+    painter->setTransform(matrix()->toTransform());
+    painter->setOpacity(inheritedOpacity());
+    painter->setRenderHint(QPainter::Antialiasing, false);  // crisp and cheaper, as the GL lines
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      // a cosmetic 1-pixel pen: QPainter's stroker makes wider lines ~10x dearer in software
+      QPen pen(SERIES_COLOURS[i], 0);
+      pen.setCosmetic(true);
+      painter->setPen(pen);
+      painter->drawPolyline(lines[i]);
+    }
+    painter->restore();
+  }
+  [[nodiscard]] StateFlags changedStates() const override { return {}; }
+  [[nodiscard]] RenderingFlags flags() const override { return BoundedRectRendering; }
+  [[nodiscard]] QRectF rect() const override { return bounds; }
+
+ private:
+  QQuickWindow* m_window;
+};
+
+/// The scene-graph part of SignalPlot and TraceTimeline: `seriesCount` line strips through
+/// each column's low and high value. `columns(i, base, span)` fills `scratch` with series
+/// i's decimated columns (x, low, high) and returns how many; values map base..base+span to
+/// the item's height. Geometry nodes (one per series, rebuilt when `rebuild`) on OpenGL/RHI,
+/// a PainterLinesNode on the software adaptation.
+template <typename Columns>
+QSGNode* updateLines(QQuickItem& item, QSGNode* oldNode, bool& rebuild, std::size_t seriesCount,
+                     const std::vector<float>& scratch, const Columns& columns) {
+  const float h = static_cast<float>(item.height());
+  const auto y = [h](float value, float base, float span) {
+    return h - LINE_MARGIN - (value - base) / span * (h - 2 * LINE_MARGIN);
+  };
+  QQuickWindow* window = item.window();
+  if (window != nullptr && window->rendererInterface()->graphicsApi() == QSGRendererInterface::Software) {
+    auto* node = oldNode != nullptr ? static_cast<PainterLinesNode*>(oldNode) : new PainterLinesNode(window);
+    node->bounds = QRectF(0, 0, item.width(), item.height());
+    node->lines.resize(seriesCount);
+    for (std::size_t i = 0; i < seriesCount; ++i) {
+      float base = 0;
+      float span = 1;
+      const std::size_t filled = columns(i, base, span);
+      QPolygonF& line = node->lines[i];
+      line.resize(static_cast<qsizetype>(filled * 2));
+      for (std::size_t c = 0; c < filled; ++c) {
+        const auto x = static_cast<qreal>(scratch[c * 3]);
+        line[static_cast<qsizetype>(c * 2)] = QPointF(x, y(scratch[c * 3 + 1], base, span));
+        line[static_cast<qsizetype>(c * 2 + 1)] = QPointF(x, y(scratch[c * 3 + 2], base, span));
+      }
+    }
+    node->markDirty(QSGNode::DirtyMaterial);
+    rebuild = false;
+    return node;
+  }
+  auto* root = oldNode != nullptr ? oldNode : new QSGNode;
+  if (rebuild) {
+    while (QSGNode* child = root->firstChild()) {
+      root->removeChildNode(child);
+      delete child;
+    }
+    for (std::size_t i = 0; i < seriesCount; ++i) {
+      auto* node = new QSGGeometryNode;
+      auto* geometry = new QSGGeometry(QSGGeometry::defaultAttributes_Point2D(), 0);
+      geometry->setDrawingMode(QSGGeometry::DrawLineStrip);
+      geometry->setLineWidth(LINE_WIDTH);
+      node->setGeometry(geometry);
+      node->setFlag(QSGNode::OwnsGeometry);
+      auto* material = new QSGFlatColorMaterial;
+      material->setColor(SERIES_COLOURS[i]);
+      node->setMaterial(material);
+      node->setFlag(QSGNode::OwnsMaterial);
+      root->appendChildNode(node);
+    }
+    rebuild = false;
+  }
+  QSGNode* child = root->firstChild();
+  for (std::size_t i = 0; i < seriesCount && child != nullptr; ++i, child = child->nextSibling()) {
+    auto* node = static_cast<QSGGeometryNode*>(child);
+    float base = 0;
+    float span = 1;
+    const std::size_t filled = columns(i, base, span);
+    QSGGeometry* geometry = node->geometry();
+    const int vertices = static_cast<int>(filled * 2);
+    if (geometry->vertexCount() != vertices) geometry->allocate(vertices);
+    QSGGeometry::Point2D* points = geometry->vertexDataAsPoint2D();
+    for (std::size_t c = 0; c < filled; ++c) {
+      points[c * 2].set(scratch[c * 3], y(scratch[c * 3 + 1], base, span));
+      points[c * 2 + 1].set(scratch[c * 3], y(scratch[c * 3 + 2], base, span));
+    }
+    node->markDirty(QSGNode::DirtyGeometry);
+  }
+  return root;
+}
 
 double nowSeconds() noexcept {
   return static_cast<double>(signals::monotonicNowNs()) / 1e9;
@@ -212,62 +330,26 @@ void SignalPlot::updateReadout() {
 }
 
 QSGNode* SignalPlot::updatePaintNode(QSGNode* oldNode, UpdatePaintNodeData*) {
-  auto* root = oldNode ? oldNode : new QSGNode;
-  if (m_seriesChanged) {
-    while (QSGNode* child = root->firstChild()) {
-      root->removeChildNode(child);
-      delete child;
-    }
-    for (std::size_t i = 0; i < m_series.size(); ++i) {
-      auto* node = new QSGGeometryNode;
-      auto* geometry = new QSGGeometry(QSGGeometry::defaultAttributes_Point2D(), 0);
-      geometry->setDrawingMode(QSGGeometry::DrawLineStrip);
-      geometry->setLineWidth(2);
-      node->setGeometry(geometry);
-      node->setFlag(QSGNode::OwnsGeometry);
-      auto* material = new QSGFlatColorMaterial;
-      material->setColor(SERIES_COLOURS[i]);
-      node->setMaterial(material);
-      node->setFlag(QSGNode::OwnsMaterial);
-      root->appendChildNode(node);
-    }
-    m_seriesChanged = false;
-  }
   const auto columns = static_cast<std::size_t>(std::max(1.0, width()));
   if (m_scratch.size() < columns * 3) m_scratch.resize(columns * 3);  // once per width
   const double end = m_paused ? m_pausedAt : nowSeconds();
   const double start = end - m_window;
-  const float h = static_cast<float>(height());
-  QSGNode* child = root->firstChild();
-  for (std::size_t i = 0; i < m_series.size() && child; ++i, child = child->nextSibling()) {
-    auto* node = static_cast<QSGGeometryNode*>(child);
-    Series& series = *m_series[i];
-    const std::size_t filled = decimate(series.ring, start, end, columns, m_scratch);
-    float low = 0;
-    float high = 0;
-    for (std::size_t c = 0; c < filled; ++c) {
-      low = c == 0 ? m_scratch[c * 3 + 1] : std::min(low, m_scratch[c * 3 + 1]);
-      high = c == 0 ? m_scratch[c * 3 + 2] : std::max(high, m_scratch[c * 3 + 2]);
-    }
-    series.minimum = low;
-    series.maximum = high;
-    const float span = high > low ? high - low : 1.0f;
-    const float base = high > low ? low : low - 0.5f;
-    QSGGeometry* geometry = node->geometry();
-    const int vertices = static_cast<int>(filled * 2);
-    if (geometry->vertexCount() != vertices) geometry->allocate(vertices);
-    QSGGeometry::Point2D* points = geometry->vertexDataAsPoint2D();
-    const float margin = 4;
-    for (std::size_t c = 0; c < filled; ++c) {
-      const float x = m_scratch[c * 3];
-      const float y0 = h - margin - (m_scratch[c * 3 + 1] - base) / span * (h - 2 * margin);
-      const float y1 = h - margin - (m_scratch[c * 3 + 2] - base) / span * (h - 2 * margin);
-      points[c * 2].set(x, y0);
-      points[c * 2 + 1].set(x, y1);
-    }
-    node->markDirty(QSGNode::DirtyGeometry);
-  }
-  return root;
+  return updateLines(*this, oldNode, m_seriesChanged, m_series.size(), m_scratch,
+                     [&](std::size_t i, float& base, float& span) {
+                       Series& series = *m_series[i];
+                       const std::size_t filled = decimate(series.ring, start, end, columns, m_scratch);
+                       float low = 0;
+                       float high = 0;
+                       for (std::size_t c = 0; c < filled; ++c) {
+                         low = c == 0 ? m_scratch[c * 3 + 1] : std::min(low, m_scratch[c * 3 + 1]);
+                         high = c == 0 ? m_scratch[c * 3 + 2] : std::max(high, m_scratch[c * 3 + 2]);
+                       }
+                       series.minimum = low;
+                       series.maximum = high;
+                       span = high > low ? high - low : 1.0f;
+                       base = high > low ? low : low - 0.5f;
+                       return filled;
+                     });
 }
 
 // ---- TraceModel --------------------------------------------------------------------------------
@@ -590,49 +672,16 @@ void TraceTimeline::pan(double fraction) {
 }
 
 QSGNode* TraceTimeline::updatePaintNode(QSGNode* oldNode, UpdatePaintNodeData*) {
-  auto* root = oldNode ? oldNode : new QSGNode;
-  if (m_seriesChanged) {
-    while (QSGNode* child = root->firstChild()) {
-      root->removeChildNode(child);
-      delete child;
-    }
-    for (std::size_t i = 0; i < m_series.size(); ++i) {
-      auto* node = new QSGGeometryNode;
-      auto* geometry = new QSGGeometry(QSGGeometry::defaultAttributes_Point2D(), 0);
-      geometry->setDrawingMode(QSGGeometry::DrawLineStrip);
-      geometry->setLineWidth(2);
-      node->setGeometry(geometry);
-      node->setFlag(QSGNode::OwnsGeometry);
-      auto* material = new QSGFlatColorMaterial;
-      material->setColor(SERIES_COLOURS[i]);
-      node->setMaterial(material);
-      node->setFlag(QSGNode::OwnsMaterial);
-      root->appendChildNode(node);
-    }
-    m_seriesChanged = false;
-  }
   const auto columns = static_cast<std::size_t>(std::max(1.0, width()));
   if (m_scratch.size() < columns * 3) m_scratch.resize(columns * 3);
-  const float h = static_cast<float>(height());
-  QSGNode* child = root->firstChild();
-  for (std::size_t i = 0; i < m_series.size() && child; ++i, child = child->nextSibling()) {
-    auto* node = static_cast<QSGGeometryNode*>(child);
-    const std::size_t filled = decimate(*m_series[i], m_start, m_end, columns, m_scratch);
-    const auto [low, high] = m_ranges[i];
-    const float span = high > low ? static_cast<float>(high - low) : 1.0f;
-    const float base = high > low ? static_cast<float>(low) : static_cast<float>(low) - 0.5f;
-    QSGGeometry* geometry = node->geometry();
-    const int vertices = static_cast<int>(filled * 2);
-    if (geometry->vertexCount() != vertices) geometry->allocate(vertices);
-    QSGGeometry::Point2D* points = geometry->vertexDataAsPoint2D();
-    const float margin = 4;
-    for (std::size_t c = 0; c < filled; ++c) {
-      points[c * 2].set(m_scratch[c * 3], h - margin - (m_scratch[c * 3 + 1] - base) / span * (h - 2 * margin));
-      points[c * 2 + 1].set(m_scratch[c * 3], h - margin - (m_scratch[c * 3 + 2] - base) / span * (h - 2 * margin));
-    }
-    node->markDirty(QSGNode::DirtyGeometry);
-  }
-  return root;
+  return updateLines(*this, oldNode, m_seriesChanged, m_series.size(), m_scratch,
+                     [&](std::size_t i, float& base, float& span) {
+                       const std::size_t filled = decimate(*m_series[i], m_start, m_end, columns, m_scratch);
+                       const auto [low, high] = m_ranges[i];
+                       span = high > low ? static_cast<float>(high - low) : 1.0f;
+                       base = high > low ? static_cast<float>(low) : static_cast<float>(low) - 0.5f;
+                       return filled;
+                     });
 }
 
 }  // namespace openvcu::hmi

@@ -14,6 +14,7 @@
 
 #include <QGuiApplication>
 #include <QImage>
+#include <algorithm>
 #include <QSignalSpy>
 #include <QTest>
 #include <chrono>
@@ -126,6 +127,16 @@ TEST_CASE("vcu-hmi under Xvfb with the whole stack saves a non-trivial screensho
     CHECK(image.height() == 600);
     const std::size_t colours = distinctColours(image);
     CHECK_MESSAGE(colours >= MIN_COLOURS, file.string() << ": " << colours << " colours");
+  }
+  // the live plot really draws: pixels of both series' colours in the plot area of the CAN
+  // Data tab (right half, above the legend; a renderer that skips the lines leaves none)
+  const QImage canData(QString::fromStdString((fs::path(HMI_SCREENSHOT_DIR) / "tab-2-can-data.png").string()));
+  for (const QRgb series : {qRgb(0x42, 0xa5, 0xf5), qRgb(0xff, 0xa7, 0x26)}) {
+    int pixels = 0;
+    for (int y = 200; y < std::min(510, canData.height()); ++y) {
+      for (int x = 330; x < canData.width(); ++x) pixels += (canData.pixel(x, y) & 0xFFFFFFu) == (series & 0xFFFFFFu);
+    }
+    CHECK_MESSAGE(pixels >= 20, "plot line of colour " << std::hex << series << ": " << std::dec << pixels << " pixels");
   }
   CHECK(hmi.running());
 }
