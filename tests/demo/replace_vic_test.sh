@@ -33,8 +33,13 @@ declare -A pid
 for p in roudi can-rx can-tx fsm gpio ecu-sim; do pid[$p]=$(ctl pid "$p"); done
 "$vcu" replay "$run/vic" --loop --config "$config" > "$run/replay.out" 2>&1 &
 replay=$!
-sleep 0.5
-kill -0 "$replay" 2>/dev/null || fail "vcu replay ended: $(cat "$run/replay.out")"
+# playing once it says so (it opened the bus first); ended early: its error is in the file
+for _ in $(seq 1 100); do
+  grep -q '^replaying ' "$run/replay.out" && break
+  kill -0 "$replay" 2>/dev/null || fail "vcu replay ended: $(cat "$run/replay.out")"
+  sleep 0.1
+done
+grep -q '^replaying ' "$run/replay.out" || fail "vcu replay did not start playing: $(cat "$run/replay.out")"
 "$vcu" sim fault silent.VIC on --config "$config" > "$run/silent.out" 2>&1 || fail "vcu sim fault silent.VIC on: $(cat "$run/silent.out")"
 echo "replace_vic: the simulated VIC is silent, the recording plays (vcu replay pid $replay)"
 

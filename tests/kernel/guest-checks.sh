@@ -301,7 +301,7 @@ s.bind(("vcan0", socket.J1939_NO_NAME, socket.J1939_NO_PGN, 0xF3))
 print("sent", s.sendto(payload, ("vcan0", socket.J1939_NO_NAME, 0xEF00, 0x21)), "bytes to 0x21")
 EOF
 wait_for 5 grep -Eq 'ECF321#13' "$OUT/tp_cm.txt"
-sleep 0.2; kill "$dpid" 2>/dev/null; wait "$dpid" 2>/dev/null
+kill "$dpid" 2>/dev/null; wait "$dpid" 2>/dev/null
 tp_grew() { local now; now=$(tp_count); [[ -n $now && $now -gt ${tp_before:-0} ]]; }
 wait_for 3 tp_grew
 tp_after=$(tp_count)

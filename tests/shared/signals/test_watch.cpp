@@ -64,7 +64,7 @@ TEST_CASE("a watch's wait sleeps through other signals' writes and wakes for its
   std::thread writer([&sut] {
     for (int i = 0; i < 50; ++i) {
       sut.writeBus(0, i, TIME_NS, 0, Quality::Valid);
-      std::this_thread::sleep_for(1ms);
+      std::this_thread::sleep_for(1ms);  // pacing, so the waiter really sleeps through these writes; no assertion depends on it
     }
     sut.writeCommand(2, 7.0, TIME_NS, WRITER);
   });
