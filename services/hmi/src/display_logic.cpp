@@ -88,15 +88,6 @@ std::optional<double> shownValue(const signals::SlotSnapshot& slot) noexcept {
   return std::nullopt;
 }
 
-std::optional<std::string> valueText(const signals::SignalInfo& signal, double value) {
-  if (!std::isfinite(value) || std::trunc(value) != value || std::fabs(value) > 9.0e18) return std::nullopt;
-  const auto integral = static_cast<std::int64_t>(value);
-  for (const auto& [number, text] : signal.valueTexts) {
-    if (number == integral) return text;
-  }
-  return std::nullopt;
-}
-
 std::string formatValue(const signals::SignalInfo& signal, double value, std::string_view format) {
   if (auto maybeText = valueText(signal, value)) return *maybeText;
   std::array<char, 64> text{};

@@ -54,8 +54,8 @@ enum class ValueStatus : std::uint8_t {
 /// else the bus value; empty when nothing was ever written.
 [[nodiscard]] std::optional<double> shownValue(const signals::SlotSnapshot& slot) noexcept;
 
-/// The VAL_ text of an integral value, if any.
-[[nodiscard]] std::optional<std::string> valueText(const signals::SignalInfo& signal, double value);
+/// The value-table text of a value (shared/signals).
+using signals::valueText;
 
 /// "87.5 %" with a printf format for the number ("%.1f"; empty: shortest), the value text
 /// alone when the signal has one for `value` ("Closed"). A bad format falls back to "%g".

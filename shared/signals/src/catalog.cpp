@@ -1,6 +1,7 @@
 #include "openvcu/signals/catalog.hpp"
 
 #include <cassert>
+#include <cmath>
 
 #include "openvcu/core/text.hpp"
 
@@ -38,6 +39,15 @@ std::string_view lastComponent(std::string_view key) noexcept {
 }
 
 }  // namespace
+
+std::optional<std::string> valueText(const SignalInfo& signal, double value) {
+  if (!std::isfinite(value) || std::trunc(value) != value || std::fabs(value) > 9.0e18) return std::nullopt;
+  const auto integral = static_cast<std::int64_t>(value);
+  for (const auto& [number, text] : signal.valueTexts) {
+    if (number == integral) return text;
+  }
+  return std::nullopt;
+}
 
 std::string_view signalKindName(SignalKind kind) noexcept {
   switch (kind) {

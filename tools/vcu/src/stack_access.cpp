@@ -66,15 +66,6 @@ std::string formatNumber(double value) {
   return std::string(text.data(), end);
 }
 
-std::optional<std::string> valueText(const signals::SignalInfo& signal, double value) {
-  if (!std::isfinite(value) || std::trunc(value) != value || std::fabs(value) > 9.0e18) return std::nullopt;
-  const auto integral = static_cast<std::int64_t>(value);
-  for (const auto& [number, text] : signal.valueTexts) {
-    if (number == integral) return text;
-  }
-  return std::nullopt;
-}
-
 std::string formatValue(const signals::SignalInfo& signal, double value) {
   std::string text = formatNumber(value);
   if (const auto maybeText = valueText(signal, value)) return text + " \"" + *maybeText + "\"";

@@ -50,8 +50,8 @@ std::optional<Stack> loadStack(const StackOptions& options, Sink& err, ExitCode*
 std::string formatNumber(double value);
 /// "87.5 %" or "1 \"Start\"" (value text from the signal's value table) or "3".
 std::string formatValue(const signals::SignalInfo& signal, double value);
-/// The VAL_ text of an integral value, if any.
-std::optional<std::string> valueText(const signals::SignalInfo& signal, double value);
+/// The value-table text of a value (shared/signals).
+using signals::valueText;
 /// A number, or a value text of the signal ("Start"); else an error naming the choices.
 Result<double> parseValue(const signals::SignalInfo& signal, std::string_view text);
 

@@ -59,6 +59,9 @@ struct SignalInfo {
   std::vector<std::pair<std::int64_t, std::string>> valueTexts;  ///< VAL_ table: 0 "Open", 1 "Closed"
 };
 
+/// The value-table text of `value` ("Closed" for 1), when `value` is an integer the table names.
+[[nodiscard]] std::optional<std::string> valueText(const SignalInfo& signal, double value);
+
 /// An ordered, immutable list of signals with O(1) index access and hashed key lookup.
 /// @note immutable after create(): thread-safe to share between threads for reading.
 class Catalog {
