@@ -138,6 +138,7 @@ mount -t proc proc $R/proc; mount -t sysfs sys $R/sys; mount -t devtmpfs dev $R/
 mkdir -p $R/dev/pts $R/dev/shm; mount -t devpts devpts $R/dev/pts; mount -t tmpfs tmpfs $R/dev/shm
 mount -t configfs configfs $R/sys/kernel/config
 mount -t tmpfs tmpfs $R/run; mount -t tmpfs tmpfs $R/tmp
+for d in $(echo "$vmkeep" | tr ',' ' '); do mkdir -p $R$d && mount -o bind /hostro$d $R$d; done
 mkdir -p $R$vmout && mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 vmout $R$vmout
 ip link set lo up
 echo "VM $(cut -d' ' -f1 /proc/uptime) s: kernel up, running the guest script"
@@ -151,6 +152,13 @@ chmod +x "$IRD/init"
 (cd "$IRD" && find . | cpio -o -H newc --quiet | gzip -1) > "$VMOUT/initrd.gz"
 rm -rf "$IRD"
 
+# The guest puts a fresh tmpfs on /tmp (iceoryx's /tmp/roudi stays private), which would
+# hide a tree that lives under /tmp (a clone in /tmp/fresh, say): the top folders under
+# /tmp of the script, this folder and every path argument are bound back in, read-only.
+KEEP=$(for p in "$GUEST_SCRIPT" "$CWD" "${@#*=}"; do
+  [[ $p == /tmp/?* ]] && { rest=${p#/tmp/}; echo "/tmp/${rest%%/*}"; }
+done | sort -u | paste -sd, -)
+
 # ---------------------------------------------------------------- boot + run
 # the host's load decides how steadily the emulated CPUs run (can-tx's period check)
 log "booting $ABI (TCG, $VM_SMP vCPU, $VM_MEM, no network device); host load $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -161,7 +169,7 @@ trap 'exit 143' TERM INT
 { timeout -k 5 "$VM_TIMEOUT" qemu-system-x86_64 -accel tcg -smp "$VM_SMP" -m "$VM_MEM" \
     -nographic -no-reboot -nic none -vga none -bios /usr/share/qemu/qboot.rom -pidfile "$VMOUT/qemu.pid" \
     -kernel "$CACHE/vmlinux" -initrd "$VMOUT/initrd.gz" \
-    -append "console=ttyS0 quiet panic=-1 vmtest=$GUEST_SCRIPT vmcwd=$CWD vmout=$VMOUT" \
+    -append "console=ttyS0 quiet panic=-1 vmtest=$GUEST_SCRIPT vmcwd=$CWD vmout=$VMOUT vmkeep=$KEEP" \
     -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
     -virtfs local,path="$VMOUT",mount_tag=vmout,security_model=none \
     </dev/null; echo $? > "$VMOUT/qemu.status"; } 2>&1 | sed -u 's/\r$//' | tee "$VMOUT/console.log" &
