@@ -155,8 +155,9 @@ rm -rf "$IRD"
 # The guest puts a fresh tmpfs on /tmp (iceoryx's /tmp/roudi stays private), which would
 # hide a tree that lives under /tmp (a clone in /tmp/fresh, say): the top folders under
 # /tmp of the script, this folder and every path argument are bound back in, read-only.
+# (an if, not '[[ ]] && ...': under pipefail a last path outside /tmp would fail the loop)
 KEEP=$(for p in "$GUEST_SCRIPT" "$CWD" "${@#*=}"; do
-  [[ $p == /tmp/?* ]] && { rest=${p#/tmp/}; echo "/tmp/${rest%%/*}"; }
+  if [[ $p == /tmp/?* ]]; then rest=${p#/tmp/}; echo "/tmp/${rest%%/*}"; fi
 done | sort -u | paste -sd, -)
 
 # ---------------------------------------------------------------- boot + run
