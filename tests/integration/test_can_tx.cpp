@@ -231,6 +231,44 @@ TEST_CASE("a runtime cycle change is acknowledged, takes effect and survives a r
   CHECK(checkPairs(listener, CCVS1, 2'000'000) >= 20);
 }
 
+TEST_CASE("a DBC message added at run time goes out at its cycle at once and again after a restart of vcu-can-tx") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f;
+  harness::Process& first = f.startCanTx();
+  Listener listener;
+  constexpr std::uint32_t HVESSD2 = 0x18F091F3;  // the VIC's; the bench stands in for it
+  const auto twice = vcuOn(f.sut, f.config, {"schedule", "add", "CCVS1_PGN65265", "50"});
+  CHECK(contains(twice.out + twice.err, "already in the transmit schedule"));
+  const auto header = vcuOn(f.sut, f.config, {"schedule", "add", "SHM_VCU_to_VIC", "50"});
+  CHECK(contains(header.out + header.err, "safety header"));
+  const auto accepted = vcuOn(f.sut, f.config, {"schedule", "add", "HVESSD2_PGN61585", "40"});
+  REQUIRE_MESSAGE(contains(accepted.out, "accepted"), (accepted.out + accepted.err));
+  const auto value = vcuOn(f.sut, f.config, {"schedule", "default", "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "50"});
+  REQUIRE_MESSAGE(contains(value.out, "accepted"), (value.out + value.err));
+  std::this_thread::sleep_for(200ms);
+  listener.listen(1500ms);
+  const auto frames = listener.withId(HVESSD2);
+  checkPeriods(frames, 40 * MS);
+  CHECK(frames.back().frame.data[0] == 0x20);  // 50 % -> raw 20000
+  CHECK(frames.back().frame.data[1] == 0x4E);
+  const auto again = vcuOn(f.sut, f.config, {"schedule", "add", "HVESSD2_PGN61585", "40"});
+  CHECK(contains(again.out + again.err, "already in the transmit schedule"));
+
+  REQUIRE(f.sut.stop(first));
+  f.startCanTx();
+  listener.heard.clear();
+  std::this_thread::sleep_for(200ms);
+  listener.listen(1000ms);
+  checkPeriods(listener.withId(HVESSD2), 40 * MS);
+  CHECK(listener.withId(HVESSD2).back().frame.data[1] == 0x4E);
+  const auto disabled = vcuOn(f.sut, f.config, {"schedule", "disable", "HVESSD2_PGN61585"});
+  REQUIRE_MESSAGE(contains(disabled.out, "accepted"), (disabled.out + disabled.err));
+  listener.heard.clear();
+  std::this_thread::sleep_for(100ms);
+  listener.listen(300ms);
+  CHECK(listener.withId(HVESSD2).empty());
+}
+
 TEST_CASE("when the heartbeat of the fsm stops, can-tx commands the safe values and raises a fault while the keep-alive goes on") {
   SKIP_UNLESS_ISOLATED();
   Fixture f;

@@ -251,7 +251,7 @@ struct CanTxAppImpl final : TxPort, Clock {
       return persist(std::move(changed));
     };
     policy.customKinds = {ipc::CommandKind::ScheduleCycle, ipc::CommandKind::ScheduleEnable,
-                          ipc::CommandKind::ScheduleDefault};
+                          ipc::CommandKind::ScheduleDefault, ipc::CommandKind::ScheduleAdd};
     policy.custom = [this](const ipc::CommandRequest& request) { return scheduleCommand(request); };
     return policy;
   }
@@ -269,11 +269,39 @@ struct CanTxAppImpl final : TxPort, Clock {
     for (MessageChange& change : target.messages) {
       if (change.message == name) return change;
     }
-    return target.messages.emplace_back(MessageChange{name, std::nullopt, std::nullopt});
+    return target.messages.emplace_back(MessageChange{name, std::nullopt, std::nullopt, false});
+  }
+
+  /// ScheduleAdd: a DBC message joins the running schedule (at the end, first frame now).
+  std::optional<std::string> addCommand(const ipc::CommandRequest& request) {
+    auto built = runtimeMessage(schedule, vehicle, runtime.catalog(), request.key, request.value);
+    if (!built) return built.error().message;
+    if (schedule.messages.size() >= scheduler->capacity()) return "the schedule is full";
+    auto prepared = scheduler->prepare(*built);
+    if (!prepared) return prepared.error().message;
+    const Overlay previous = overlay;
+    Overlay changed = overlay;
+    MessageChange& change = changeOf(changed, request.key);
+    change.added = true;
+    change.cycleMs = request.value;
+    if (auto refusal = persist(std::move(changed))) return refusal;
+    const MessageStats& stats = Scheduler::statsOf(**prepared);
+    TxCommand command{.kind = TxCommand::Kind::Add, .added = prepared->get()};
+    if (!thread->post(command)) {
+      (void)persist(previous);
+      return "the transmit thread's inbox is full; try again";
+    }
+    (void)prepared->release();  // the command owns it now
+    schedule.messages.push_back(std::move(*built));
+    registerMessageCounters(schedule.messages.size() - 1, stats);
+    runtime.log().info("message " + request.key + " added to the transmit schedule, every " + number(request.value) +
+                       " ms");
+    return std::nullopt;
   }
 
   std::optional<std::string> scheduleCommand(const ipc::CommandRequest& request) {
     if (!std::isfinite(request.value)) return "the value must be a finite number";
+    if (request.kind == ipc::CommandKind::ScheduleAdd) return addCommand(request);
     const Overlay previous = overlay;
     TxCommand command;
     if (request.kind == ipc::CommandKind::ScheduleDefault) {
@@ -389,24 +417,34 @@ struct CanTxAppImpl final : TxPort, Clock {
         return static_cast<std::int64_t>(buses[b].publishFailures.load(std::memory_order_relaxed));
       });
     }
-    for (std::size_t s = 0; s < schedule.messages.size(); ++s) {
-      const std::string prefix = "tx." + vehicle.database.messages[schedule.messages[s].message].name + ".";
-      const MessageStats& stats = scheduler->stats(s);
-      auto add = [&](const std::string& name, auto read) {
-        heartbeat.addCounterSource(prefix + name, [&stats, read] { return static_cast<std::int64_t>(read(stats)); });
-      };
-      add("frames", [](const MessageStats& m) { return m.frames.load(std::memory_order_relaxed); });
-      add("missed", [](const MessageStats& m) { return m.missed.load(std::memory_order_relaxed); });
-      add("send_failures", [](const MessageStats& m) { return m.sendFailures.load(std::memory_order_relaxed); });
-      add("encode_errors", [](const MessageStats& m) { return m.encodeErrors.load(std::memory_order_relaxed); });
-      add("period_err_p50_us", [](const MessageStats& m) { return m.periodError.summary().p50Us; });
-      add("period_err_p99_us", [](const MessageStats& m) { return m.periodError.summary().p99Us; });
-      add("period_err_max_us", [](const MessageStats& m) { return m.periodError.summary().maxUs; });
-      if (schedule.messages[s].safetyDeltaNs) {
-        add("delta_err_p50_us", [](const MessageStats& m) { return m.deltaError.summary().p50Us; });
-        add("delta_err_p99_us", [](const MessageStats& m) { return m.deltaError.summary().p99Us; });
-        add("delta_err_max_us", [](const MessageStats& m) { return m.deltaError.summary().maxUs; });
-      }
+    for (std::size_t s = 0; s < schedule.messages.size(); ++s) registerMessageCounters(s, scheduler->stats(s));
+  }
+
+  /// tx.<Msg>.*: the message's statistics and its live settings (cycle_us, enabled, added),
+  /// which the HMI's ECU Setup shows.
+  void registerMessageCounters(std::size_t s, const MessageStats& stats) {
+    service::HeartbeatPublisher& heartbeat = runtime.heartbeat();
+    const std::string prefix = "tx." + vehicle.database.messages[schedule.messages[s].message].name + ".";
+    heartbeat.addCounterSource(prefix + "cycle_us",
+                               [this, s] { return static_cast<std::int64_t>(schedule.messages[s].cycleNs / 1000); });
+    heartbeat.addCounterSource(prefix + "enabled",
+                               [this, s] { return static_cast<std::int64_t>(schedule.messages[s].enabled); });
+    heartbeat.addCounterSource(prefix + "added",
+                               [this, s] { return static_cast<std::int64_t>(schedule.messages[s].added); });
+    auto add = [&](const std::string& name, auto read) {
+      heartbeat.addCounterSource(prefix + name, [&stats, read] { return static_cast<std::int64_t>(read(stats)); });
+    };
+    add("frames", [](const MessageStats& m) { return m.frames.load(std::memory_order_relaxed); });
+    add("missed", [](const MessageStats& m) { return m.missed.load(std::memory_order_relaxed); });
+    add("send_failures", [](const MessageStats& m) { return m.sendFailures.load(std::memory_order_relaxed); });
+    add("encode_errors", [](const MessageStats& m) { return m.encodeErrors.load(std::memory_order_relaxed); });
+    add("period_err_p50_us", [](const MessageStats& m) { return m.periodError.summary().p50Us; });
+    add("period_err_p99_us", [](const MessageStats& m) { return m.periodError.summary().p99Us; });
+    add("period_err_max_us", [](const MessageStats& m) { return m.periodError.summary().maxUs; });
+    if (schedule.messages[s].safetyDeltaNs) {
+      add("delta_err_p50_us", [](const MessageStats& m) { return m.deltaError.summary().p50Us; });
+      add("delta_err_p99_us", [](const MessageStats& m) { return m.deltaError.summary().p99Us; });
+      add("delta_err_max_us", [](const MessageStats& m) { return m.deltaError.summary().maxUs; });
     }
   }
 };

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "openvcu/can/frame.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/core/text.hpp"
@@ -615,6 +616,41 @@ std::optional<std::string> checkCycle(const ScheduledMessage& message, double cy
   return std::nullopt;
 }
 
+Result<ScheduledMessage> runtimeMessage(const Schedule& schedule, const config::VehicleConfig& vehicle,
+                                        const signals::Catalog& catalog, std::string_view name, double cycleMs) {
+  const dbc::Message* message = vehicle.database.findMessage(name);
+  if (message == nullptr || message->pseudo) {
+    return Error{"unknown message '" + std::string(name) + "'" + suggestion(name, messageNames(vehicle))};
+  }
+  const auto index = static_cast<std::size_t>(message - vehicle.database.messages.data());
+  const config::BusConfig* bus = vehicle.busOf(index);
+  if (bus == nullptr) return Error{"message '" + message->name + "' is on no configured bus"};
+  if (isSafetyHeader(*message)) {
+    return Error{"'" + message->name + "' is a J1939-76 safety header: it goes out with its SDM"};
+  }
+  if (message->length > can::MAX_DATA_LENGTH) {
+    return Error{"'" + message->name + "' is " + std::to_string(message->length) +
+                 " bytes: longer than a CAN frame (transport protocol sending is not supported)"};
+  }
+  if (schedule.find(index) != nullptr) {
+    return Error{"'" + message->name +
+                 "' is already in the transmit schedule (change it with ScheduleCycle / ScheduleEnable)"};
+  }
+  ScheduledMessage entry;
+  entry.message = index;
+  entry.bus = static_cast<std::size_t>(bus - vehicle.buses.data());
+  entry.canId = message->id;
+  entry.extended = message->extended;
+  entry.added = true;
+  if (auto problem = checkCycle(entry, cycleMs)) return Error{*problem};
+  entry.cycleNs = static_cast<std::int64_t>(std::llround(cycleMs * NS_PER_MS));
+  entry.defaults.assign(message->signals.size(), std::nullopt);
+  for (const dbc::Signal& signal : message->signals) {
+    entry.keys.push_back(catalog.indexOf(config::signalKey(*message, signal)));
+  }
+  return entry;
+}
+
 Result<std::size_t> findScheduled(const Schedule& schedule, const config::VehicleConfig& vehicle,
                                   std::string_view name) {
   const dbc::Message* message = vehicle.database.findMessage(name);
@@ -669,9 +705,11 @@ Result<Overlay> loadOverlay(const std::string& path) {
     for (const auto& [name, settings] : messages->items()) {
       const std::string itemPath = JsonChecker::join("/messages", name);
       if (!check.isObject(settings, itemPath)) continue;
-      check.onlyKeys(settings, itemPath, {"cycleMs", "enabled"});
+      check.onlyKeys(settings, itemPath, {"cycleMs", "enabled", "added"});
       MessageChange change{name, check.number(settings, itemPath, "cycleMs", false),
-                           check.boolean(settings, itemPath, "enabled", false)};
+                           check.boolean(settings, itemPath, "enabled", false),
+                           check.boolean(settings, itemPath, "added", false).value_or(false)};
+      if (change.added && !change.cycleMs) check.error(itemPath + "/cycleMs", "an added message needs its cycle");
       overlay.messages.push_back(std::move(change));
     }
   }
@@ -696,6 +734,11 @@ Result<Schedule> applyOverlay(const Schedule& schedule, const Overlay& overlay, 
   const std::string& file = schedule.overlay;
   for (const MessageChange& change : overlay.messages) {
     const std::string path = file + ": /messages/" + change.message;
+    if (change.added) {
+      auto added = runtimeMessage(result, vehicle, catalog, change.message, change.cycleMs.value_or(0));
+      if (!added) return Error{path + ": " + added.error().message};
+      result.messages.push_back(std::move(*added));
+    }
     auto found = findScheduled(result, vehicle, change.message);
     if (!found) return Error{path + ": " + found.error().message};
     ScheduledMessage& entry = result.messages[*found];
@@ -732,6 +775,7 @@ Status saveOverlay(const std::string& path, const Overlay& overlay) {
   Json messages = Json::object();
   for (const MessageChange& change : overlay.messages) {
     Json item = Json::object();
+    if (change.added) item["added"] = true;
     if (change.cycleMs) item["cycleMs"] = *change.cycleMs;
     if (change.enabled) item["enabled"] = *change.enabled;
     messages[change.message] = std::move(item);

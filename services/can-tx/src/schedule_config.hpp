@@ -47,6 +47,7 @@ struct ScheduledMessage {
   bool onChange{};
   std::int64_t minIntervalNs{10'000'000};
   std::optional<std::int64_t> safetyDeltaNs;  ///< J1939-76 SDM: SHM first, SDM this much later
+  bool added{};  ///< added at run time (ScheduleAdd, the overlay's "added"), not by the schedule file
 };
 
 struct SendGroup {
@@ -87,6 +88,7 @@ struct MessageChange {
   std::string message;
   std::optional<double> cycleMs;
   std::optional<bool> enabled;
+  bool added{};  ///< the message was added at run time (then cycleMs is set)
 };
 struct Overlay {
   std::vector<MessageChange> messages;
@@ -111,6 +113,13 @@ Status saveOverlay(const std::string& path, const Overlay& overlay);
 /// Check of one runtime change, shared by commands and overlay loading: empty when fine,
 /// else the reason. `cycleMs` must be 1..3600000 and longer than the safety delta.
 std::optional<std::string> checkCycle(const ScheduledMessage& message, double cycleMs);
+
+/// The entry for DBC message `name` added at run time with cycle `cycleMs` (ScheduleAdd): its
+/// DBC start values, no group, no computed fields, no safety pair. A reason when the message
+/// is unknown, pseudo, on no configured bus, a J1939-76 safety header, longer than a frame,
+/// already scheduled, or the cycle is out of range.
+Result<ScheduledMessage> runtimeMessage(const Schedule& schedule, const config::VehicleConfig& vehicle,
+                                        const signals::Catalog& catalog, std::string_view name, double cycleMs);
 
 /// The scheduled message named `name`, or a reason ("unknown message 'X' (did you mean
 /// 'Y'?)", "'X' is not in the schedule").

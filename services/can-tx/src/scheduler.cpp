@@ -86,7 +86,7 @@ struct FieldState {
   std::uint64_t counter{};   ///< the counter's next value
 };
 
-struct Entry {
+struct ScheduledEntry {
   ScheduledMessage config;
   const dbc::MessageCodec* codec{};
   std::uint32_t length{};
@@ -116,7 +116,8 @@ struct Scheduler::Impl {
   Clock& clock;
   dbc::DatabaseCodec codecs;
   std::vector<SendGroup> groups;
-  std::vector<std::unique_ptr<Entry>> entries;  // unique_ptr: atomics are not movable
+  std::size_t room{};  ///< entries' reserved capacity: add() never reallocates
+  std::vector<PreparedMessage> entries;  // pointers: atomics are not movable; reserved at create()
   SchedulerCounters counters;
   std::uint8_t ownAddress{j1939::NULL_ADDRESS};
   std::optional<std::size_t> timeDateMessage;  ///< DBC message with PGN 65254 this node sends
@@ -128,7 +129,46 @@ struct Scheduler::Impl {
 
   // ---- building frames ------------------------------------------------------------------
 
-  bool groupOn(const Entry& entry) const noexcept {
+  /// The state of one scheduled message (allocates; reads only the configuration).
+  Result<PreparedMessage> build(const ScheduledMessage& config) const {
+    PreparedMessage entry(new ScheduledEntry());
+    entry->config = config;
+    entry->codec = &codecs[config.message];
+    entry->length = entry->codec->length();
+    if (entry->length > can::MAX_DATA_LENGTH) {
+      return Error{"message '" + vehicle.database.messages[config.message].name + "' is " +
+                   std::to_string(entry->length) + " bytes: longer than a CAN frame (transport protocol sending is "
+                   "not supported)"};
+    }
+    entry->sourceAddress = config.extended ? j1939::Id::fromCanId(config.canId).sourceAddress : 0;
+    for (const ComputedField& field : config.computed) {
+      FieldState state;
+      state.config = field;
+      state.counter = field.start;
+      dbc::DecodedValue ones;
+      ones.kind = dbc::RawKind::Unsigned;
+      ones.rawUnsigned = ~std::uint64_t{0};
+      const std::uint32_t bits = vehicle.database.messages[config.message].signals[field.signal].size;
+      ones.rawUnsigned = bits >= 64 ? ones.rawUnsigned : (std::uint64_t{1} << bits) - 1;
+      (void)entry->codec->encodeRaw(field.signal, ones, std::span<std::uint8_t>(state.mask.data(), entry->length));
+      entry->fields.push_back(state);
+    }
+    if (config.safetyDeltaNs) {
+      entry->pair.emplace(config.canId, 0);
+      const std::uint32_t header = entry->pair->headerCanId();
+      for (std::size_t m = 0; m < vehicle.database.messages.size(); ++m) {
+        const dbc::Message& candidate = vehicle.database.messages[m];
+        if (candidate.extended && (candidate.id & 0x03FFFFFFu) == (header & 0x03FFFFFFu)) {
+          entry->headerMessage = m;
+          entry->headerKeys = keysOf(m);
+          break;
+        }
+      }
+    }
+    return entry;
+  }
+
+  bool groupOn(const ScheduledEntry& entry) const noexcept {
     if (!entry.config.group) return true;
     const SendGroup& group = groups[*entry.config.group];
     double value = group.initial;
@@ -138,7 +178,7 @@ struct Scheduler::Impl {
     return value != 0.0;
   }
 
-  void build(Entry& entry, Payload& payload) noexcept {
+  void build(ScheduledEntry& entry, Payload& payload) noexcept {
     const auto initial = entry.codec->initialPayload();
     std::copy(initial.begin(), initial.end(), payload.begin());
     const std::span<std::uint8_t> buffer(payload.data(), entry.length);
@@ -159,7 +199,7 @@ struct Scheduler::Impl {
     }
   }
 
-  void compute(Entry& entry, Payload& payload) noexcept {
+  void compute(ScheduledEntry& entry, Payload& payload) noexcept {
     const std::span<std::uint8_t> buffer(payload.data(), entry.length);
     for (FieldState& field : entry.fields) {
       for (std::uint32_t b = 0; b < entry.length; ++b) payload[b] = static_cast<std::uint8_t>(payload[b] & ~field.mask[b]);
@@ -237,7 +277,7 @@ struct Scheduler::Impl {
   }
 
   /// Builds and sends one instance of the message (its SHM when it is a safety SDM).
-  void transmit(Entry& entry, Payload& payload) noexcept {
+  void transmit(ScheduledEntry& entry, Payload& payload) noexcept {
     const std::span<const std::uint8_t> bytes(payload.data(), entry.length);
     if (entry.pair) {
       if (entry.sdmPending) send(entry, entry.sdm);  // never leave an SHM without its SDM
@@ -264,7 +304,7 @@ struct Scheduler::Impl {
   }
 
   /// The SDM of a pair whose SHM went out.
-  void send(Entry& entry, const Payload& payload) noexcept {
+  void send(ScheduledEntry& entry, const Payload& payload) noexcept {
     const std::int64_t now = clock.monotonicNs();
     const std::span<const std::uint8_t> bytes(payload.data(), entry.length);
     if (port.send(entry.config.bus, frameOf(entry.config.canId, true, bytes)) != can::SendStatus::Sent) {
@@ -277,7 +317,7 @@ struct Scheduler::Impl {
     record(entry.config.message, entry.config.keys, bytes, entry.sourceAddress, now);
   }
 
-  void cyclic(Entry& entry, std::int64_t nowNs) noexcept {
+  void cyclic(ScheduledEntry& entry, std::int64_t nowNs) noexcept {
     const std::int64_t cycle = entry.config.cycleNs;
     const std::int64_t late = nowNs - entry.nextNs;
     const std::int64_t skipped = late / cycle;  // whole cycles already past: not sent
@@ -303,7 +343,7 @@ struct Scheduler::Impl {
     entry.hasLast = true;
   }
 
-  void changeCheck(Entry& entry, std::int64_t nowNs) noexcept {
+  void changeCheck(ScheduledEntry& entry, std::int64_t nowNs) noexcept {
     const std::int64_t interval = entry.config.minIntervalNs;
     entry.nextCheckNs += ((nowNs - entry.nextCheckNs) / interval + 1) * interval;
     if (!entry.config.enabled || !groupOn(entry)) return;
@@ -350,44 +390,14 @@ Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig
       impl->timeDateKeys = impl->keysOf(m);
     }
   }
+  impl->room = std::max(vehicle.database.messages.size(), schedule.messages.size());
+  impl->entries.reserve(impl->room);
   for (const ScheduledMessage& config : schedule.messages) {
-    auto entry = std::make_unique<Entry>();
-    entry->config = config;
-    entry->codec = &impl->codecs[config.message];
-    entry->length = entry->codec->length();
-    if (entry->length > can::MAX_DATA_LENGTH) {
-      return Error{"message '" + vehicle.database.messages[config.message].name + "' is " +
-                   std::to_string(entry->length) + " bytes: longer than a CAN frame (transport protocol sending is "
-                   "not supported)"};
-    }
-    entry->sourceAddress = config.extended ? j1939::Id::fromCanId(config.canId).sourceAddress : 0;
-    for (const ComputedField& field : config.computed) {
-      FieldState state;
-      state.config = field;
-      state.counter = field.start;
-      dbc::DecodedValue ones;
-      ones.kind = dbc::RawKind::Unsigned;
-      ones.rawUnsigned = ~std::uint64_t{0};
-      const std::uint32_t bits = vehicle.database.messages[config.message].signals[field.signal].size;
-      ones.rawUnsigned = bits >= 64 ? ones.rawUnsigned : (std::uint64_t{1} << bits) - 1;
-      (void)entry->codec->encodeRaw(field.signal, ones, std::span<std::uint8_t>(state.mask.data(), entry->length));
-      entry->fields.push_back(state);
-    }
-    if (config.safetyDeltaNs) {
-      entry->pair.emplace(config.canId, 0);
-      const std::uint32_t header = entry->pair->headerCanId();
-      for (std::size_t m = 0; m < vehicle.database.messages.size(); ++m) {
-        const dbc::Message& candidate = vehicle.database.messages[m];
-        if (candidate.extended && (candidate.id & 0x03FFFFFFu) == (header & 0x03FFFFFFu)) {
-          entry->headerMessage = m;
-          entry->headerKeys = impl->keysOf(m);
-          break;
-        }
-      }
-    }
-    if (config.cycleNs > 0) entry->nextNs = startNs + config.offsetNs;
-    if (config.onChange) entry->nextCheckNs = startNs + config.offsetNs;
-    impl->entries.push_back(std::move(entry));
+    auto entry = impl->build(config);
+    if (!entry) return entry.error();
+    if (config.cycleNs > 0) (*entry)->nextNs = startNs + config.offsetNs;
+    if (config.onChange) (*entry)->nextCheckNs = startNs + config.offsetNs;
+    impl->entries.emplace_back(entry->release());
   }
   return std::unique_ptr<Scheduler>(new Scheduler(std::move(impl)));
 }
@@ -418,7 +428,7 @@ std::int64_t Scheduler::nextDeadlineNs() const noexcept {
 }
 
 void Scheduler::setCycle(std::size_t scheduled, std::int64_t cycleNs, std::int64_t nowNs) noexcept {
-  Entry& entry = *m_impl->entries[scheduled];
+  ScheduledEntry& entry = *m_impl->entries[scheduled];
   const std::int64_t previous = entry.config.cycleNs;
   entry.config.cycleNs = cycleNs;
   entry.consecutive = false;
@@ -436,7 +446,7 @@ void Scheduler::setEnabled(std::size_t scheduled, bool enabled) noexcept {
 }
 
 void Scheduler::setDefault(std::size_t scheduled, std::uint32_t signal, double value) noexcept {
-  Entry& entry = *m_impl->entries[scheduled];
+  ScheduledEntry& entry = *m_impl->entries[scheduled];
   if (signal < entry.config.defaults.size()) entry.config.defaults[signal] = value;
 }
 
@@ -483,6 +493,23 @@ void Scheduler::answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t r
     impl.countFailure(impl.counters.requestsNacked);
   }
 }
+
+void ScheduledEntryDeleter::operator()(ScheduledEntry* entry) const noexcept { delete entry; }
+
+Result<PreparedMessage> Scheduler::prepare(const ScheduledMessage& message) const { return m_impl->build(message); }
+
+const MessageStats& Scheduler::statsOf(const ScheduledEntry& entry) noexcept { return entry.stats; }
+
+bool Scheduler::add(PreparedMessage& message, std::int64_t nowNs) noexcept {
+  std::vector<PreparedMessage>& entries = m_impl->entries;
+  if (!message || entries.size() >= m_impl->room) return false;
+  if (message->config.cycleNs > 0) message->nextNs = nowNs;
+  if (message->config.onChange) message->nextCheckNs = nowNs;
+  entries.push_back(std::move(message));  // within the reserved capacity: no allocation
+  return true;
+}
+
+std::size_t Scheduler::capacity() const noexcept { return m_impl->room; }
 
 std::size_t Scheduler::size() const noexcept { return m_impl->entries.size(); }
 const MessageStats& Scheduler::stats(std::size_t scheduled) const noexcept { return m_impl->entries[scheduled]->stats; }

@@ -91,6 +91,13 @@ struct SchedulerCounters {
   std::atomic<std::uint64_t> requestsNacked{};
 };
 
+/// One scheduled message's state (defined in scheduler.cpp).
+struct ScheduledEntry;
+struct ScheduledEntryDeleter {
+  void operator()(ScheduledEntry* entry) const noexcept;
+};
+using PreparedMessage = std::unique_ptr<ScheduledEntry, ScheduledEntryDeleter>;
+
 /// @note not thread-safe: one thread runs it. run() and every change are noexcept and
 ///       allocation-free.
 class Scheduler {
@@ -113,6 +120,18 @@ class Scheduler {
   void setCycle(std::size_t scheduled, std::int64_t cycleNs, std::int64_t nowNs) noexcept;
   void setEnabled(std::size_t scheduled, bool enabled) noexcept;
   void setDefault(std::size_t scheduled, std::uint32_t signal, double value) noexcept;
+
+  // ---- adding a message at run time (ScheduleAdd) ---------------------------------------
+  /// Builds the state of a message to add (allocates; any thread, the scheduler's
+  /// configuration is read only). Its statistics live as long as the scheduler once added.
+  [[nodiscard]] Result<PreparedMessage> prepare(const ScheduledMessage& message) const;
+  [[nodiscard]] static const MessageStats& statsOf(const ScheduledEntry& entry) noexcept;
+  /// Appends a prepared message as index size(); its first frame goes out at `nowNs`, then
+  /// every cycle. Never reallocates: room for every DBC message is reserved at create().
+  /// false (the message is left in `message`) when that room is used up.
+  bool add(PreparedMessage& message, std::int64_t nowNs) noexcept;
+  /// The number of messages the scheduler can hold (size() plus what add() may append).
+  [[nodiscard]] std::size_t capacity() const noexcept;
 
   /// Sends a frame other processes asked for, once, now.
   void sendOnce(std::size_t bus, const can::Frame& frame) noexcept;

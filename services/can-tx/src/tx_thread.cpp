@@ -79,6 +79,10 @@ void TxThread::stop() noexcept {
   m_wake.fetch_add(1, std::memory_order_release);
   futexWake(m_wake);
   m_thread.join();
+  TxCommand left;
+  while (m_inbox.pop(left)) {
+    if (left.kind == TxCommand::Kind::Add) PreparedMessage{left.added};  // never applied: freed here
+  }
 }
 
 bool TxThread::post(const TxCommand& command) noexcept {
@@ -107,6 +111,11 @@ void TxThread::apply(const TxCommand& command, std::int64_t nowNs) noexcept {
       break;
     case TxCommand::Kind::Default:
       m_scheduler.setDefault(command.scheduled, command.signal, command.value);
+      break;
+    case TxCommand::Kind::Add:
+      // the poster checked the room (Scheduler::capacity); a refusal would leave its
+      // heartbeat counters pointing at freed statistics, so the entry is then kept alive
+      if (PreparedMessage entry(command.added); !m_scheduler.add(entry, nowNs)) (void)entry.release();
       break;
   }
 }

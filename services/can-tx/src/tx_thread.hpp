@@ -27,7 +27,7 @@
 namespace openvcu::cantx {
 
 struct TxCommand {
-  enum class Kind : std::uint8_t { OneShot, Request, Cycle, Enable, Default };
+  enum class Kind : std::uint8_t { OneShot, Request, Cycle, Enable, Default, Add };
   Kind kind{Kind::OneShot};
   std::size_t bus{};
   can::Frame frame{};          ///< OneShot
@@ -39,6 +39,7 @@ struct TxCommand {
   double value{};              ///< Default
   std::int64_t cycleNs{};      ///< Cycle
   bool enabled{};              ///< Enable
+  ScheduledEntry* added{};     ///< Add: a Scheduler::prepare()d message, owned by the command
 };
 
 /// Single-producer single-consumer ring of TxCommands.

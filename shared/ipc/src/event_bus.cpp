@@ -36,6 +36,7 @@ static_assert(static_cast<std::int8_t>(CommandKind::ScheduleDefault) ==
               openvcu_lcm::command_request_t::SCHEDULE_DEFAULT);
 static_assert(static_cast<std::int8_t>(CommandKind::FsmReload) == openvcu_lcm::command_request_t::FSM_RELOAD);
 static_assert(static_cast<std::int8_t>(CommandKind::SimFault) == openvcu_lcm::command_request_t::SIM_FAULT);
+static_assert(static_cast<std::int8_t>(CommandKind::ScheduleAdd) == openvcu_lcm::command_request_t::SCHEDULE_ADD);
 static_assert(static_cast<std::int8_t>(FaultSeverity::Info) == openvcu_lcm::fault_event_t::INFO);
 static_assert(static_cast<std::int8_t>(FaultSeverity::Warning) == openvcu_lcm::fault_event_t::WARNING);
 static_assert(static_cast<std::int8_t>(FaultSeverity::Error) == openvcu_lcm::fault_event_t::ERROR);

@@ -26,6 +26,7 @@ bool knownKind(ipc::CommandKind kind) noexcept {
     case ipc::CommandKind::ScheduleDefault:
     case ipc::CommandKind::FsmReload:
     case ipc::CommandKind::SimFault:
+    case ipc::CommandKind::ScheduleAdd:
       return true;
   }
   return false;
@@ -38,7 +39,8 @@ bool isCustom(const CommandPolicy& policy, ipc::CommandKind kind) noexcept {
 bool carriesValue(ipc::CommandKind kind) noexcept {
   return kind == ipc::CommandKind::SetSignal || kind == ipc::CommandKind::SetOverride ||
          kind == ipc::CommandKind::OperatorSwitch || kind == ipc::CommandKind::ScheduleCycle ||
-         kind == ipc::CommandKind::ScheduleEnable || kind == ipc::CommandKind::ScheduleDefault;
+         kind == ipc::CommandKind::ScheduleEnable || kind == ipc::CommandKind::ScheduleDefault ||
+         kind == ipc::CommandKind::ScheduleAdd;
 }
 
 /// Shortest text that reads back as the same double ("0.1", "100", "1e+20").
@@ -92,6 +94,8 @@ std::string commandKindName(ipc::CommandKind kind) {
       return "FsmReload";
     case ipc::CommandKind::SimFault:
       return "SimFault";
+    case ipc::CommandKind::ScheduleAdd:
+      return "ScheduleAdd";
   }
   return "kind " + std::to_string(static_cast<int>(kind));
 }
@@ -167,6 +171,7 @@ bool CommandHandler::apply(const ipc::CommandRequest& request, signals::SignalIn
     case ipc::CommandKind::ScheduleDefault:
     case ipc::CommandKind::FsmReload:
     case ipc::CommandKind::SimFault:
+    case ipc::CommandKind::ScheduleAdd:
       return false;  // not table operations: a service handles them as custom kinds (or in its veto)
   }
   return false;

@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -187,4 +188,54 @@ TEST_CASE("checkCycle: 1..3600000 ms and longer than the safety delta") {
   CHECK(cantx::checkCycle(message, 2.0));
   CHECK(!cantx::checkCycle(message, 2.5));
   CHECK(cantx::checkCycle(message, 4e6));
+}
+
+TEST_CASE("runtimeMessage: any DBC message on a bus joins at a checked cycle, and the overlay keeps it across restarts") {
+  Fixture f;
+  auto schedule = f.load(R"({"overlay": "runtime.json"})");
+  REQUIRE(schedule);
+  auto added = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 100);
+  REQUIRE_MESSAGE(added, (added ? "" : added.error().toString()));
+  CHECK(added->added);
+  CHECK(added->cycleNs == 100'000'000);
+  CHECK(added->canId == 0x18F091F3);  // the VIC's own ID: the bench stands in for it
+  CHECK(added->keys.size() == added->defaults.size());
+  CHECK(!added->group);
+  auto refusal = [&](const std::string& name, double cycleMs) {
+    auto result = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, name, cycleMs);
+    REQUIRE_MESSAGE(!result, name);
+    return result.error().message;
+  };
+  CHECK(refusal("HVESSD2_PGN61586", 100).find("did you mean 'HVESSD2_PGN61585'") != std::string::npos);
+  CHECK(refusal("CCVS1_PGN65265", 100).find("already in the transmit schedule") != std::string::npos);
+  CHECK(refusal("SHM_VCU_to_VIC", 100).find("safety header") != std::string::npos);
+  CHECK(refusal("HVESSD2_PGN61585", 0).find("1 to 3600000 ms") != std::string::npos);
+
+  cantx::Overlay overlay;
+  overlay.messages.push_back({"HVESSD2_PGN61585", 100.0, std::nullopt, true});
+  overlay.defaults.emplace_back("VIC.HVESSD2_PGN61585.HS_FastUpdSOC", 55);
+  REQUIRE(cantx::saveOverlay(schedule->overlay, overlay));
+  auto loaded = cantx::loadOverlay(schedule->overlay);
+  REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
+  REQUIRE(loaded->messages.size() == 1);
+  CHECK(loaded->messages[0].added);
+  auto applied = cantx::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
+  REQUIRE_MESSAGE(applied, (applied ? "" : applied.error().toString()));
+  CHECK(applied->messages.size() == schedule->messages.size() + 1);
+  const auto& hvessd2 = f.entry(*applied, "HVESSD2_PGN61585");
+  CHECK(hvessd2.added);
+  CHECK(hvessd2.cycleNs == 100'000'000);
+  CHECK(std::count(hvessd2.defaults.begin(), hvessd2.defaults.end(), std::optional<double>(55.0)) == 1);
+
+  // an added message without its cycle, or one the schedule already has, refuses the overlay
+  f.write("runtime.json", R"({"format": 1, "messages": {"HVESSD2_PGN61585": {"added": true}}})");
+  auto noCycle = cantx::loadOverlay(schedule->overlay);
+  REQUIRE(!noCycle);
+  CHECK(noCycle.error().toString().find("/messages/HVESSD2_PGN61585/cycleMs") != std::string::npos);
+  f.write("runtime.json", R"({"format": 1, "messages": {"CCVS1_PGN65265": {"added": true, "cycleMs": 50}}})");
+  auto twice = cantx::loadOverlay(schedule->overlay);
+  REQUIRE(twice);
+  auto refused = cantx::applyOverlay(*schedule, *twice, f.vehicle, f.catalog);
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("/messages/CCVS1_PGN65265: 'CCVS1_PGN65265' is already") != std::string::npos);
 }

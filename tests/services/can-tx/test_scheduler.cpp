@@ -319,6 +319,43 @@ TEST_CASE("runtime changes: a new cycle keeps the phase, a disabled message stop
   CHECK(f.sut->counters().oneShots.load() == 1);
 }
 
+TEST_CASE("a message added at run time goes out at once and then every cycle, with its start values and stats") {
+  Fixture f;
+  f.start();
+  f.runUntil(START + 30 * MS);
+  auto entry = cantx::runtimeMessage(f.schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 40);
+  REQUIRE(entry);
+  entry->defaults[0] = 50.0;  // HS_FastUpdSOC 50 % -> raw 20000 = 0x4E20
+  auto prepared = f.sut->prepare(*entry);
+  REQUIRE(prepared);
+  const cantx::MessageStats& stats = cantx::Scheduler::statsOf(**prepared);
+  const std::size_t before = f.sut->size();
+  REQUIRE(f.sut->capacity() > before);
+  REQUIRE(f.sut->add(*prepared, f.clock.now));
+  CHECK(!*prepared);  // taken
+  CHECK(f.sut->size() == before + 1);
+  CHECK(&f.sut->stats(before) == &stats);
+  f.port.sent.clear();
+  f.runUntil(START + 150 * MS);
+  const auto frames = f.port.withId(0x18F091F3);
+  REQUIRE(frames.size() == 4);  // 30, 70, 110, 150 ms
+  CHECK(frames[0].atNs == START + 30 * MS);
+  CHECK(frames[3].atNs == START + 150 * MS);
+  CHECK(frames[0].frame.data[0] == 0x20);
+  CHECK(frames[0].frame.data[1] == 0x4E);
+  CHECK(stats.frames.load() == 4);
+  // the room is every DBC message: adding beyond it is refused and leaves the entry to the caller
+  while (f.sut->size() < f.sut->capacity()) {
+    auto filler = f.sut->prepare(*entry);
+    REQUIRE(filler);
+    REQUIRE(f.sut->add(*filler, f.clock.now));
+  }
+  auto extra = f.sut->prepare(*entry);
+  REQUIRE(extra);
+  CHECK(!f.sut->add(*extra, f.clock.now));
+  CHECK(*extra);
+}
+
 TEST_CASE("ErrorHistogram: percentiles in microseconds, exact maximum, overflow bucket") {
   cantx::ErrorHistogram histogram;
   for (int i = 0; i < 98; ++i) histogram.record(10 * US);

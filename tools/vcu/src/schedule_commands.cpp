@@ -73,6 +73,21 @@ constexpr const char* CYCLE_FOOTER =
     "Exit: 0 accepted, 1 refused, unknown message, bad MS, or no answer within the\n"
     "timeout (default 2 s), 2 usage error.\n";
 
+constexpr const char* ADD_DESCRIPTION = "Add a DBC message to the transmit schedule (vcu-can-tx answers)";
+constexpr const char* ADD_FOOTER =
+    "Sends ScheduleAdd: vcu-can-tx starts sending MESSAGE (any DBC message on a\n"
+    "configured bus, also one another node transmits: the bench stands in for it) at\n"
+    "once and then every MS milliseconds (1..3600000), with its DBC start values; set its\n"
+    "signals with 'vcu schedule default' or an override, stop it with 'vcu schedule\n"
+    "disable'. Kept across restarts (can-tx's overlay). An unknown message is refused here\n"
+    "with a 'did you mean'; can-tx refuses a message it already schedules, a J1939-76\n"
+    "safety header and one longer than a frame.\n"
+    "\n"
+    "Example:\n"
+    "  vcu schedule add HVESSD2_PGN61585 100 --note 'bench: stand in for the VIC'\n"
+    "Exit: 0 accepted, 1 refused, unknown message, bad MS, or no answer within the\n"
+    "timeout (default 2 s), 2 usage error.\n";
+
 constexpr const char* ENABLE_DESCRIPTION = "Send a scheduled message again (vcu-can-tx answers)";
 constexpr const char* DISABLE_DESCRIPTION = "Stop sending a scheduled message (vcu-can-tx answers)";
 constexpr const char* ENABLE_FOOTER =
@@ -268,11 +283,12 @@ void addCommandOptions(CLI::App& command, ScheduleCommandOptions& options) {
   addStackOptions(command, options.stack);
 }
 
-void addCycle(CLI::App& group, CommandContext& context) {
+void addCycle(CLI::App& group, CommandContext& context, ScheduleAction action) {
   auto options = std::make_shared<ScheduleCommandOptions>();
-  options->action = ScheduleAction::Cycle;
-  CLI::App* cycle = group.add_subcommand("cycle", CYCLE_DESCRIPTION);
-  cycle->footer(std::string(CYCLE_FOOTER) + CONFIG_NOTE);
+  options->action = action;
+  const bool add = action == ScheduleAction::Add;
+  CLI::App* cycle = group.add_subcommand(add ? "add" : "cycle", add ? ADD_DESCRIPTION : CYCLE_DESCRIPTION);
+  cycle->footer(std::string(add ? ADD_FOOTER : CYCLE_FOOTER) + CONFIG_NOTE);
   cycle->add_option("MESSAGE", options->target, "DBC message name")->required()->type_name("");
   cycle->add_option("MS", options->value, "cycle time, ms (1..3600000)")->required()->type_name("");
   addCommandOptions(*cycle, *options);
@@ -396,14 +412,15 @@ ExitCode runScheduleCommand(const ScheduleCommandOptions& options, Streams strea
     const dbc::Message* message = findBusMessage(stack.config.database, options.target, streams.err);
     if (message == nullptr) return ExitCode::Failure;
     request.key = message->name;
-    if (options.action == ScheduleAction::Cycle) {
+    if (options.action == ScheduleAction::Cycle || options.action == ScheduleAction::Add) {
       const auto maybeMs = parseMilliseconds(options.value);
       if (!maybeMs || *maybeMs < 1 || *maybeMs > MAX_CYCLE_MS) {
         reportError(streams.err,
                     "cycle time '" + options.value + "': expected milliseconds, 1.." + std::to_string(MAX_CYCLE_MS));
         return ExitCode::Failure;
       }
-      request.kind = ipc::CommandKind::ScheduleCycle;
+      request.kind = options.action == ScheduleAction::Add ? ipc::CommandKind::ScheduleAdd
+                                                           : ipc::CommandKind::ScheduleCycle;
       request.value = *maybeMs;
     } else {
       request.kind = ipc::CommandKind::ScheduleEnable;
@@ -415,9 +432,10 @@ ExitCode runScheduleCommand(const ScheduleCommandOptions& options, Streams strea
 
 void registerScheduleCommands(CLI::App& app, CommandContext& context) {
   CLI::App* group = app.add_subcommand(
-      "schedule", "vcu-can-tx's transmit schedule: import the thesis' sheet; change cycles, enables and defaults");
+      "schedule", "vcu-can-tx's transmit schedule: import the thesis' sheet; add messages, change cycles, enables and defaults");
   addImport(*group, context);
-  addCycle(*group, context);
+  addCycle(*group, context, ScheduleAction::Cycle);
+  addCycle(*group, context, ScheduleAction::Add);
   addEnable(*group, context, ScheduleAction::Enable);
   addEnable(*group, context, ScheduleAction::Disable);
   addDefault(*group, context);

@@ -30,7 +30,7 @@ struct ScheduleImportOptions {
   std::string outputFile;                 ///< -o; empty: standard output
 };
 
-enum class ScheduleAction : std::uint8_t { Cycle, Enable, Disable, Default };
+enum class ScheduleAction : std::uint8_t { Cycle, Enable, Disable, Default, Add };
 
 struct ScheduleCommandOptions {
   StackOptions stack;

@@ -49,6 +49,7 @@ enum class CommandKind : std::int8_t {
   ScheduleDefault = 8,  ///< value sent for signal `key` while nothing commands it
   FsmReload = 9,        ///< vcu-fsm: load the FSM file `key` (empty: its configured file) and switch to it
   SimFault = 10,        ///< vcu-ecu-sim: inject (`value` 1) or clear (0) the fault named `key`
+  ScheduleAdd = 11,     ///< can-tx: add the DBC message `key` to the transmit schedule, cycle `value` ms
 };
 
 struct CommandRequest {

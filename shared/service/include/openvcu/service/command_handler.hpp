@@ -75,7 +75,7 @@ struct CommandVerdict {
 };
 
 /// "SetSignal", "SetOverride", "ClearOverride", "OperatorSwitch", "FaultReset",
-/// "ScheduleCycle", "ScheduleEnable", "ScheduleDefault", "FsmReload", "kind N".
+/// "ScheduleCycle", "ScheduleEnable", "ScheduleDefault", "FsmReload", "SimFault", "ScheduleAdd", "kind N".
 [[nodiscard]] std::string commandKindName(ipc::CommandKind kind);
 
 /// The checks alone (no table, no bus): what CommandHandler::handle would decide. For a
