@@ -7,6 +7,7 @@
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/j1939/id.hpp"
+#include "openvcu/j1939/safety.hpp"
 
 namespace openvcu::hmi {
 namespace {
@@ -27,6 +28,11 @@ QString hex(std::uint32_t value, int digits) {
       .arg(value, digits, 16, QLatin1Char('0'))
       .toUpper()
       .replace(QStringLiteral("0X"), QStringLiteral("0x"));
+}
+
+/// A J1939-76 safety header (PGN 3584): can-tx sends it with its SDM, never on its own.
+bool isSafetyHeader(const dbc::Message& message) {
+  return message.extended && j1939::pgnOf(message.id) == j1939::PGN_SAFETY_HEADER;
 }
 
 }  // namespace
@@ -447,6 +453,7 @@ ScheduleModel::ScheduleModel(QObject* parent) : QAbstractListModel(parent) {
   build();
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::displayTick, this, &ScheduleModel::refresh);
+    connect(stack, &StackConnection::heartbeat, this, &ScheduleModel::applyHeartbeat);
     connect(stack, &StackConnection::commandFinished, this, [this](qint64 id, bool accepted, const QString& text) {
       const auto it = m_pending.find(id);
       if (it == m_pending.end()) return;
@@ -491,22 +498,140 @@ void ScheduleModel::build() {
       const dbc::Message& message = vehicle.database.messages[messageIndex];
       const auto senders = message.transmitters();
       if (std::find(senders.begin(), senders.end(), vehicle.node) == senders.end()) continue;
+      if (isSafetyHeader(message)) continue;  // sent with its SDM, not scheduled on its own
       const auto delta = deltaByMessage.find(message.name);
-      for (const dbc::Signal& signal : message.signals) {
-        Row row;
-        row.message = toQ(message.name);
-        row.signal = toQ(signal.name);
-        const std::string key = config::signalKey(message, signal);
-        row.key = toQ(key);
-        row.index = stack->catalog().indexOf(key);
-        if (!row.index) continue;
-        row.cycleMs = message.cycleTimeMs ? static_cast<int>(*message.cycleTimeMs) : 0;
-        row.pair = delta != deltaByMessage.end();
-        row.deltaUs = row.pair ? delta->second : 0;
-        m_rows.push_back(std::move(row));
-      }
+      appendRows(m_rows, messageIndex, delta != deltaByMessage.end(),
+                 delta != deltaByMessage.end() ? delta->second : 0);
     }
   }
+}
+
+void ScheduleModel::appendRows(std::vector<Row>& rows, std::size_t messageIndex, bool pair, int deltaUs) const {
+  StackConnection* stack = StackConnection::instance();
+  const dbc::Message& message = stack->config().database.messages[messageIndex];
+  for (const dbc::Signal& signal : message.signals) {
+    Row row;
+    row.messageIndex = messageIndex;
+    row.message = toQ(message.name);
+    row.signal = toQ(signal.name);
+    const std::string key = config::signalKey(message, signal);
+    row.key = toQ(key);
+    row.index = stack->catalog().indexOf(key);
+    if (!row.index) continue;
+    row.cycleMs = message.cycleTimeMs ? static_cast<int>(*message.cycleTimeMs) : 0;
+    row.pair = pair;
+    row.deltaUs = deltaUs;
+    rows.push_back(std::move(row));
+  }
+}
+
+void ScheduleModel::applyHeartbeat(const ipc::Heartbeat& beat) {
+  StackConnection* stack = StackConnection::instance();
+  if (!stack || beat.service != "vcu-can-tx") return;
+  struct Live {
+    std::optional<std::int64_t> cycleUs;
+    bool enabled{true};
+    bool added{};
+  };
+  std::map<std::string, Live> live;  // once a second: the allocation does not matter
+  for (const ipc::Counter& counter : beat.counters) {
+    const std::string_view name = counter.name;
+    if (!name.starts_with("tx.")) continue;
+    const std::size_t dot = name.rfind('.');
+    if (dot <= 3) continue;
+    const std::string message(name.substr(3, dot - 3));
+    const std::string_view field = name.substr(dot + 1);
+    if (field == "cycle_us") {
+      live[message].cycleUs = counter.value;
+    } else if (field == "enabled") {
+      live[message].enabled = counter.value != 0;
+    } else if (field == "added") {
+      live[message].added = counter.value != 0;
+    }
+  }
+  const dbc::Database& database = stack->config().database;
+  for (const auto& [name, settings] : live) {
+    if (!settings.cycleUs) continue;  // a can-tx before the live counters
+    const dbc::Message* message = database.findMessage(name);
+    if (message == nullptr) continue;
+    const auto messageIndex = static_cast<std::size_t>(message - database.messages.data());
+    const QString qName = toQ(name);
+    if (rowOfMessage(qName) < 0) {
+      std::vector<Row> rows;
+      appendRows(rows, messageIndex, false, 0);
+      if (rows.empty()) continue;
+      const int first = static_cast<int>(m_rows.size());
+      beginInsertRows({}, first, first + static_cast<int>(rows.size()) - 1);
+      for (Row& row : rows) m_rows.push_back(std::move(row));
+      endInsertRows();
+    }
+    const int cycleMs = static_cast<int>((*settings.cycleUs + 500) / 1000);
+    for (std::size_t i = 0; i < m_rows.size(); ++i) {
+      Row& row = m_rows[i];
+      if (row.messageIndex != messageIndex) continue;
+      if (row.live && row.cycleMs == cycleMs && row.enabled == settings.enabled && row.added == settings.added) continue;
+      row.live = true;
+      row.cycleMs = cycleMs;
+      row.enabled = settings.enabled;
+      row.added = settings.added;
+      Q_EMIT dataChanged(index(static_cast<int>(i)), index(static_cast<int>(i)),
+                         {CycleRole, LiveRole, EnabledRole, AddedRole});
+    }
+  }
+}
+
+int ScheduleModel::rowOfMessage(const QString& message) const {
+  for (std::size_t i = 0; i < m_rows.size(); ++i) {
+    if (m_rows[i].message == message) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+QStringList ScheduleModel::candidates(const QString& filter) const {
+  QStringList names;
+  StackConnection* stack = StackConnection::instance();
+  if (!stack) return names;
+  const config::VehicleConfig& vehicle = stack->config();
+  for (const config::BusConfig& bus : vehicle.buses) {
+    for (const std::size_t messageIndex : bus.messages) {
+      const dbc::Message& message = vehicle.database.messages[messageIndex];
+      if (message.pseudo || isSafetyHeader(message)) continue;
+      const QString name = toQ(message.name);
+      if (!filter.isEmpty() && !name.contains(filter, Qt::CaseInsensitive)) continue;
+      if (rowOfMessage(name) >= 0 || names.contains(name)) continue;
+      names.push_back(name);
+    }
+  }
+  names.sort(Qt::CaseInsensitive);
+  return names;
+}
+
+QString ScheduleModel::addMessage(const QString& name, const QString& milliseconds) {
+  StackConnection* stack = StackConnection::instance();
+  if (!stack) return QStringLiteral("not connected");
+  const dbc::Message* message = stack->config().database.findMessage(name.trimmed().toStdString());
+  if (message == nullptr || message->pseudo) return QStringLiteral("unknown message '%1'").arg(name);
+  if (rowOfMessage(toQ(message->name)) >= 0) {
+    return QStringLiteral("%1 is already in the schedule").arg(toQ(message->name));
+  }
+  bool ok = false;
+  const int cycle = milliseconds.trimmed().toInt(&ok);
+  if (!ok || cycle < 1 || cycle > 60000) return QStringLiteral("cycle must be a whole number of ms in 1..60000");
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::ScheduleAdd;
+  request.key = message->name;
+  request.value = cycle;
+  return send(std::move(request), QStringLiteral("add %1 every %2 ms").arg(toQ(message->name)).arg(cycle));
+}
+
+QString ScheduleModel::setEnabled(int row, bool enabled) {
+  if (row < 0 || row >= static_cast<int>(m_rows.size())) return QStringLiteral("no such row");
+  const QString& message = m_rows[static_cast<std::size_t>(row)].message;
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::ScheduleEnable;
+  request.key = message.toStdString();
+  request.value = enabled ? 1.0 : 0.0;
+  return send(std::move(request), QStringLiteral("%1 %2").arg(enabled ? "enable" : "disable", message));
 }
 
 int ScheduleModel::rowCount(const QModelIndex& parent) const {
@@ -542,6 +667,12 @@ QVariant ScheduleModel::data(const QModelIndex& index, int role) const {
       const signals::SignalInfo& info = stack->catalog()[*row.index];
       return QStringLiteral("%1 .. %2 %3").arg(info.minimum).arg(info.maximum).arg(toQ(info.unit));
     }
+    case LiveRole:
+      return row.live;
+    case EnabledRole:
+      return row.enabled;
+    case AddedRole:
+      return row.added;
     default:
       return {};
   }
@@ -557,7 +688,10 @@ QHash<int, QByteArray> ScheduleModel::roleNames() const {
           {OverrideRole, "overrideText"},
           {OverriddenRole, "overridden"},
           {KeyRole, "key"},
-          {RangeRole, "range"}};
+          {RangeRole, "range"},
+          {LiveRole, "live"},
+          {EnabledRole, "enabled"},
+          {AddedRole, "added"}};
 }
 
 void ScheduleModel::refresh() {

@@ -212,11 +212,13 @@ class SignalTreeModel : public QAbstractListModel {
   QString m_error;
 };
 
-/// The transmit schedule of this VCU (the messages its DBC node transmits, with the cycle
-/// from the DBC, the J1939-76 pair of the schedule file) as rows of signals with the value
-/// commanded and the override. Edits are commands to can-tx and the owning services:
-/// setCycle (ScheduleCycle), setDefault (ScheduleDefault), setOverride / clearOverride;
-/// each is checked here first
+/// The transmit schedule of this VCU as rows of signals with the value commanded and the
+/// override. Until vcu-can-tx's heartbeat arrives: the messages its DBC node transmits, the
+/// DBC cycle and the J1939-76 pairs of the schedule file; from then on what can-tx actually
+/// runs (its tx.<Msg>.cycle_us|enabled|added counters), including messages added at run
+/// time, which get rows of their own. Edits are commands to can-tx and the owning services:
+/// setCycle (ScheduleCycle), setEnabled (ScheduleEnable), addMessage (ScheduleAdd),
+/// setDefault (ScheduleDefault), setOverride / clearOverride; each is checked here first
 /// (range, integer ms) and then acknowledged or refused by the stack.
 class ScheduleModel : public QAbstractListModel {
   Q_OBJECT
@@ -235,7 +237,10 @@ class ScheduleModel : public QAbstractListModel {
     OverrideRole,
     OverriddenRole,
     KeyRole,
-    RangeRole
+    RangeRole,
+    LiveRole,     ///< cycle and enable come from can-tx's heartbeat (else from the DBC)
+    EnabledRole,  ///< can-tx sends the message
+    AddedRole     ///< added at run time (ScheduleAdd)
   };
   explicit ScheduleModel(QObject* parent = nullptr);
   [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
@@ -250,11 +255,23 @@ class ScheduleModel : public QAbstractListModel {
   /// The schedule's value for the signal (sent while nothing commands it): ScheduleDefault.
   Q_INVOKABLE QString setDefault(int row, const QString& value);
   Q_INVOKABLE QString clearOverride(int row);
+  /// ScheduleEnable for the row's message.
+  Q_INVOKABLE QString setEnabled(int row, bool enabled);
+  /// ScheduleAdd: the DBC message `name` joins the schedule, every `milliseconds`.
+  Q_INVOKABLE QString addMessage(const QString& name, const QString& milliseconds);
+  /// DBC messages on a configured bus that have no rows yet (not safety headers), whose
+  /// name contains `filter` (case-insensitive), sorted.
+  Q_INVOKABLE QStringList candidates(const QString& filter) const;
+  /// The first row of `message`, or -1.
+  Q_INVOKABLE int rowOfMessage(const QString& message) const;
+  /// Applies vcu-can-tx's live schedule (tests call it directly).
+  void applyHeartbeat(const ipc::Heartbeat& beat);
  Q_SIGNALS:
   void statusChanged();
 
  private:
   struct Row {
+    std::size_t messageIndex{};
     QString message;
     QString signal;
     QString key;
@@ -265,7 +282,12 @@ class ScheduleModel : public QAbstractListModel {
     QString value;
     QString overrideText;
     bool overridden{};
+    bool live{};
+    bool enabled{true};
+    bool added{};
   };
+  /// Appends the rows of DBC message `messageIndex` to `rows`.
+  void appendRows(std::vector<Row>& rows, std::size_t messageIndex, bool pair, int deltaUs) const;
   void build();
   void refresh();
   QString send(ipc::CommandRequest request, const QString& what);

@@ -220,7 +220,7 @@ TEST_CASE(
                 finished.at(0).at(2).toString().toStdString());
 }
 
-TEST_CASE("the ECU setup changes a cycle and sets and clears an override on the running can-tx without a restart") {
+TEST_CASE("the ECU setup changes a cycle, sets and clears an override, adds and disables a message on the running can-tx without a restart") {
   SKIP_UNLESS_ISOLATED();
   HmiStack s;
   ensureApplication();
@@ -252,4 +252,22 @@ TEST_CASE("the ECU setup changes a cycle and sets and clears an override on the 
   REQUIRE(QTest::qWaitFor(answered, 5000));
   CHECK(QTest::qWaitFor([&] { return !sut.data(sut.index(row), openvcu::hmi::ScheduleModel::OverriddenRole).toBool(); },
                         3000));
+
+  // the table shows what can-tx runs (its heartbeat), and a message added here gets rows
+  using Role = openvcu::hmi::ScheduleModel::Role;
+  CHECK(QTest::qWaitFor([&] { return sut.data(sut.index(row), Role::LiveRole).toBool(); }, 5000));
+  CHECK(sut.data(sut.index(row), Role::CycleRole).toInt() == 50);
+  const int before = sut.rowCount();
+  CHECK(sut.addMessage("HVESSD3_PGN61586", "40").isEmpty());
+  REQUIRE(QTest::qWaitFor(answered, 5000));
+  CHECK_MESSAGE(sut.lastResult().contains("accepted by vcu-can-tx"), sut.lastResult().toStdString());
+  REQUIRE(QTest::qWaitFor([&] { return sut.rowOfMessage("HVESSD3_PGN61586") >= 0; }, 5000));
+  const int added = sut.rowOfMessage("HVESSD3_PGN61586");
+  CHECK(added >= before);
+  CHECK(sut.data(sut.index(added), Role::AddedRole).toBool());
+  CHECK(sut.data(sut.index(added), Role::CycleRole).toInt() == 40);
+  CHECK(sut.data(sut.index(added), Role::EnabledRole).toBool());
+  CHECK(sut.setEnabled(added, false).isEmpty());
+  REQUIRE(QTest::qWaitFor(answered, 5000));
+  CHECK(QTest::qWaitFor([&] { return !sut.data(sut.index(added), Role::EnabledRole).toBool(); }, 5000));
 }

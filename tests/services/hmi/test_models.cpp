@@ -152,6 +152,68 @@ TEST_CASE("a schedule change is checked here, sent as ScheduleCycle and shown on
   CHECK(sut.lastResult().contains("accepted by vcu-can-tx"));
 }
 
+TEST_CASE("the schedule table follows can-tx's live schedule and a message is added with ScheduleAdd") {
+  auto stack = openStack();
+  ScheduleModel sut;
+  const int ccvs = sut.rowOfMessage("CCVS1_PGN65265");
+  REQUIRE(ccvs >= 0);
+  CHECK(sut.rowOfMessage("SHM_VCU_to_VIC") < 0);  // goes out with its SDM, not on its own
+  CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 100);  // the DBC's
+  CHECK_FALSE(sut.data(sut.index(ccvs), ScheduleModel::LiveRole).toBool());
+  const QStringList candidates = sut.candidates("hvessd");
+  CHECK(candidates.contains("HVESSD2_PGN61585"));
+  CHECK_FALSE(sut.candidates("").contains("CCVS1_PGN65265"));  // has rows already
+  CHECK_FALSE(sut.candidates("").contains("SHM_VCU_to_VIC"));
+  CHECK(sut.addMessage("HVESSD2_PGN61586", "100").contains("unknown message"));
+  CHECK(sut.addMessage("CCVS1_PGN65265", "100").contains("already in the schedule"));
+  CHECK(sut.addMessage("HVESSD2_PGN61585", "0").contains("1..60000"));
+  std::optional<ipc::CommandRequest> seen;
+  REQUIRE(stack->events()->onCommand([&](const ipc::CommandRequest& request) { seen = request; }));
+  CHECK(sut.addMessage("HVESSD2_PGN61585", "40").isEmpty());
+  deliver(*stack);
+  REQUIRE(seen);
+  CHECK(seen->kind == ipc::CommandKind::ScheduleAdd);
+  CHECK(seen->key == "HVESSD2_PGN61585");
+  CHECK(seen->value == 40);
+  seen.reset();
+  CHECK(sut.setEnabled(ccvs, false).isEmpty());
+  deliver(*stack);
+  REQUIRE(seen);
+  CHECK(seen->kind == ipc::CommandKind::ScheduleEnable);
+  CHECK(seen->value == 0);
+
+  // can-tx's heartbeat: CCVS1 at 50 ms and disabled, HVESSD2 added at 40 ms
+  const int before = sut.rowCount();
+  stack->events()->publish(ipc::Heartbeat{.service = "vcu-can-tx",
+                                          .instance = "x",
+                                          .pid = 1,
+                                          .uptimeMs = 1000,
+                                          .counters = {{"tx.CCVS1_PGN65265.cycle_us", 50'000},
+                                                       {"tx.CCVS1_PGN65265.enabled", 0},
+                                                       {"tx.CCVS1_PGN65265.added", 0},
+                                                       {"tx.CCVS1_PGN65265.frames", 7},
+                                                       {"tx.HVESSD2_PGN61585.cycle_us", 40'000},
+                                                       {"tx.HVESSD2_PGN61585.enabled", 1},
+                                                       {"tx.HVESSD2_PGN61585.added", 1}},
+                                          .status = "ready"});
+  deliver(*stack);
+  CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
+  CHECK(sut.data(sut.index(ccvs), ScheduleModel::LiveRole).toBool());
+  CHECK_FALSE(sut.data(sut.index(ccvs), ScheduleModel::EnabledRole).toBool());
+  const int added = sut.rowOfMessage("HVESSD2_PGN61585");
+  REQUIRE(added >= before);
+  CHECK(sut.rowCount() == before + 3);  // its three signals
+  CHECK(sut.data(sut.index(added), ScheduleModel::AddedRole).toBool());
+  CHECK(sut.data(sut.index(added), ScheduleModel::CycleRole).toInt() == 40);
+  CHECK(sut.data(sut.index(added), ScheduleModel::SignalRole).toString() == "HS_FastUpdSOC");
+  CHECK_FALSE(sut.candidates("hvessd").contains("HVESSD2_PGN61585"));
+  // another service's counters of the same name change nothing
+  stack->events()->publish(ipc::Heartbeat{
+      .service = "vcu-fsm", .instance = "x", .pid = 2, .counters = {{"tx.CCVS1_PGN65265.cycle_us", 7'000}}});
+  deliver(*stack);
+  CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
+}
+
 TEST_CASE("a refused command shows the responder's reason") {
   auto stack = openStack();
   QSignalSpy finished(stack.get(), &StackConnection::commandFinished);

@@ -79,6 +79,29 @@ Item {
             compare(schedule.lastResult.indexOf("waiting for the answer") > 0, true)
         }
 
+        function test_adding_a_message_picks_it_from_the_dbc_then_its_cycle() {
+            const screen = createTemporaryObject(setupTab, root)
+            waitForRendering(screen)
+            mouseClick(findChild(screen, "addMessageButton"))
+            const popup = findChild(screen, "addMessagePopup")
+            tryCompare(popup, "opened", true)
+            const list = findChild(popup.contentItem, "addMessageCandidates")
+            verify(list.count > 10, "the DBC's other messages are offered")
+            findChild(popup.contentItem, "addMessageFilter").text = "hvessd2"
+            tryCompare(list, "count", 1)
+            waitForRendering(list)
+            const entry = findText(list.contentItem, "HVESSD2_PGN61585", true)
+            verify(entry !== null, "HVESSD2_PGN61585 is not offered")
+            mouseClick(entry)
+            tryCompare(popup, "opened", false)
+            const keypad = findChild(screen, "setupKeypad")
+            tryCompare(keypad, "opened", true)
+            keypad.value = ""
+            for (const key of ["4", "0", "OK"]) mouseClick(findText(keypad.contentItem, key, true))
+            tryVerify(() => findText(screen, "add HVESSD2_PGN61585 every 40 ms", false) !== null,
+                      1000, "the ScheduleAdd was not sent")
+        }
+
         function test_tapping_a_signal_in_the_tree_plots_it() {
             const screen = createTemporaryObject(canTab, root)
             waitForRendering(screen)
