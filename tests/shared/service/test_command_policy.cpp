@@ -147,5 +147,6 @@ TEST_CASE("command kinds have readable names") {
   CHECK(service::commandKindName(ipc::CommandKind::ClearOverride) == "ClearOverride");
   CHECK(service::commandKindName(ipc::CommandKind::FsmReload) == "FsmReload");
   CHECK(service::commandKindName(ipc::CommandKind::SimFault) == "SimFault");
-  CHECK(service::commandKindName(static_cast<ipc::CommandKind>(11)) == "kind 11");
+  CHECK(service::commandKindName(ipc::CommandKind::ScheduleAdd) == "ScheduleAdd");
+  CHECK(service::commandKindName(static_cast<ipc::CommandKind>(12)) == "kind 12");
 }
