@@ -150,12 +150,35 @@ Result<DashboardConfig> parseDashboardConfig(std::string_view text, const std::s
   };
   if (const config::Json* dials = check.member(root, "", "dials", false); dials && check.isObject(*dials, "/dials")) {
     check.onlyKeys(*dials, "/dials", {"voltage", "current", "power"});
-    result.voltageKey = check.string(*dials, "/dials", "voltage", false).value_or("");
-    result.currentKey = check.string(*dials, "/dials", "current", false).value_or("");
-    result.powerKey = check.string(*dials, "/dials", "power", false).value_or("");
-    knownKey(result.voltageKey, "/dials/voltage");
-    knownKey(result.currentKey, "/dials/current");
-    knownKey(result.powerKey, "/dials/power");
+    // each dial: a key, or {"key": KEY, "min": NUMBER, "max": NUMBER}
+    const auto dial = [&](const char* name, std::string& key, DialRange& range) {
+      const std::string path = std::string("/dials/") + name;
+      const config::Json* value = check.member(*dials, "/dials", name, false);
+      if (value == nullptr) return;
+      if (value->is_string()) {
+        key = value->get<std::string>();
+        knownKey(key, path);
+        return;
+      }
+      if (!value->is_object()) {
+        check.error(path, "must be a signal key or {\"key\": KEY, \"min\": NUMBER, \"max\": NUMBER}");
+        return;
+      }
+      check.onlyKeys(*value, path, {"key", "min", "max", "comment"});
+      key = check.string(*value, path, "key", false).value_or("");
+      knownKey(key, path + "/key");
+      const auto minimum = check.number(*value, path, "min", false);
+      const auto maximum = check.number(*value, path, "max", false);
+      const DialRange wanted{minimum.value_or(range.minimum), maximum.value_or(range.maximum)};
+      if (!(wanted.minimum < wanted.maximum)) {
+        check.error(path, "min must be below max");
+        return;
+      }
+      range = wanted;
+    };
+    dial("voltage", result.voltageKey, result.voltageRange);
+    dial("current", result.currentKey, result.currentRange);
+    dial("power", result.powerKey, result.powerRange);
   }
   if (const config::Json* header = check.member(root, "", "header", false);
       header && check.isObject(*header, "/header")) {

@@ -80,7 +80,15 @@ struct DashboardItem {
   std::string format;  ///< printf for the number, default "%.1f"
 };
 
-/// The dashboard file: {"dials": {"voltage": KEY, "current": KEY, "power": KEY|""},
+/// A dial's scale.
+struct DialRange {
+  double minimum{};
+  double maximum{};
+};
+
+/// The dashboard file: {"dials": {"voltage": DIAL, "current": DIAL, "power": DIAL}, where
+/// DIAL is a KEY or {"key": KEY, "min": NUMBER, "max": NUMBER} ("power": "" or no "key":
+/// voltage x current),
 /// "header": {"soc": KEY, "soh": KEY, "charger": KEY}, "status": [KEY, ...],
 /// "items": [{"key":..., "label":..., "unit":..., "format":...}], "staleAfterMs": 2000}.
 /// Every key is the vehicle's: nothing in the HMI names a signal of one vehicle.
@@ -88,6 +96,9 @@ struct DashboardConfig {
   std::string voltageKey;
   std::string currentKey;
   std::string powerKey;  ///< empty: power = voltage x current
+  DialRange voltageRange{0, 1000};   ///< V
+  DialRange currentRange{-400, 400};  ///< A
+  DialRange powerRange{-300, 300};    ///< kW
   std::string socKey;    ///< header; empty: not shown
   std::string sohKey;
   std::string chargerKey;

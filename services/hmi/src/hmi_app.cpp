@@ -46,6 +46,8 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   const QCommandLineOption instance("instance", "stack instance; overrides the configuration's", "NAME");
   const QCommandLineOption lcmUrl("lcm-url", "event bus URL; overrides the configuration's", "URL");
   const QCommandLineOption supervisor("supervisor-config", "supervisord file, for restarting a service", "FILE");
+  const QCommandLineOption dataFolder(
+      "data-folder", "where exports go and the trace viewer's Browse starts (default: $HOME/openvcu)", "DIR");
   const QCommandLineOption zone("time-zone", "IANA time zone of the header clock (default: the system's)", "ZONE");
   const QCommandLineOption size("size", "window size (default 720x600; 800x480 also fits)", "WxH", "720x600");
   const QCommandLineOption screenshot("screenshot", "save every tab as DIR/tab-N-NAME.png once the stack is attached",
@@ -62,7 +64,7 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
       "NAME", "software");
   const QCommandLineOption tab(
       "tab", "the tab shown first: 0 Vehicle, 1 Dashboard, 2 CAN Data, 3 ECU Setup, 4 Debug, 5 Trace", "INDEX", "0");
-  parser.addOptions({config, dashboard, instance, lcmUrl, supervisor, zone, size, screenshot, exitAfter, fps, quitAfter,
+  parser.addOptions({config, dashboard, instance, lcmUrl, supervisor, dataFolder, zone, size, screenshot, exitAfter, fps, quitAfter,
                      plot, tab, noFrames, renderer});
   if (!parser.parse(arguments)) return Error{parser.errorText().toStdString()};
   if (parser.isSet(QStringLiteral("help"))) {
@@ -94,6 +96,7 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   options.stack.lcmUrl = parser.value(lcmUrl).toStdString();
   options.stack.supervisorConfig = parser.value(supervisor).toStdString();
   options.stack.timeZone = parser.value(zone).toStdString();
+  options.stack.dataFolder = parser.value(dataFolder).toStdString();
   if (!options.stack.timeZone.empty() && !QTimeZone(QByteArray::fromStdString(options.stack.timeZone)).isValid()) {
     return Error{"--time-zone '" + options.stack.timeZone +
                  "': unknown time zone (an IANA name, e.g. Europe/Helsinki)"};

@@ -72,6 +72,10 @@ class DashboardSettings : public QObject {
   Q_PROPERTY(QString voltageKey READ voltageKey CONSTANT)
   Q_PROPERTY(QString currentKey READ currentKey CONSTANT)
   Q_PROPERTY(QString powerKey READ powerKey CONSTANT)
+  /// [minimum, maximum] of each dial (the file's, else 0..1000 V, -400..400 A, -300..300 kW)
+  Q_PROPERTY(QVariantList voltageRange READ voltageRange CONSTANT)
+  Q_PROPERTY(QVariantList currentRange READ currentRange CONSTANT)
+  Q_PROPERTY(QVariantList powerRange READ powerRange CONSTANT)
   Q_PROPERTY(QString socKey READ socKey CONSTANT)
   Q_PROPERTY(QString sohKey READ sohKey CONSTANT)
   Q_PROPERTY(QString chargerKey READ chargerKey CONSTANT)
@@ -84,6 +88,9 @@ class DashboardSettings : public QObject {
   [[nodiscard]] QString voltageKey() const { return QString::fromStdString(m_config.voltageKey); }
   [[nodiscard]] QString currentKey() const { return QString::fromStdString(m_config.currentKey); }
   [[nodiscard]] QString powerKey() const { return QString::fromStdString(m_config.powerKey); }
+  [[nodiscard]] QVariantList voltageRange() const { return range(m_config.voltageRange); }
+  [[nodiscard]] QVariantList currentRange() const { return range(m_config.currentRange); }
+  [[nodiscard]] QVariantList powerRange() const { return range(m_config.powerRange); }
   [[nodiscard]] QString socKey() const { return QString::fromStdString(m_config.socKey); }
   [[nodiscard]] QString sohKey() const { return QString::fromStdString(m_config.sohKey); }
   [[nodiscard]] QString chargerKey() const { return QString::fromStdString(m_config.chargerKey); }
@@ -98,6 +105,7 @@ class DashboardSettings : public QObject {
   [[nodiscard]] const DashboardConfig& config() const noexcept { return m_config; }
 
  private:
+  static QVariantList range(const DialRange& dial) { return {dial.minimum, dial.maximum}; }
   DashboardConfig m_config;
   ModelStatus::Value m_status{ModelStatus::Ready};
   QString m_error;

@@ -47,6 +47,7 @@ struct StackSettings {
   std::string instance;          ///< empty: the configuration's
   std::string supervisorConfig;  ///< supervisord file for "restart a service"; empty: not offered
   std::string timeZone;          ///< IANA name for the header clock; empty: the system's
+  std::string dataFolder;        ///< exports and the file browser's start; empty: $HOME/openvcu
   bool frameStreams{};           ///< subscribe to the raw frames over iceoryx (vcu-hmi: on; tests: off, no RouDi)
   int displayHz{10};             ///< text refresh; plots sample on their own timer
 };

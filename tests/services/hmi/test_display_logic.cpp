@@ -126,6 +126,34 @@ TEST_CASE("a dashboard file names the header's and the status table's signals an
   CHECK(badHeader.error().toString().find("/header/soc") != std::string::npos);
 }
 
+TEST_CASE("a dial is a key or a key with its scale, checked (defaults 0..1000 V, -400..400 A, -300..300 kW)") {
+  const signals::Catalog catalog = smallCatalog();
+  const auto sut = parseDashboardConfig(
+      R"({"dials": {"voltage": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "min": 0, "max": 850},
+                    "power": {"min": -150, "max": 250}}, "items": []})",
+      "dash.json", catalog);
+  REQUIRE_MESSAGE(sut, sut.error().toString());
+  CHECK(sut->voltageKey == "VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
+  CHECK(sut->voltageRange.minimum == 0);
+  CHECK(sut->voltageRange.maximum == 850);
+  CHECK(sut->currentRange.minimum == -400);  // not in the file: the default
+  CHECK(sut->currentRange.maximum == 400);
+  CHECK(sut->powerKey.empty());  // computed from U x I
+  CHECK(sut->powerRange.minimum == -150);
+  CHECK(sut->powerRange.maximum == 250);
+  const auto inverted = parseDashboardConfig(R"({"dials": {"current": {"min": 5, "max": -5}}, "items": []})", "d", catalog);
+  REQUIRE_FALSE(inverted);
+  CHECK(inverted.error().toString().find("/dials/current: min must be below max") != std::string::npos);
+  const auto wrongType = parseDashboardConfig(R"({"dials": {"voltage": 12}, "items": []})", "d", catalog);
+  REQUIRE_FALSE(wrongType);
+  CHECK(wrongType.error().toString().find("/dials/voltage") != std::string::npos);
+  const auto badKey = parseDashboardConfig(R"({"dials": {"voltage": {"key": "nope"}}, "items": []})", "d", catalog);
+  REQUIRE_FALSE(badKey);
+  CHECK(badKey.error().toString().find("/dials/voltage/key") != std::string::npos);
+  const auto extra = parseDashboardConfig(R"({"dials": {"voltage": {"maximum": 5}}, "items": []})", "d", catalog);
+  REQUIRE_FALSE(extra);
+}
+
 TEST_CASE("a dashboard file with an unknown key is refused with its JSON path and a suggestion") {
   const signals::Catalog catalog = smallCatalog();
   const auto sut = parseDashboardConfig(R"({"items": [{"key": "internal.relay.Cl16"}]})", "dash.json", catalog);

@@ -21,6 +21,7 @@ class Setup : public QObject {
     settings.configPath = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
     settings.lcmUrl = "memq://";
     settings.instance = "hmi-quick-" + std::to_string(::getpid());
+    settings.dataFolder = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/logs";  // Browse starts here (read only)
     auto opened = openvcu::hmi::StackConnection::open(settings);
     if (!opened) qFatal("%s", opened.error().toString().c_str());
     m_stack = std::move(*opened);

@@ -5,12 +5,14 @@
 #include <unistd.h>
 
 #include <QGuiApplication>
+#include <QDir>
 #include <QSignalSpy>
 #include <QTemporaryDir>
 #include <fstream>
 #include <memory>
 #include <string>
 
+#include "file_browser.hpp"
 #include "frame_trace.hpp"
 #include "hmi_app.hpp"
 #include "openvcu/ipc/event_bus.hpp"
@@ -37,7 +39,8 @@ void ensureApplication() {
 }
 
 /// A stack connection on memq:// with an instance no table exists for.
-std::unique_ptr<StackConnection> openStack(const std::string& dashboard = {}, const std::string& supervisor = {}) {
+std::unique_ptr<StackConnection> openStack(const std::string& dashboard = {}, const std::string& supervisor = {},
+                                           const std::string& dataFolder = {}) {
   ensureApplication();
   StackSettings settings;
   settings.configPath = HHEA_CONFIG;
@@ -45,6 +48,7 @@ std::unique_ptr<StackConnection> openStack(const std::string& dashboard = {}, co
   settings.instance = "hmi-unit-" + std::to_string(::getpid());
   settings.dashboardPath = dashboard;
   settings.supervisorConfig = supervisor;
+  settings.dataFolder = dataFolder;
   auto opened = StackConnection::open(settings);
   REQUIRE_MESSAGE(opened, opened.error().toString());
   return std::move(*opened);
@@ -430,4 +434,39 @@ TEST_CASE("the command line refuses bad options with a message and checks the co
   const auto checked = checkBeforeStart(missing);
   REQUIRE_FALSE(checked);
   CHECK(checked.error().toString().find("/nonexistent/vehicle.json") != std::string::npos);
+}
+
+TEST_CASE("the file browser lists folders first, enters them, returns a tapped file and names exports") {
+  QTemporaryDir folder;
+  REQUIRE(folder.isValid());
+  const QString root = folder.path();
+  REQUIRE(QDir(root).mkpath("logs/day1"));
+  std::ofstream((root + "/logs/b.log").toStdString()) << "x\n";
+  std::ofstream((root + "/logs/A.asc").toStdString()) << "y\n";
+  auto stack = openStack({}, {}, (root + "/logs").toStdString());
+  FileBrowserModel sut;
+  CHECK(sut.dataFolder() == root + "/logs");
+  CHECK(sut.folder() == root + "/logs");  // starts in the data folder
+  REQUIRE(sut.rowCount() == 4);
+  const auto name = [&](int row) { return sut.data(sut.index(row), FileBrowserModel::NameRole).toString(); };
+  CHECK(name(0) == "..");
+  CHECK(name(1) == "day1");
+  CHECK(sut.data(sut.index(1), FileBrowserModel::IsFolderRole).toBool());
+  CHECK(name(2) == "A.asc");  // case-insensitive order
+  CHECK(name(3) == "b.log");
+  CHECK(sut.data(sut.index(3), FileBrowserModel::SizeRole).toString() == "2 B");
+  CHECK(sut.enter(3) == root + "/logs/b.log");
+  CHECK(sut.folder() == root + "/logs");  // a file does not change the folder
+  CHECK(sut.enter(1).isEmpty());
+  CHECK(sut.folder() == root + "/logs/day1");
+  CHECK(sut.rowCount() == 1);  // only ".."
+  sut.up();
+  CHECK(sut.folder() == root + "/logs");
+  sut.setFolder(root + "/missing");
+  CHECK(sut.errorString().contains("/missing: cannot be read"));
+  CHECK(sut.folder() == root + "/logs");  // the listing stays
+  CHECK(sut.rowCount() == 4);
+  const QString exportPath = sut.newFilePath("vcu-hmi-log", "txt");
+  CHECK(exportPath.startsWith(root + "/logs/vcu-hmi-log-"));
+  CHECK(exportPath.endsWith(".txt"));
 }

@@ -19,12 +19,12 @@ ColumnLayout {
         Dial {
             Layout.fillWidth: true; Layout.fillHeight: true
             title: "Pack voltage"; value: voltage.value; valueText: voltage.text; status: voltage.status
-            minimum: 0; maximum: 1000
+            minimum: settings.voltageRange[0]; maximum: settings.voltageRange[1]
         }
         Dial {
             Layout.fillWidth: true; Layout.fillHeight: true
             title: "Pack current"; value: current.value; valueText: current.text; status: current.status
-            minimum: -400; maximum: 400
+            minimum: settings.currentRange[0]; maximum: settings.currentRange[1]
         }
         Dial {
             // power from the file's key, else U x I (then as fresh as the worse of the two)
@@ -35,7 +35,7 @@ ColumnLayout {
             value: kilowatts
             valueText: (computed ? (voltage.status === 0 && current.status === 0 ? kilowatts.toFixed(1) + " kW" : "--") : power.text)
             status: computed ? Math.max(voltage.status, current.status) : power.status
-            minimum: -300; maximum: 300
+            minimum: settings.powerRange[0]; maximum: settings.powerRange[1]
         }
     }
     Text {

@@ -12,6 +12,7 @@ ColumnLayout {
     property var fsm
     spacing: 4
     LogModel { id: logModel }
+    FileBrowserModel { id: exportFolder }  // only its data folder: exports go there
     FaultModel { id: faults }
     SystemActions { id: actions }
 
@@ -46,7 +47,7 @@ ColumnLayout {
                 TouchButton {
                     text: "Export"
                     onClicked: {
-                        const path = "/tmp/vcu-hmi-log-" + Date.now() + ".txt"
+                        const path = exportFolder.newFilePath("vcu-hmi-log", "txt")
                         const error = logModel.exportTo(path)
                         exportResult.text = error === "" ? "saved " + path : error
                     }

@@ -9,13 +9,72 @@ import OpenVcu.Hmi
 ColumnLayout {
     spacing: 4
     TraceModel { id: trace }
+    FileBrowserModel { id: browser }
     RowLayout {
         Layout.fillWidth: true
+        TouchButton { objectName: "browseButton"; text: "Browse…"; enabled: !trace.loading; onClicked: { browser.reload(); browsePopup.open() } }
         TextField { id: pathField; Layout.fillWidth: true; placeholderText: "log file path (candump -L, candump, .asc)"; font.pixelSize: Theme.fontSmall }
         TouchButton { text: "Open"; enabled: !trace.loading && pathField.text !== ""; onClicked: trace.open(pathField.text) }
         TouchButton {
             text: "Export CSV"; enabled: !trace.loading && traceView.count > 0
-            onClicked: { const e = trace.exportCsv(trace.fileName + ".csv"); exportText.text = e === "" ? "saved " + trace.fileName + ".csv" : e }
+            onClicked: {
+                const base = trace.fileName.substring(trace.fileName.lastIndexOf("/") + 1)
+                const path = browser.newFilePath(base, "csv")
+                const e = trace.exportCsv(path)
+                exportText.text = e === "" ? "saved " + path : e
+            }
+        }
+    }
+    // A folder listing sized for a finger: tap a folder to enter it, a file to open it.
+    Popup {
+        id: browsePopup
+        objectName: "browsePopup"
+        modal: true
+        anchors.centerIn: Overlay.overlay
+        width: Math.min(parent.width - 20, 640)
+        height: Math.min(parent.height - 20, 460)
+        padding: 8
+        background: Rectangle { color: Theme.panel; radius: 8; border.color: Theme.accent }
+        ColumnLayout {
+            anchors.fill: parent
+            spacing: 4
+            RowLayout {
+                Layout.fillWidth: true
+                TouchButton { text: "Data"; onClicked: browser.folder = browser.dataFolder }
+                Text { text: browser.folder; color: Theme.text; font.pixelSize: Theme.fontSmall; elide: Text.ElideLeft; Layout.fillWidth: true }
+                TouchButton { text: "Close"; onClicked: browsePopup.close() }
+            }
+            Text { text: browser.errorString; color: Theme.bad; font.pixelSize: Theme.fontSmall; visible: text !== ""; Layout.fillWidth: true; elide: Text.ElideLeft }
+            ListView {
+                id: fileList
+                objectName: "browseList"
+                Layout.fillWidth: true
+                Layout.fillHeight: true
+                clip: true
+                model: browser
+                delegate: Rectangle {
+                    width: fileList.width
+                    height: Theme.touch
+                    color: index % 2 ? Theme.panelLight : Theme.panel
+                    RowLayout {
+                        anchors.fill: parent
+                        anchors.leftMargin: 8
+                        anchors.rightMargin: 8
+                        Text { text: (isFolder ? "▸ " : "") + name; color: isFolder ? Theme.accent : Theme.text; font.pixelSize: Theme.font; elide: Text.ElideMiddle; Layout.fillWidth: true }
+                        Text { text: sizeText + "  " + modified; color: Theme.textDim; font.pixelSize: Theme.fontSmall }
+                    }
+                    MouseArea {
+                        anchors.fill: parent
+                        onClicked: {
+                            const file = browser.enter(index)
+                            if (file === "") return
+                            pathField.text = file
+                            browsePopup.close()
+                            trace.open(file)
+                        }
+                    }
+                }
+            }
         }
     }
     ProgressBar { Layout.fillWidth: true; value: trace.progress; visible: trace.loading }
@@ -57,6 +116,7 @@ ColumnLayout {
     Text { id: timelineMessage; color: Theme.bad; font.pixelSize: Theme.fontSmall; visible: text !== "" }
     ListView {
         id: traceView
+        objectName: "traceList"
         Layout.fillWidth: true
         Layout.fillHeight: true
         clip: true

@@ -102,6 +102,22 @@ Item {
                       1000, "the ScheduleAdd was not sent")
         }
 
+        function test_browse_lists_the_data_folder_and_a_tapped_log_opens() {
+            const screen = createTemporaryObject(traceTab, root)
+            waitForRendering(screen)
+            mouseClick(findChild(screen, "browseButton"))
+            const popup = findChild(screen, "browsePopup")
+            tryCompare(popup, "opened", true)
+            const list = findChild(popup.contentItem, "browseList")
+            tryVerify(() => list.count >= 5, 1000, "the data folder's logs are not listed")
+            waitForRendering(list)
+            const entry = findText(list.contentItem, "candump_l.log", true)
+            verify(entry !== null, "candump_l.log is not listed")
+            mouseClick(entry)
+            tryCompare(popup, "opened", false)
+            tryVerify(() => findChild(screen, "traceList").count > 0, 5000, "the tapped log was not opened")
+        }
+
         function test_tapping_a_signal_in_the_tree_plots_it() {
             const screen = createTemporaryObject(canTab, root)
             waitForRendering(screen)
