@@ -137,6 +137,20 @@ TEST_CASE("vcu-hmi under Xvfb with the whole stack saves a non-trivial screensho
     CHECK_MESSAGE(pixels >= 20, "plot line of colour " << std::hex << series << ": " << std::dec << pixels << " pixels");
   }
   CHECK(hmi.running());
+
+  // the 800x480 panel: a second HMI on the same stack, every tab at that size
+  const fs::path small = fs::path(HMI_SCREENSHOT_DIR) / "800x480";
+  harness::Process& second =
+      s.startHmi({"--size", "800x480", "--screenshot", small.string(), "--exit-after-screenshots"},
+                 {"DISPLAY=:" + *display, "QT_QPA_PLATFORM=xcb"});
+  REQUIRE_MESSAGE(second.waitForLine("screenshots done", 40s), "no 800x480 screenshots");
+  for (const char* tab : TABS) {
+    const QImage image(QString::fromStdString((small / tab).string()));
+    REQUIRE_MESSAGE(!image.isNull(), (small / tab).string());
+    CHECK(image.width() == 800);
+    CHECK(image.height() == 480);
+    CHECK_MESSAGE(distinctColours(image) >= MIN_COLOURS, (small / tab).string());
+  }
 }
 
 TEST_CASE(
