@@ -8,6 +8,9 @@
 # with 4 signals plotted and --report-fps (frames actually rendered per second; the plot
 # scrolls at 60 Hz, so 60 is the most a healthy run can show). Reported: the median of its
 # per-second fps lines, its CPU (utime + stime over the run) and VmRSS at the end.
+# Also offscreen: the CAN Data tab's Frames page instead of the plot (the raw-frame trace
+# of every rx and tx frame), and with HMI_BENCH_LONG=S a run of S seconds with the plot's
+# 10-min window (S >= 620 fills it: the per-pixel decimation then walks 10 min of samples).
 set -uo pipefail
 seconds=${1:-30}
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -32,11 +35,12 @@ echo "hmi benchmark: $(nproc) cores, $(uname -r), $seconds s per run at full HHE
 echo "plot: $keys (window 30 s), CAN Data tab, 720x600"
 printf '%-10s %8s %8s %8s %10s\n' platform "fps p50" "fps min" "CPU %" "VmRSS MB"
 
-measure() {  # $1 = label, $2 = --renderer, rest = environment
-  local label=$1 renderer=$2
-  shift 2
+measure() {  # $1 = label, $2 = --renderer, $3 = more vcu-hmi options, $4 = seconds, rest = environment
+  local label=$1 renderer=$2 extra=$3 seconds=$4
+  shift 4
+  # shellcheck disable=SC2086  # $extra: several options
   env "$@" "$bin/vcu-hmi" --config "$config" --dashboard "$root/config/hhea/dashboard.json" --tab 2 --renderer "$renderer" \
-    --plot "$keys" --report-fps --quit-after "$seconds" > "$run/$label.out" 2>&1 &
+    --plot "$keys" $extra --report-fps --quit-after "$seconds" > "$run/$label.out" 2>&1 &
   local pid=$!
   sleep 2  # start-up is not measured
   local start
@@ -58,11 +62,16 @@ measure() {  # $1 = label, $2 = --renderer, rest = environment
     "$(echo "$fps" | head -1)" "$(echo "100 * $used / $hz / ($t1 - $t0)" | bc -l)" "$(echo "$rss / 1024" | bc -l)"
 }
 
-measure offscreen software QT_QPA_PLATFORM=offscreen
+measure offscreen software "" "$seconds" QT_QPA_PLATFORM=offscreen
+measure off-frames software "--can-page frames" "$seconds" QT_QPA_PLATFORM=offscreen
+if [ -n "${HMI_BENCH_LONG:-}" ]; then
+  measure off-10min software "--plot-window 600" "$HMI_BENCH_LONG" QT_QPA_PLATFORM=offscreen
+fi
 if command -v Xvfb >/dev/null; then
   Xvfb :7 -screen 0 1024x768x24 -nolisten tcp > "$run/xvfb.out" 2>&1 &
   xvfb_pid=$!
   for _ in $(seq 50); do [ -e /tmp/.X11-unix/X7 ] && break; sleep 0.1; done
-  measure xvfb-gl gpu QT_QPA_PLATFORM=xcb DISPLAY=:7
-  measure xvfb-sw software QT_QPA_PLATFORM=xcb DISPLAY=:7
+  measure xvfb-gl gpu "" "$seconds" QT_QPA_PLATFORM=xcb DISPLAY=:7
+  measure xvfb-sw software "" "$seconds" QT_QPA_PLATFORM=xcb DISPLAY=:7
+  measure xvfb-frames software "--can-page frames" "$seconds" QT_QPA_PLATFORM=xcb DISPLAY=:7
 fi

@@ -67,6 +67,8 @@ ApplicationWindow {
             anchors.fill: parent
             visible: tabs.currentIndex === 2
             initialKeys: typeof initialPlotKeys !== "undefined" ? initialPlotKeys : []
+            initialWindow: typeof initialPlotWindow !== "undefined" ? initialPlotWindow : 30
+            initialFramesPage: typeof initialCanPageFrames !== "undefined" ? initialCanPageFrames : false
         }
         EcuSetupTab { anchors.fill: parent; visible: tabs.currentIndex === 3 }
         DebugTab { anchors.fill: parent; visible: tabs.currentIndex === 4; health: health; fsm: fsm }

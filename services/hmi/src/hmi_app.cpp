@@ -55,6 +55,9 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   const QCommandLineOption exitAfter("exit-after-screenshots", "quit once the screenshots are saved");
   const QCommandLineOption fps("report-fps", "print 'fps N' once a second (benchmarks)");
   const QCommandLineOption quitAfter("quit-after", "quit after SECONDS (benchmarks)", "SECONDS");
+  const QCommandLineOption plotWindow("plot-window", "the live plot's first window: 10, 30, 60, 300 or 600 s",
+                                      "SECONDS", "30");
+  const QCommandLineOption canPage("can-page", "CAN Data's first page: plot or frames", "PAGE", "plot");
   const QCommandLineOption noFrames("no-frames", "do not subscribe to raw frames (no iceoryx / iox-roudi)");
   const QCommandLineOption plot("plot", "plot these signals from the start (comma-separated keys)", "KEYS");
   const QCommandLineOption renderer(
@@ -64,6 +67,7 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
       "NAME", "software");
   const QCommandLineOption tab(
       "tab", "the tab shown first: 0 Vehicle, 1 Dashboard, 2 CAN Data, 3 ECU Setup, 4 Debug, 5 Trace", "INDEX", "0");
+  parser.addOptions({plotWindow, canPage});
   parser.addOptions({config, dashboard, instance, lcmUrl, supervisor, dataFolder, zone, size, screenshot, exitAfter, fps, quitAfter,
                      plot, tab, noFrames, renderer});
   if (!parser.parse(arguments)) return Error{parser.errorText().toStdString()};
@@ -132,6 +136,15 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   options.tab = parser.value(tab).toInt(&tabOk);
   if (!tabOk || options.tab < 0 || options.tab >= TAB_COUNT) return Error{"--tab: expected 0..5"};
   if (parser.isSet(plot)) options.plotKeys = parser.value(plot).split(QLatin1Char(','), Qt::SkipEmptyParts);
+  options.plotWindowSeconds = parser.value(plotWindow).toInt();
+  if (!QList<int>{10, 30, 60, 300, 600}.contains(options.plotWindowSeconds) ||
+      QString::number(options.plotWindowSeconds) != parser.value(plotWindow)) {
+    return Error{"--plot-window '" + parser.value(plotWindow).toStdString() + "': expected 10, 30, 60, 300 or 600"};
+  }
+  if (parser.value(canPage) != QLatin1String("plot") && parser.value(canPage) != QLatin1String("frames")) {
+    return Error{"--can-page '" + parser.value(canPage).toStdString() + "': expected plot or frames"};
+  }
+  options.framesPage = parser.value(canPage) == QLatin1String("frames");
   if (!parser.positionalArguments().isEmpty()) {
     return Error{"unexpected argument '" + parser.positionalArguments().first().toStdString() + "' (see --help)"};
   }
@@ -171,6 +184,8 @@ HmiApp::~HmiApp() {
 
 Status HmiApp::load() {
   m_engine.rootContext()->setContextProperty(QStringLiteral("initialPlotKeys"), m_options.plotKeys);
+  m_engine.rootContext()->setContextProperty(QStringLiteral("initialPlotWindow"), m_options.plotWindowSeconds);
+  m_engine.rootContext()->setContextProperty(QStringLiteral("initialCanPageFrames"), m_options.framesPage);
   m_engine.addImportPath(QStringLiteral("qrc:/"));  // the OpenVcu.Hmi module lives at qrc:/OpenVcu/Hmi
   m_engine.load(QUrl(QStringLiteral("qrc:/OpenVcu/Hmi/qml/Main.qml")));
   if (m_engine.rootObjects().isEmpty()) return Error{"the QML user interface did not load (see the messages above)"};

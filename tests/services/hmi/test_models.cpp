@@ -429,6 +429,17 @@ TEST_CASE("the command line refuses bad options with a message and checks the co
   CHECK(sut->height == 480);
   CHECK(sut->tab == 2);
   CHECK(sut->stack.frameStreams);
+  CHECK(sut->plotWindowSeconds == 30);
+  CHECK_FALSE(sut->framesPage);
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--plot-window", "45"}));
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--plot-window", "600s"}));
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--can-page", "trace"}));
+  const auto bench = parseCommandLine(
+      {"vcu-hmi", "--config", hhea, "--plot-window", "600", "--can-page", "frames", "--data-folder", "/srv/x"});
+  REQUIRE_MESSAGE(bench, bench.error().toString());
+  CHECK(bench->plotWindowSeconds == 600);
+  CHECK(bench->framesPage);
+  CHECK(bench->stack.dataFolder == "/srv/x");
   HmiOptions missing;
   missing.stack.configPath = "/nonexistent/vehicle.json";
   const auto checked = checkBeforeStart(missing);

@@ -9,6 +9,8 @@ import OpenVcu.Hmi
 RowLayout {
     id: tab
     property var initialKeys: []
+    property int initialWindow: 30      // s: 10, 30, 60, 300 or 600
+    property bool initialFramesPage: false
     spacing: 6
 
     ColumnLayout {
@@ -66,6 +68,8 @@ RowLayout {
         TabBar {
             id: rightPages
             Layout.fillWidth: true
+            // after the buttons exist (a binding is overwritten when the first one is added)
+            Component.onCompleted: if (tab.initialFramesPage) setCurrentIndex(1)
             TabButton { text: "Plot"; implicitHeight: 40; font.pixelSize: Theme.fontSmall }
             TabButton { text: "Frames"; implicitHeight: 40; font.pixelSize: Theme.fontSmall }
         }
@@ -82,7 +86,7 @@ RowLayout {
                         id: windowBox
                         model: ["10 s", "30 s", "1 min", "5 min", "10 min"]
                         readonly property var seconds: [10, 30, 60, 300, 600]
-                        currentIndex: 1
+                        currentIndex: Math.max(0, seconds.indexOf(tab.initialWindow))
                         onCurrentIndexChanged: plot.windowSeconds = seconds[currentIndex]
                     }
                     TouchButton { text: plot.paused ? "Resume" : "Pause"; onClicked: plot.paused = !plot.paused }
@@ -96,7 +100,10 @@ RowLayout {
                         id: plot
                         objectName: "plot"
                         anchors.fill: parent
-                        Component.onCompleted: if (tab.initialKeys.length > 0) keys = tab.initialKeys
+                        Component.onCompleted: {
+                            windowSeconds = windowBox.seconds[windowBox.currentIndex]
+                            if (tab.initialKeys.length > 0) keys = tab.initialKeys
+                        }
                     }
                     Rectangle {
                         visible: plot.cursorX >= 0
