@@ -5,7 +5,6 @@
 
 #include <QDateTime>
 #include <QJSEngine>
-#include <random>
 
 #include "openvcu/config/catalog.hpp"
 
@@ -20,12 +19,6 @@ constexpr const char* ISSUER = "vcu-hmi";
 constexpr std::int64_t ACK_TIMEOUT_NS = 2'000'000'000;
 /// The HMI's writer id (docs/design/service-runtime.md: position in config::SERVICES + 1).
 constexpr std::uint16_t HMI_WRITER = 5;
-
-std::int64_t firstRequestId() {
-  std::random_device seed;
-  std::mt19937_64 generator((static_cast<std::uint64_t>(seed()) << 32) ^ seed());
-  return static_cast<std::int64_t>(generator() >> 20) | 1;  // room to count up without overflow
-}
 
 }  // namespace
 
@@ -51,7 +44,7 @@ StackConnection::StackConnection(StackSettings settings, config::VehicleConfig v
     : m_settings(std::move(settings)),
       m_config(std::move(vehicle)),
       m_catalog(std::move(catalog)),
-      m_commands(ISSUER, firstRequestId(), ACK_TIMEOUT_NS) {
+      m_commands(ISSUER, ipc::randomRequestId(), ACK_TIMEOUT_NS) {
   g_instance = this;
   const int hz = m_settings.displayHz > 0 ? m_settings.displayHz : 10;
   m_displayTimer.setInterval(1000 / hz);

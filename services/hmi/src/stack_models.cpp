@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/service/process_stats.hpp"
 
 namespace openvcu::hmi {
 namespace {
@@ -35,29 +36,6 @@ QString duration(std::int64_t nanoseconds) {
 
 QString clockText(std::int64_t realtimeNs) {
   return QDateTime::fromMSecsSinceEpoch(realtimeNs / 1'000'000).toString(QStringLiteral("HH:mm:ss.zzz"));
-}
-
-std::int64_t cpuTicks(std::int32_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string text;
-  if (!std::getline(in, text)) return -1;
-  const auto close = text.rfind(')');
-  if (close == std::string::npos || close + 2 >= text.size()) return -1;
-  std::istringstream fields(text.substr(close + 2));
-  std::string field;
-  std::int64_t total = 0;
-  for (int i = 3; i <= 15 && fields >> field; ++i) {
-    if (i == 14 || i == 15) total += std::strtoll(field.c_str(), nullptr, 10);
-  }
-  return total;
-}
-
-double rssMb(std::int32_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/statm");
-  long pages = 0;
-  long resident = 0;
-  if (!(in >> pages >> resident)) return -1;
-  return static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) / 1e6;
 }
 
 std::optional<FsmRules> loadRules(QString& error) {
@@ -365,18 +343,18 @@ void HealthModel::refresh() {
   const std::int64_t now = signals::monotonicNowNs();
   // /proc once a second, not at display rate
   if (++m_tick % 10 == 1) {
-    const double ticksPerSecond = static_cast<double>(::sysconf(_SC_CLK_TCK));
+    const double ticksPerSecond = service::clockTicksPerSecond();
     for (const ServiceHealth& service : m_tracker.services()) {
       if (service.pid <= 0) continue;
       Cpu& cpu = m_cpu[service.name];
-      const std::int64_t ticks = cpuTicks(service.pid);
+      const std::int64_t ticks = service::processCpuTicks(service.pid);
       if (ticks >= 0 && cpu.ticks >= 0 && now > cpu.atNs) {
         cpu.percent =
             static_cast<double>(ticks - cpu.ticks) / ticksPerSecond / (static_cast<double>(now - cpu.atNs) / 1e9) * 100;
       }
       cpu.ticks = ticks;
       cpu.atNs = now;
-      cpu.rssMb = rssMb(service.pid);
+      cpu.rssMb = service::processRssMb(service.pid);
     }
     struct sysinfo info {};
     if (::sysinfo(&info) == 0) {

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cstdint>
 #include <optional>
-#include <random>
 #include <string>
 
 #include "diagnostics.hpp"
@@ -11,17 +10,6 @@
 #include "stack_access.hpp"
 
 namespace openvcu::cli {
-namespace {
-
-/// A positive, never-zero id that another vcu started in the same nanosecond will not pick.
-std::int64_t newRequestId() {
-  std::random_device seed;
-  std::mt19937_64 generator((static_cast<std::uint64_t>(seed()) << 32) ^ seed() ^
-                            static_cast<std::uint64_t>(realtimeNowNs()));
-  return static_cast<std::int64_t>(generator() >> 1) | 1;
-}
-
-}  // namespace
 
 ExitCode sendCommandRequest(const config::VehicleConfig& config, ipc::CommandRequest request, double timeoutSeconds,
                             Streams streams) {
@@ -32,7 +20,7 @@ ExitCode sendCommandRequest(const config::VehicleConfig& config, ipc::CommandReq
   }
   ipc::EventBus& events = *eventsResult;
   request.timestampNs = 0;  // stamped when published
-  request.requestId = newRequestId();
+  request.requestId = ipc::randomRequestId();
   request.issuer = std::string(COMMAND_ISSUER);
   std::optional<ipc::CommandAck> answer;
   auto subscribed = events.onAck([&](const ipc::CommandAck& ack) {

@@ -14,6 +14,7 @@
 
 #include "diagnostics.hpp"
 #include "openvcu/config/json.hpp"
+#include "openvcu/service/process_stats.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/signals/table.hpp"
 #include "stop_signal.hpp"
@@ -46,33 +47,6 @@ struct ServiceView {
   double cpuPercent{};
   std::chrono::steady_clock::time_point cpuAt;
 };
-
-/// utime + stime of a local process in clock ticks, or -1.
-std::int64_t cpuTicks(std::int32_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string text;
-  if (!std::getline(in, text)) return -1;
-  const auto close = text.rfind(')');
-  if (close == std::string::npos) return -1;
-  std::istringstream fields(text.substr(close + 2));
-  std::string field;
-  std::int64_t utime = 0;
-  std::int64_t stime = 0;
-  for (int i = 3; i <= 15 && fields >> field; ++i) {
-    if (i == 14) utime = std::stoll(field);
-    if (i == 15) stime = std::stoll(field);
-  }
-  return utime + stime;
-}
-
-/// Resident set of a local process in MB, or -1.
-double rssMb(std::int32_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/statm");
-  long pages = 0;
-  long resident = 0;
-  if (!(in >> pages >> resident)) return -1;
-  return static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) / 1e6;
-}
 
 std::string fixed(double value, int decimals) {
   std::ostringstream out;
@@ -140,10 +114,10 @@ class Top {
   void services(std::string& out) {
     const std::int64_t now = realtimeNowNs();
     const auto clock = std::chrono::steady_clock::now();
-    const double ticksPerSecond = static_cast<double>(::sysconf(_SC_CLK_TCK));
+    const double ticksPerSecond = service::clockTicksPerSecond();
     TextTable table({"SERVICE", "PID", "UPTIME", "RESTARTS", "BEAT", "CPU %", "RSS MB", "STATUS"});
     for (auto& [name, view] : m_services) {
-      const std::int64_t ticks = cpuTicks(view.last.pid);
+      const std::int64_t ticks = service::processCpuTicks(view.last.pid);
       if (ticks >= 0 && view.cpuTicks >= 0) {
         const double seconds = std::chrono::duration<double>(clock - view.cpuAt).count();
         if (seconds > 0.2) view.cpuPercent = static_cast<double>(ticks - view.cpuTicks) / ticksPerSecond / seconds * 100;
@@ -152,7 +126,7 @@ class Top {
         view.cpuTicks = ticks;
         view.cpuAt = clock;
       }
-      const double rss = rssMb(view.last.pid);
+      const double rss = service::processRssMb(view.last.pid);
       const std::int64_t age = std::max<std::int64_t>(0, now - view.last.timestampNs);
       table.addRow({name, std::to_string(view.last.pid), formatDuration(view.last.uptimeMs * 1'000'000),
                     std::to_string(view.restarts), formatDuration(age) + (age > 3'000'000'000 ? " LATE" : ""),

@@ -63,6 +63,11 @@ struct CommandRequest {
   bool operator==(const CommandRequest&) const = default;
 };
 
+/// A random, positive, odd request id for a new issuer process (vcu, vcu-hmi): another
+/// process started in the same nanosecond does not pick it, and 2^43 ids can be counted up
+/// from it without overflow.
+std::int64_t randomRequestId();
+
 struct CommandAck {
   std::int64_t timestampNs{};
   std::int64_t requestId{};
