@@ -17,10 +17,10 @@ RowLayout {
         Layout.preferredWidth: tab.width * 0.45
         Layout.maximumWidth: tab.width * 0.45
         Layout.fillHeight: true
-        TextField {
+        TouchField {
+            objectName: "signalSearch"
             Layout.fillWidth: true
             placeholderText: "search signals"
-            font.pixelSize: Theme.font
             onTextChanged: tree.search = text
         }
         ListView {
@@ -139,9 +139,9 @@ RowLayout {
                 visible: rightPages.currentIndex === 1
                 FrameTraceModel { id: frames; active: rightPages.currentIndex === 1 && tab.visible }
                 RowLayout {
-                    TextField { placeholderText: "ID"; Layout.preferredWidth: 70; font.pixelSize: Theme.fontSmall; onTextChanged: frames.idFilter = text }
-                    TextField { placeholderText: "PGN"; Layout.preferredWidth: 70; font.pixelSize: Theme.fontSmall; onTextChanged: frames.pgnFilter = text }
-                    TextField { placeholderText: "node"; Layout.fillWidth: true; font.pixelSize: Theme.fontSmall; onTextChanged: frames.nodeFilter = text }
+                    TouchField { placeholderText: "ID"; Layout.preferredWidth: 110; pixelSize: Theme.fontSmall; onTextChanged: frames.idFilter = text }
+                    TouchField { placeholderText: "PGN"; Layout.preferredWidth: 110; pixelSize: Theme.fontSmall; onTextChanged: frames.pgnFilter = text }
+                    TouchField { placeholderText: "node"; Layout.fillWidth: true; pixelSize: Theme.fontSmall; onTextChanged: frames.nodeFilter = text }
                 }
                 RowLayout {
                     TouchButton { text: frames.paused ? "Resume" : "Pause"; onClicked: frames.paused = !frames.paused }

@@ -107,7 +107,7 @@ ColumnLayout {
             anchors.fill: parent
             spacing: 6
             Text { text: "Add a DBC message to the transmit schedule"; color: Theme.text; font.pixelSize: Theme.font; Layout.fillWidth: true; elide: Text.ElideRight }
-            TextField { id: filterField; objectName: "addMessageFilter"; placeholderText: "filter"; font.pixelSize: Theme.font; Layout.fillWidth: true }
+            TouchField { id: filterField; objectName: "addMessageFilter"; placeholderText: "filter"; Layout.fillWidth: true }
             ListView {
                 id: candidateList
                 objectName: "addMessageCandidates"

@@ -13,7 +13,7 @@ ColumnLayout {
     RowLayout {
         Layout.fillWidth: true
         TouchButton { objectName: "browseButton"; text: "Browse…"; enabled: !trace.loading; onClicked: { browser.reload(); browsePopup.open() } }
-        TextField { id: pathField; Layout.fillWidth: true; placeholderText: "log file path (candump -L, candump, .asc)"; font.pixelSize: Theme.fontSmall }
+        TouchField { id: pathField; Layout.fillWidth: true; placeholderText: "log file path (candump -L, candump, .asc)"; pixelSize: Theme.fontSmall }
         TouchButton { text: "Open"; enabled: !trace.loading && pathField.text !== ""; onClicked: trace.open(pathField.text) }
         TouchButton {
             text: "Export CSV"; enabled: !trace.loading && traceView.count > 0

@@ -118,6 +118,26 @@ Item {
             tryVerify(() => findChild(screen, "traceList").count > 0, 5000, "the tapped log was not opened")
         }
 
+        function test_the_on_screen_keyboard_types_a_search() {
+            const screen = createTemporaryObject(canTab, root)
+            waitForRendering(screen)
+            const search = findChild(screen, "signalSearch")
+            verify(search !== null)
+            mouseClick(findChild(search, "keyboardButton"))
+            const keyboard = findChild(search, "textKeyboard")
+            verify(keyboard !== null, "no keyboard")
+            tryCompare(keyboard, "opened", true)
+            for (const key of ["h", "s", "_", "u", "l", "v"]) {
+                const button = findText(keyboard.contentItem, key, true)
+                verify(button !== null, "no key " + key)
+                mouseClick(button)
+            }
+            mouseClick(findText(keyboard.contentItem, "⌫", true))
+            mouseClick(findText(keyboard.contentItem, "OK", true))
+            tryCompare(keyboard, "opened", false)
+            compare(search.text, "hs_ul")
+        }
+
         function test_tapping_a_signal_in_the_tree_plots_it() {
             const screen = createTemporaryObject(canTab, root)
             waitForRendering(screen)
