@@ -168,6 +168,14 @@ struct Fixture {
     REQUIRE_MESSAGE(hasFifoThread((*process)->pid()), "the transmit thread did not get SCHED_FIFO");
     return **process;
   }
+  /// Stops `running`, starts a new vcu-can-tx and listens afresh for `duration`.
+  void restartCanTx(harness::Process& running, Listener& listener, std::chrono::milliseconds duration) {
+    REQUIRE(sut.stop(running));
+    startCanTx();
+    listener.heard.clear();
+    std::this_thread::sleep_for(200ms);
+    listener.listen(duration);
+  }
   void keepAlive() {
     const auto result = vcuOn(sut, config, {"signal", "set", "internal.tx.keepAlive", "1"});
     REQUIRE_MESSAGE(contains(result.out, "accepted"), (result.out + result.err));
@@ -222,11 +230,7 @@ TEST_CASE("a runtime cycle change is acknowledged, takes effect and survives a r
   checkPeriods(listener.withId(CCVS1), 50 * MS);
   CHECK(fs::exists(f.config.parent_path() / "schedule.overlay.json"));
 
-  REQUIRE(f.sut.stop(first));
-  f.startCanTx();
-  listener.heard.clear();
-  std::this_thread::sleep_for(200ms);
-  listener.listen(1500ms);
+  f.restartCanTx(first, listener, 1500ms);
   checkPeriods(listener.withId(CCVS1), 50 * MS);
   CHECK(checkPairs(listener, CCVS1, 2'000'000) >= 20);
 }
@@ -254,11 +258,7 @@ TEST_CASE("a DBC message added at run time goes out at its cycle at once and aga
   const auto again = vcuOn(f.sut, f.config, {"schedule", "add", "HVESSD2_PGN61585", "40"});
   CHECK(contains(again.out + again.err, "already in the transmit schedule"));
 
-  REQUIRE(f.sut.stop(first));
-  f.startCanTx();
-  listener.heard.clear();
-  std::this_thread::sleep_for(200ms);
-  listener.listen(1000ms);
+  f.restartCanTx(first, listener, 1000ms);
   checkPeriods(listener.withId(HVESSD2), 40 * MS);
   CHECK(listener.withId(HVESSD2).back().frame.data[1] == 0x4E);
   const auto disabled = vcuOn(f.sut, f.config, {"schedule", "disable", "HVESSD2_PGN61585"});
