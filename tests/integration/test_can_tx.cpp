@@ -13,9 +13,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <csignal>
 #include <sched.h>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -74,6 +76,38 @@ struct Listener {
     }
     // a gap the listener's own queue made is not can-tx's
     CHECK_MESSAGE(link->stats().receiveDropped == 0, "the listener's queue overflowed");
+  }
+  /// Reads and drops frames up to and including the first that `match` accepts (so what
+  /// was sent before a change, still queued, is gone); what follows it stays in `heard`.
+  /// false when none came within `timeout`.
+  bool skipUntil(const std::function<bool(const Heard&)>& match, std::chrono::milliseconds timeout) {
+    heard.clear();
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    std::array<can::ReceivedFrame, 64> batch{};
+    bool found = false;
+    while (!found && std::chrono::steady_clock::now() < end) {
+      const std::size_t count = link->receive(batch);
+      for (std::size_t i = 0; i < count; ++i) {
+        const Heard item{batch[i].frame, batch[i].monotonicNs};
+        if (found) {
+          heard.push_back(item);
+        } else {
+          found = match(item);
+        }
+      }
+      if (count == 0) std::this_thread::sleep_for(1ms);
+    }
+    return found;
+  }
+  /// Drops everything sent before now and waits for the first frame of `id` sent after.
+  bool skipToNextFrameOf(std::uint32_t id, std::chrono::milliseconds timeout) {
+    const std::int64_t since = nowNs();
+    return skipUntil([&](const Heard& item) { return item.frame.id == id && item.atNs > since; }, timeout);
+  }
+  static std::int64_t nowNs() {
+    timespec now{};
+    ::clock_gettime(CLOCK_MONOTONIC, &now);  // the sim link's frame time
+    return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
   }
   [[nodiscard]] std::vector<Heard> withId(std::uint32_t id) const {
     std::vector<Heard> matching;
@@ -182,12 +216,13 @@ struct Fixture {
     REQUIRE_MESSAGE(hasFifoThread((*process)->pid()), "the transmit thread did not get SCHED_FIFO");
     return **process;
   }
-  /// Stops `running`, starts a new vcu-can-tx and listens afresh for `duration`.
-  void restartCanTx(harness::Process& running, Listener& listener, std::chrono::milliseconds duration) {
+  /// Stops `running`, starts a new vcu-can-tx and, from its first frame of `id`, listens
+  /// afresh for `duration`.
+  void restartCanTx(harness::Process& running, Listener& listener, std::uint32_t id,
+                    std::chrono::milliseconds duration) {
     REQUIRE(sut.stop(running));
     startCanTx();
-    listener.heard.clear();
-    std::this_thread::sleep_for(200ms);
+    REQUIRE_MESSAGE(listener.skipToNextFrameOf(id, 2s), "the restarted vcu-can-tx sends no frame of the message");
     listener.listen(duration);
   }
   void keepAlive() {
@@ -239,12 +274,12 @@ TEST_CASE("a runtime cycle change is acknowledged, takes effect and survives a r
   CHECK(contains(refused.out + refused.err, "refused"));  // shorter than its 2 ms SHM->SDM delta
   const auto accepted = vcuOn(f.sut, f.config, {"schedule", "cycle", "CCVS1_PGN65265", "50"});
   REQUIRE_MESSAGE(contains(accepted.out, "accepted"), (accepted.out + accepted.err));
-  std::this_thread::sleep_for(200ms);
+  REQUIRE(listener.skipToNextFrameOf(CCVS1, 2s));  // sent under the new cycle
   listener.listen(1500ms);
   checkPeriods(listener.withId(CCVS1), 50 * MS);
   CHECK(fs::exists(f.config.parent_path() / "schedule.overlay.json"));
 
-  f.restartCanTx(first, listener, 1500ms);
+  f.restartCanTx(first, listener, CCVS1, 1500ms);
   checkPeriods(listener.withId(CCVS1), 50 * MS);
   CHECK(checkPairs(listener, CCVS1, 2'000'000) >= 20);
 }
@@ -263,7 +298,7 @@ TEST_CASE("a DBC message added at run time goes out at its cycle at once and aga
   REQUIRE_MESSAGE(contains(accepted.out, "accepted"), (accepted.out + accepted.err));
   const auto value = vcuOn(f.sut, f.config, {"schedule", "default", "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "50"});
   REQUIRE_MESSAGE(contains(value.out, "accepted"), (value.out + value.err));
-  std::this_thread::sleep_for(200ms);
+  REQUIRE(listener.skipToNextFrameOf(HVESSD2, 2s));  // sent with the new value
   listener.listen(1500ms);
   const auto frames = listener.withId(HVESSD2);
   checkPeriods(frames, 40 * MS);
@@ -272,14 +307,13 @@ TEST_CASE("a DBC message added at run time goes out at its cycle at once and aga
   const auto again = vcuOn(f.sut, f.config, {"schedule", "add", "HVESSD2_PGN61585", "40"});
   CHECK(contains(again.out + again.err, "already in the transmit schedule"));
 
-  f.restartCanTx(first, listener, 1500ms);
+  f.restartCanTx(first, listener, HVESSD2, 1500ms);
   checkPeriods(listener.withId(HVESSD2), 40 * MS);
   CHECK(listener.withId(HVESSD2).back().frame.data[1] == 0x4E);
   const auto disabled = vcuOn(f.sut, f.config, {"schedule", "disable", "HVESSD2_PGN61585"});
   REQUIRE_MESSAGE(contains(disabled.out, "accepted"), (disabled.out + disabled.err));
-  // what the listener's queue still holds was sent before the disable: read it, then listen
-  listener.listen(100ms);
-  listener.heard.clear();
+  // what the listener's queue still holds was sent before the disable: skip it, then listen
+  REQUIRE(listener.skipToNextFrameOf(0x0CFF1127 /* CMD_SYS_1, 10 ms */, 2s));
   listener.listen(400ms);
   CHECK(listener.withId(HVESSD2).empty());
   CHECK(!listener.withId(0x0CFF1127 /* CMD_SYS_1 */).empty());  // the listener hears the rest
