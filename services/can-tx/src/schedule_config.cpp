@@ -1,10 +1,6 @@
 #include "schedule_config.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -84,18 +80,6 @@ double initialOf(const config::VehicleConfig& vehicle, std::string_view key) {
     }
   }
   return 0.0;
-}
-
-/// A physical value a signal can carry: empty when fine, else the reason.
-std::optional<std::string> checkValue(const dbc::Signal& signal, double value) {
-  if (!std::isfinite(value)) return "the value must be a finite number";
-  if (signal.minimum < signal.maximum && (value < signal.minimum || value > signal.maximum)) {
-    std::ostringstream text;
-    text << "value " << value << " is outside the range [" << signal.minimum << ", " << signal.maximum << "]"
-         << (signal.unit.empty() ? "" : " " + signal.unit) << " of '" << signal.name << "'";
-    return text.str();
-  }
-  return std::nullopt;
 }
 
 class Loader {
@@ -339,7 +323,7 @@ class Loader {
         continue;
       }
       const double number = value.get<double>();
-      if (auto problem = checkValue(message.signals[*signal], number)) {
+      if (auto problem = checkSignalValue(message.signals[*signal], number)) {
         m_check.error(valuePath, *problem);
         continue;
       }
@@ -554,20 +538,18 @@ class Loader {
   JsonChecker& m_check;
 };
 
-Status writeAll(int fd, const std::string& text) {
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t written = ::write(fd, text.data() + done, text.size() - done);
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      return Error{std::strerror(errno)};
-    }
-    done += static_cast<std::size_t>(written);
-  }
-  return {};
-}
-
 }  // namespace
+
+std::optional<std::string> checkSignalValue(const dbc::Signal& signal, double value) {
+  if (!std::isfinite(value)) return "the value must be a finite number";
+  if (signal.minimum < signal.maximum && (value < signal.minimum || value > signal.maximum)) {
+    std::ostringstream text;
+    text << "value " << value << " is outside the range [" << signal.minimum << ", " << signal.maximum << "]"
+         << (signal.unit.empty() ? "" : " " + signal.unit) << " of '" << signal.name << "'";
+    return text.str();
+  }
+  return std::nullopt;
+}
 
 std::string_view fieldAlgorithmName(FieldAlgorithm algorithm) noexcept {
   for (const auto& known : ALGORITHMS) {
@@ -686,132 +668,6 @@ Result<SignalRef> findScheduledSignal(const Schedule& schedule, const config::Ve
   text.insert(0, 1, '\'');
   text += "' is not a signal of a scheduled message";
   return Error{std::move(text)};
-}
-
-Result<Overlay> loadOverlay(const std::string& path) {
-  std::error_code ignored;
-  if (!std::filesystem::exists(path, ignored)) return Overlay{};
-  auto jsonResult = config::readJsonFile(path);
-  if (!jsonResult) return jsonResult.error();
-  const Json& root = *jsonResult;
-  JsonChecker check(path);
-  Overlay overlay;
-  if (!check.isObject(root, "")) return check.firstError();
-  check.onlyKeys(root, "", {"format", "messages", "defaults", "overrides", "comment"});
-  if (auto format = check.number(root, "", "format"); format && *format != 1) {
-    check.error("/format", "unknown overlay format (this vcu-can-tx writes format 1)");
-  }
-  if (const Json* messages = check.member(root, "", "messages", false); messages && check.isObject(*messages, "/messages")) {
-    for (const auto& [name, settings] : messages->items()) {
-      const std::string itemPath = JsonChecker::join("/messages", name);
-      if (!check.isObject(settings, itemPath)) continue;
-      check.onlyKeys(settings, itemPath, {"cycleMs", "enabled", "added"});
-      MessageChange change{name, check.number(settings, itemPath, "cycleMs", false),
-                           check.boolean(settings, itemPath, "enabled", false),
-                           check.boolean(settings, itemPath, "added", false).value_or(false)};
-      if (change.added && !change.cycleMs) check.error(itemPath + "/cycleMs", "an added message needs its cycle");
-      overlay.messages.push_back(std::move(change));
-    }
-  }
-  for (auto [key, target] : {std::pair{"defaults", &overlay.defaults}, std::pair{"overrides", &overlay.overrides}}) {
-    const Json* map = check.member(root, "", key, false);
-    if (map == nullptr || !check.isObject(*map, std::string("/") + key)) continue;
-    for (const auto& [signal, value] : map->items()) {
-      if (!value.is_number()) {
-        check.error(JsonChecker::join(std::string("/") + key, signal), "must be a number");
-        continue;
-      }
-      target->emplace_back(signal, value.get<double>());
-    }
-  }
-  if (!check.ok()) return check.firstError();
-  return overlay;
-}
-
-Result<Schedule> applyOverlay(const Schedule& schedule, const Overlay& overlay, const config::VehicleConfig& vehicle,
-                              const signals::Catalog& catalog) {
-  Schedule result = schedule;
-  const std::string& file = schedule.overlay;
-  for (const MessageChange& change : overlay.messages) {
-    const std::string path = file + ": /messages/" + change.message;
-    if (change.added) {
-      auto added = runtimeMessage(result, vehicle, catalog, change.message, change.cycleMs.value_or(0));
-      if (!added) return Error{path + ": " + added.error().message};
-      result.messages.push_back(std::move(*added));
-    }
-    auto found = findScheduled(result, vehicle, change.message);
-    if (!found) return Error{path + ": " + found.error().message};
-    ScheduledMessage& entry = result.messages[*found];
-    if (change.cycleMs) {
-      if (auto problem = checkCycle(entry, *change.cycleMs)) return Error{path + "/cycleMs: " + *problem};
-      entry.cycleNs = static_cast<std::int64_t>(std::llround(*change.cycleMs * NS_PER_MS));
-    }
-    if (change.enabled) entry.enabled = *change.enabled;
-  }
-  for (const auto& [key, value] : overlay.defaults) {
-    const std::string path = file + ": /defaults/" + key;
-    auto found = findScheduledSignal(result, vehicle, catalog, key);
-    if (!found) return Error{path + ": " + found.error().message};
-    ScheduledMessage& entry = result.messages[found->scheduled];
-    const dbc::Signal& signal = vehicle.database.messages[entry.message].signals[found->signal];
-    if (auto problem = checkValue(signal, value)) return Error{path + ": " + *problem};
-    entry.defaults[found->signal] = value;
-  }
-  for (const auto& [key, value] : overlay.overrides) {
-    const std::string path = file + ": /overrides/" + key;
-    auto found = findScheduledSignal(result, vehicle, catalog, key);
-    if (!found) return Error{path + ": " + found.error().message};
-    const ScheduledMessage& entry = result.messages[found->scheduled];
-    const dbc::Signal& signal = vehicle.database.messages[entry.message].signals[found->signal];
-    if (auto problem = checkValue(signal, value)) return Error{path + ": " + *problem};
-  }
-  return result;
-}
-
-Status saveOverlay(const std::string& path, const Overlay& overlay) {
-  Json root = Json::object();
-  root["format"] = 1;
-  root["comment"] = "runtime changes of the transmit schedule, written by vcu-can-tx (docs/design/can-tx.md)";
-  Json messages = Json::object();
-  for (const MessageChange& change : overlay.messages) {
-    Json item = Json::object();
-    if (change.added) item["added"] = true;
-    if (change.cycleMs) item["cycleMs"] = *change.cycleMs;
-    if (change.enabled) item["enabled"] = *change.enabled;
-    messages[change.message] = std::move(item);
-  }
-  root["messages"] = std::move(messages);
-  Json defaults = Json::object();
-  for (const auto& [key, value] : overlay.defaults) defaults[key] = value;
-  root["defaults"] = std::move(defaults);
-  Json overrides = Json::object();
-  for (const auto& [key, value] : overlay.overrides) overrides[key] = value;
-  root["overrides"] = std::move(overrides);
-  const std::string text = root.dump(2) + "\n";
-
-  const std::filesystem::path target(path);
-  const std::string folder = target.parent_path().empty() ? "." : target.parent_path().string();
-  const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return Error{path + ": cannot write the overlay: " + std::strerror(errno)};
-  Status written = writeAll(fd, text);
-  if (written && ::fsync(fd) != 0) written = Error{std::strerror(errno)};
-  ::close(fd);
-  if (!written) {
-    ::unlink(temporary.c_str());
-    return Error{path + ": cannot write the overlay: " + written.error().message};
-  }
-  if (::rename(temporary.c_str(), path.c_str()) != 0) {
-    const int saved = errno;
-    ::unlink(temporary.c_str());
-    return Error{path + ": cannot replace the overlay: " + std::strerror(saved)};
-  }
-  const int dirFd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dirFd >= 0) {
-    ::fsync(dirFd);
-    ::close(dirFd);
-  }
-  return {};
 }
 
 }  // namespace openvcu::cantx

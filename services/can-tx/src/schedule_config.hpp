@@ -110,6 +110,10 @@ Result<Schedule> applyOverlay(const Schedule& schedule, const Overlay& overlay, 
 /// Writes `overlay` atomically (temporary file, fsync, rename, fsync of the folder).
 Status saveOverlay(const std::string& path, const Overlay& overlay);
 
+/// A physical value `signal` can carry (finite, inside its DBC range): empty when fine,
+/// else the reason.
+std::optional<std::string> checkSignalValue(const dbc::Signal& signal, double value);
+
 /// Check of one runtime change, shared by commands and overlay loading: empty when fine,
 /// else the reason. `cycleMs` must be 1..3600000 and longer than the safety delta.
 std::optional<std::string> checkCycle(const ScheduledMessage& message, double cycleMs);

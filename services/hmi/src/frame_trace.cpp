@@ -16,10 +16,6 @@ namespace {
 
 constexpr auto WAIT_TIMEOUT = std::chrono::milliseconds(200);  // bounds the reaction to a stop
 
-QString toQ(const std::string& text) {
-  return QString::fromStdString(text);
-}
-
 }  // namespace
 
 FrameTraceModel::FrameTraceModel(QObject* parent) : QAbstractListModel(parent), m_ring(RING), m_shown(SHOWN) {

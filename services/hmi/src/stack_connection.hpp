@@ -52,6 +52,9 @@ struct StackSettings {
   int displayHz{10};             ///< text refresh; plots sample on their own timer
 };
 
+/// std::string -> QString (UTF-8), for every model of the HMI.
+inline QString toQ(const std::string& text) { return QString::fromStdString(text); }
+
 class StackConnection : public QObject {
   Q_OBJECT
   QML_NAMED_ELEMENT(Stack)

@@ -17,10 +17,6 @@
 namespace openvcu::hmi {
 namespace {
 
-QString toQ(const std::string& text) {
-  return QString::fromStdString(text);
-}
-
 constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;  // services beat once a second
 constexpr std::size_t HISTORY = 200;
 constexpr std::string_view OPERATOR_PREFIX = "internal.operator.";

@@ -25,6 +25,7 @@
 
 #include "frame_trace.hpp"
 #include "integration_support.hpp"
+#include "schedule_model.hpp"
 #include "signal_models.hpp"
 #include "stack_connection.hpp"
 #include "stack_models.hpp"

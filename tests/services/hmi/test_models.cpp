@@ -17,6 +17,7 @@
 #include "hmi_app.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "plot_and_trace.hpp"
+#include "schedule_model.hpp"
 #include "signal_models.hpp"
 #include "stack_connection.hpp"
 #include "stack_models.hpp"
