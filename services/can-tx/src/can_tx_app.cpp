@@ -139,6 +139,7 @@ struct CanTxAppImpl final : TxPort, Clock {
     schedule = std::move(*scheduleResult);
     loadOverlayOrSetAside();
     applyOverrides();
+    for (const std::string& warning : safetyIdentityWarnings(schedule, vehicle)) runtime.log().warning(warning);
 
     const std::string& instance = runtime.instance();
     for (const config::BusConfig& bus : vehicle.buses) {
@@ -294,6 +295,9 @@ struct CanTxAppImpl final : TxPort, Clock {
     (void)prepared->release();  // the command owns it now
     schedule.messages.push_back(std::move(*built));
     registerMessageCounters(schedule.messages.size() - 1, stats);
+    for (const std::string& warning : safetyIdentityWarnings(schedule, vehicle, schedule.messages.size() - 1)) {
+      runtime.log().warning(warning);
+    }
     runtime.log().info("message " + request.key + " added to the transmit schedule, every " + number(request.value) +
                        " ms");
     return std::nullopt;
@@ -404,6 +408,12 @@ struct CanTxAppImpl final : TxPort, Clock {
     });
     heartbeat.addCounterSource("requests_nacked", [this] {
       return static_cast<std::int64_t>(scheduler->counters().requestsNacked.load(std::memory_order_relaxed));
+    });
+    heartbeat.addCounterSource("held_for_sdm", [this] {
+      return static_cast<std::int64_t>(scheduler->counters().held.load(std::memory_order_relaxed));
+    });
+    heartbeat.addCounterSource("sdms_early", [this] {
+      return static_cast<std::int64_t>(scheduler->counters().sdmsEarly.load(std::memory_order_relaxed));
     });
     heartbeat.addCounterSource("writers_lost", [this] { return static_cast<std::int64_t>(writersLost); });
     for (std::size_t b = 0; b < buses.size(); ++b) {

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "openvcu/can/frame.hpp"
@@ -585,6 +586,38 @@ Result<Schedule> loadSchedule(const config::VehicleConfig& vehicle, const signal
   Schedule schedule = loader.run(document ? &*document : nullptr);
   if (!check.ok()) return check.firstError();
   return schedule;
+}
+
+std::vector<std::string> safetyIdentityWarnings(const Schedule& schedule, const config::VehicleConfig& vehicle,
+                                                std::optional<std::size_t> only) {
+  const auto hex = [](std::uint32_t value, int digits) {
+    std::ostringstream text;
+    text << "0x" << std::uppercase << std::hex << std::setw(digits) << std::setfill('0') << value;
+    return text.str();
+  };
+  const auto describe = [&](const ScheduledMessage& message) {
+    return vehicle.database.messages[message.message].name + " (" + hex(message.canId, 8) +
+           (message.safetyDeltaNs ? ", J1939-76 SDM)" : ")");
+  };
+  std::vector<std::string> warnings;
+  const std::vector<ScheduledMessage>& messages = schedule.messages;
+  for (std::size_t a = 0; a < messages.size(); ++a) {
+    for (std::size_t b = a + 1; b < messages.size(); ++b) {
+      const ScheduledMessage& first = messages[a];
+      const ScheduledMessage& second = messages[b];
+      if (only && *only != a && *only != b) continue;
+      if (!first.extended || !second.extended || first.bus != second.bus) continue;
+      if (!first.safetyDeltaNs && !second.safetyDeltaNs) continue;
+      if (!j1939::sameSafetyIdentity(first.canId, second.canId)) continue;
+      const j1939::Id id = j1939::Id::fromCanId(first.canId);
+      warnings.push_back(describe(first) + " and " + describe(second) + " have the same PGN " + hex(id.pgn(), 4) +
+                         ", source " + hex(id.sourceAddress, 2) + " and destination " + hex(id.destination(), 2) +
+                         " on bus " + vehicle.buses[first.bus].name +
+                         ": a J1939-76 receiver tells an SDM by these alone, not the priority (can-tx never sends "
+                         "one between the other's SHM and SDM)");
+    }
+  }
+  return warnings;
 }
 
 std::optional<std::string> checkCycle(const ScheduledMessage& message, double cycleMs) {

@@ -101,6 +101,15 @@ struct Overlay {
 /// and the JSON path; nothing is partially applied.
 Result<Schedule> loadSchedule(const config::VehicleConfig& vehicle, const signals::Catalog& catalog);
 
+/// Pairs of scheduled messages a J1939-76 receiver cannot tell apart: on the same bus, with
+/// equal PGN, SA and DA (j1939::sameSafetyIdentity; priority not compared), at least one an
+/// SDM. One warning per pair, naming both, e.g. "S1_ES_PGN61427 (0x0CEFF321, J1939-76 SDM)
+/// and PropA_C4_PGN61184 (0x18EFF321) have the same PGN 0xEF00, source 0x21 and destination
+/// 0xF3 on bus vehicle: ...". can-tx logs them at start; the Scheduler keeps such a message
+/// out of the SHM-SDM gap. `only`: just the pairs that include this schedule index.
+std::vector<std::string> safetyIdentityWarnings(const Schedule& schedule, const config::VehicleConfig& vehicle,
+                                                std::optional<std::size_t> only = std::nullopt);
+
 /// Parses the overlay file; empty when it does not exist. Errors name the file and path.
 Result<Overlay> loadOverlay(const std::string& path);
 /// Checks every entry of `overlay` against `schedule` and applies it to a copy, which is

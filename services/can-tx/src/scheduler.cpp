@@ -21,6 +21,21 @@ constexpr std::int64_t NEVER = INT64_MAX;
 
 std::int64_t absolute(std::int64_t value) noexcept { return value < 0 ? -value : value; }
 
+/// Frames held back at once at most (Impl::emit); HHEA holds one (PropA_C4) per S1_ES pair.
+constexpr std::size_t HELD_CAPACITY = 64;
+
+/// The counters a frame's fate goes to when it finally leaves (either may be null).
+struct Outcome {
+  std::atomic<std::uint64_t>* sent{};
+  std::atomic<std::uint64_t>* failed{};
+};
+struct HeldFrame {
+  std::size_t bus{};
+  can::Frame frame{};
+  Outcome outcome{};
+};
+enum class Emitted : std::uint8_t { Sent, Held, Failed };
+
 }  // namespace
 
 // ---- ErrorHistogram -------------------------------------------------------------------------
@@ -119,6 +134,11 @@ struct Scheduler::Impl {
   std::size_t room{};  ///< entries' reserved capacity: add() never reallocates
   std::vector<PreparedMessage> entries;  // pointers: atomics are not movable; reserved at create()
   SchedulerCounters counters;
+  /// The J1939-76 pairs among `entries` (room for every entry reserved at create()).
+  std::vector<ScheduledEntry*> pairs;
+  /// Frames waiting for a pending SDM of their PGN, SA and DA (emit()); fixed room, no allocation.
+  std::array<HeldFrame, HELD_CAPACITY> held{};
+  std::size_t heldCount{};
   std::uint8_t ownAddress{j1939::NULL_ADDRESS};
   std::optional<std::size_t> timeDateMessage;  ///< DBC message with PGN 65254 this node sends
   std::int8_t localHourOffset{};
@@ -272,49 +292,114 @@ struct Scheduler::Impl {
   }
   Keys timeDateKeys;
 
-  void countFailure(std::atomic<std::uint64_t>& counter) noexcept {
+  static void increment(std::atomic<std::uint64_t>& counter) noexcept {
     counter.store(counter.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  }
+
+  // ---- the J1939-76 ordering rule -------------------------------------------------------
+  // A J1939-76 receiver takes the first frame with the PGN, SA and DA its SHM names as the
+  // SDM (j1939::sameSafetyIdentity; the priority is not compared). So between an SHM and its
+  // SDM nothing else with those three may go out on that bus. Every frame other than a pair's
+  // own SHM and SDM reaches the port through emit(), which holds such a frame until the SDM
+  // has gone out; an SHM first sends any pending SDM of its identity (sendHeader()).
+
+  /// The pair whose pending SDM a J1939-76 receiver would confuse `frame` with, or nullptr.
+  ScheduledEntry* pendingLike(std::size_t bus, std::uint32_t canId, bool extended) const noexcept {
+    if (!extended) return nullptr;  // J1939 (and so J1939-76) identifiers are 29-bit
+    for (ScheduledEntry* pair : pairs) {
+      if (pair->sdmPending && pair->config.bus == bus && j1939::sameSafetyIdentity(pair->config.canId, canId)) {
+        return pair;
+      }
+    }
+    return nullptr;
+  }
+
+  Emitted deliver(std::size_t bus, const can::Frame& frame, Outcome outcome) noexcept {
+    const bool sent = port.send(bus, frame) == can::SendStatus::Sent;
+    if (std::atomic<std::uint64_t>* counter = sent ? outcome.sent : outcome.failed) increment(*counter);
+    return sent ? Emitted::Sent : Emitted::Failed;
+  }
+
+  /// Sends `frame` now, or holds it while a pending SDM has its PGN, SA and DA (it then goes
+  /// out right after that SDM, in the order held). When the hold is full the SDM goes out at
+  /// once, before its delta, and the frame after it: never between SHM and SDM, never lost.
+  Emitted emit(std::size_t bus, const can::Frame& frame, Outcome outcome) noexcept {
+    while (ScheduledEntry* pair = pendingLike(bus, frame.id, frame.extended())) {
+      if (heldCount < held.size()) {
+        held[heldCount++] = HeldFrame{bus, frame, outcome};
+        increment(counters.held);
+        return Emitted::Held;
+      }
+      increment(counters.sdmsEarly);
+      sendData(*pair);
+    }
+    return deliver(bus, frame, outcome);
+  }
+
+  /// After an SDM went out: sends the held frames no pending SDM blocks any more, in order.
+  void releaseHeld() noexcept {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < heldCount; ++i) {
+      const HeldFrame& item = held[i];
+      if (pendingLike(item.bus, item.frame.id, item.frame.extended()) != nullptr) {
+        held[kept++] = item;
+      } else {
+        (void)deliver(item.bus, item.frame, item.outcome);
+      }
+    }
+    heldCount = kept;
   }
 
   /// Builds and sends one instance of the message (its SHM when it is a safety SDM).
   void transmit(ScheduledEntry& entry, Payload& payload) noexcept {
     const std::span<const std::uint8_t> bytes(payload.data(), entry.length);
     if (entry.pair) {
-      if (entry.sdmPending) send(entry, entry.sdm);  // never leave an SHM without its SDM
-      const j1939::SafetyPayload header =
-          entry.pair->nextHeader(j1939::SafetyDataView(payload.data(), j1939::SAFETY_MESSAGE_LENGTH));
-      if (port.send(entry.config.bus, frameOf(entry.pair->headerCanId(), true, header)) != can::SendStatus::Sent) {
-        countFailure(entry.stats.sendFailures);
-      }
-      const std::int64_t now = clock.monotonicNs();  // after the SHM left: the delta starts here
-      if (entry.headerMessage) record(*entry.headerMessage, entry.headerKeys, header, entry.sourceAddress, now);
-      entry.sdm = payload;
-      entry.sdmPending = true;
-      entry.shmSentNs = now;
-      entry.sdmDueNs = now + *entry.config.safetyDeltaNs;
+      sendHeader(entry, payload);
       return;
     }
     const std::int64_t now = clock.monotonicNs();
-    if (port.send(entry.config.bus, frameOf(entry.config.canId, entry.config.extended, bytes)) !=
-        can::SendStatus::Sent) {
-      countFailure(entry.stats.sendFailures);
-    }
-    countFailure(entry.stats.frames);
+    (void)emit(entry.config.bus, frameOf(entry.config.canId, entry.config.extended, bytes),
+               Outcome{nullptr, &entry.stats.sendFailures});
+    increment(entry.stats.frames);
     record(entry.config.message, entry.config.keys, bytes, entry.sourceAddress, now);
   }
 
-  /// The SDM of a pair whose SHM went out.
-  void send(ScheduledEntry& entry, const Payload& payload) noexcept {
-    const std::int64_t now = clock.monotonicNs();
-    const std::span<const std::uint8_t> bytes(payload.data(), entry.length);
-    if (port.send(entry.config.bus, frameOf(entry.config.canId, true, bytes)) != can::SendStatus::Sent) {
-      countFailure(entry.stats.sendFailures);
+  /// The SHM of a pair; its SDM (`payload`) becomes pending, due deltaNs after the SHM.
+  void sendHeader(ScheduledEntry& entry, const Payload& payload) noexcept {
+    // One pending SDM per PGN, SA and DA: an earlier pair's SDM, this message's own or
+    // another's with the same identity, goes out first (never leave an SHM without its SDM).
+    for (ScheduledEntry* pair : pairs) {
+      if (pair->sdmPending && pair->config.bus == entry.config.bus &&
+          j1939::sameSafetyIdentity(pair->config.canId, entry.config.canId)) {
+        sendData(*pair);
+      }
     }
-    countFailure(entry.stats.frames);
+    const j1939::SafetyPayload header =
+        entry.pair->nextHeader(j1939::SafetyDataView(payload.data(), j1939::SAFETY_MESSAGE_LENGTH));
+    if (port.send(entry.config.bus, frameOf(entry.pair->headerCanId(), true, header)) != can::SendStatus::Sent) {
+      increment(entry.stats.sendFailures);
+    }
+    const std::int64_t now = clock.monotonicNs();  // after the SHM left: the delta starts here
+    if (entry.headerMessage) record(*entry.headerMessage, entry.headerKeys, header, entry.sourceAddress, now);
+    entry.sdm = payload;
+    entry.sdmPending = true;
+    entry.shmSentNs = now;
+    entry.sdmDueNs = now + *entry.config.safetyDeltaNs;
+  }
+
+  /// The SDM of a pair whose SHM went out; then the frames it held back.
+  void sendData(ScheduledEntry& entry) noexcept {
+    const std::int64_t now = clock.monotonicNs();
+    const std::span<const std::uint8_t> bytes(entry.sdm.data(), entry.length);
+    if (port.send(entry.config.bus, frameOf(entry.config.canId, true, bytes)) != can::SendStatus::Sent) {
+      increment(entry.stats.sendFailures);
+    }
+    increment(entry.stats.frames);
     entry.stats.deltaError.record(now - entry.shmSentNs - *entry.config.safetyDeltaNs);
     entry.sdmPending = false;
     entry.sdmDueNs = NEVER;
     record(entry.config.message, entry.config.keys, bytes, entry.sourceAddress, now);
+    releaseHeld();
   }
 
   void cyclic(ScheduledEntry& entry, std::int64_t nowNs) noexcept {
@@ -392,11 +477,13 @@ Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig
   }
   impl->room = std::max(vehicle.database.messages.size(), schedule.messages.size());
   impl->entries.reserve(impl->room);
+  impl->pairs.reserve(impl->room);
   for (const ScheduledMessage& config : schedule.messages) {
     auto entry = impl->build(config);
     if (!entry) return entry.error();
     if (config.cycleNs > 0) (*entry)->nextNs = startNs + config.offsetNs;
     if (config.onChange) (*entry)->nextCheckNs = startNs + config.offsetNs;
+    if ((*entry)->pair) impl->pairs.push_back(entry->get());
     impl->entries.emplace_back(entry->release());
   }
   return std::unique_ptr<Scheduler>(new Scheduler(std::move(impl)));
@@ -409,7 +496,7 @@ void Scheduler::run(std::int64_t nowNs) noexcept {
   Impl& impl = *m_impl;
   // SDMs first: their deltas are the tightest deadlines.
   for (auto& entry : impl.entries) {
-    if (entry->sdmPending && entry->sdmDueNs <= nowNs) impl.send(*entry, entry->sdm);
+    if (entry->sdmPending && entry->sdmDueNs <= nowNs) impl.sendData(*entry);
   }
   for (auto& entry : impl.entries) {
     if (entry->config.cycleNs > 0 && entry->nextNs <= nowNs) impl.cyclic(*entry, nowNs);
@@ -452,8 +539,7 @@ void Scheduler::setDefault(std::size_t scheduled, std::uint32_t signal, double v
 
 void Scheduler::sendOnce(std::size_t bus, const can::Frame& frame) noexcept {
   Impl& impl = *m_impl;
-  const bool sent = impl.port.send(bus, frame) == can::SendStatus::Sent;
-  impl.countFailure(sent ? impl.counters.oneShots : impl.counters.oneShotFailures);
+  (void)impl.emit(bus, frame, Outcome{&impl.counters.oneShots, &impl.counters.oneShotFailures});
 }
 
 void Scheduler::answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t requester, bool global) noexcept {
@@ -468,8 +554,8 @@ void Scheduler::answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t r
                                    ? impl.vehicle.database.messages[*impl.timeDateMessage].id
                                    : j1939::Id::fromPgn(j1939::PGN_TIME_DATE, 6, impl.ownAddress, j1939::GLOBAL_ADDRESS)
                                          .toCanId();
-      if (impl.port.send(bus, impl.frameOf(id, true, *payload)) == can::SendStatus::Sent) {
-        impl.countFailure(impl.counters.requestsAnswered);
+      if (impl.emit(bus, impl.frameOf(id, true, *payload), Outcome{&impl.counters.requestsAnswered, nullptr}) !=
+          Emitted::Failed) {
         if (impl.timeDateMessage) impl.record(*impl.timeDateMessage, impl.timeDateKeys, *payload, impl.ownAddress, now);
       }
       return;
@@ -482,16 +568,14 @@ void Scheduler::answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t r
     impl.build(*entry, payload);
     impl.compute(*entry, payload);
     impl.transmit(*entry, payload);
-    impl.countFailure(impl.counters.requestsAnswered);
+    impl.increment(impl.counters.requestsAnswered);
     return;
   }
   if (global) return;  // J1939-21: no NACK to a global request
   std::array<std::uint8_t, 8> nack{ACK_NEGATIVE, 0xFF, 0xFF, 0xFF, requester, static_cast<std::uint8_t>(pgn & 0xFF),
                                    static_cast<std::uint8_t>((pgn >> 8) & 0xFF), static_cast<std::uint8_t>(pgn >> 16)};
   const std::uint32_t id = j1939::Id::fromPgn(PGN_ACKNOWLEDGEMENT, 6, impl.ownAddress, j1939::GLOBAL_ADDRESS).toCanId();
-  if (impl.port.send(bus, impl.frameOf(id, true, nack)) == can::SendStatus::Sent) {
-    impl.countFailure(impl.counters.requestsNacked);
-  }
+  (void)impl.emit(bus, impl.frameOf(id, true, nack), Outcome{&impl.counters.requestsNacked, nullptr});
 }
 
 void ScheduledEntryDeleter::operator()(ScheduledEntry* entry) const noexcept { delete entry; }
@@ -505,6 +589,7 @@ bool Scheduler::add(PreparedMessage& message, std::int64_t nowNs) noexcept {
   if (!message || entries.size() >= m_impl->room) return false;
   if (message->config.cycleNs > 0) message->nextNs = nowNs;
   if (message->config.onChange) message->nextCheckNs = nowNs;
+  if (message->pair) m_impl->pairs.push_back(message.get());  // reserved at create() as well
   entries.push_back(std::move(message));  // within the reserved capacity: no allocation
   return true;
 }

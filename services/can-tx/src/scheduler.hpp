@@ -12,6 +12,10 @@
 //   - a J1939-76 SDM: its SHM goes out when the message is due, the SDM (the same bytes the
 //     SHM's CRC covers) deltaNs after the SHM; the sequence number starts at 0 when the
 //     process starts, advances by one per pair and wraps at 32 (receivers resynchronise);
+//   - between an SHM and its SDM nothing else with the SDM's PGN, SA and DA goes out on that
+//     bus (a J1939-76 receiver would take it for the SDM; priority is not compared): such a
+//     frame (cyclic, on change, a one-shot, a request's answer) is held and sent right after
+//     the SDM; a second SHM of that identity first sends the pending SDM;
 //   - the value of each signal: override, else command (signal table), else the schedule's
 //     default, else the DBC initial payload's bits; computed fields after that;
 //   - a message whose send group's signal is 0, or that is disabled, keeps its phase but
@@ -89,6 +93,8 @@ struct SchedulerCounters {
   std::atomic<std::uint64_t> oneShotFailures{};
   std::atomic<std::uint64_t> requestsAnswered{};
   std::atomic<std::uint64_t> requestsNacked{};
+  std::atomic<std::uint64_t> held{};       ///< frames held until a pending SDM of their PGN, SA, DA went out
+  std::atomic<std::uint64_t> sdmsEarly{};  ///< SDMs sent before their delta because the hold was full
 };
 
 /// One scheduled message's state (defined in scheduler.cpp).
@@ -133,7 +139,8 @@ class Scheduler {
   /// The number of messages the scheduler can hold (size() plus what add() may append).
   [[nodiscard]] std::size_t capacity() const noexcept;
 
-  /// Sends a frame other processes asked for, once, now.
+  /// Sends a frame other processes asked for, once, now (or right after a pending SDM with
+  /// its PGN, SA and DA).
   void sendOnce(std::size_t bus, const can::Frame& frame) noexcept;
   /// Answers a J1939 request for `pgn` from `requester` on `bus`: the Time/Date from the
   /// clock, a scheduled message's current frame, else (destination-specific requests) a NACK.

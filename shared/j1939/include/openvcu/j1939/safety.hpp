@@ -45,6 +45,20 @@ using SafetyDataView = std::span<const std::uint8_t, SAFETY_MESSAGE_LENGTH>;
 static_assert(safetyHeaderCanId(0x0CEFF321u) == 0x0C0EF321u);
 static_assert(safetyHeaderCanId(0x0C010305u) == 0x0C0E0305u);
 
+/// The bits of a 29-bit identifier a J1939-76 receiver identifies an SDM by: EDP, DP, PF, PS
+/// and SA, i.e. its PGN, source and destination address. The priority is not among them.
+inline constexpr std::uint32_t SAFETY_IDENTITY_MASK = 0x03FFFFFFu;
+
+/// true when a J1939-76 receiver cannot tell the frames `a` and `b` apart: equal PGN, SA and
+/// DA, whatever their priorities. After the SHM of `a` it takes the next frame `b` as the SDM.
+/// 0x0CEFF321 (S1_ES, priority 3) and 0x18EFF321 (PropA_C4, priority 6) -> true.
+[[nodiscard]] constexpr bool sameSafetyIdentity(std::uint32_t a, std::uint32_t b) noexcept {
+  return ((a ^ b) & SAFETY_IDENTITY_MASK) == 0;
+}
+static_assert(sameSafetyIdentity(0x0CEFF321u, 0x18EFF321u));
+static_assert(!sameSafetyIdentity(0x0CEFF321u, 0x0CEFF421u));  // another SA
+static_assert(!sameSafetyIdentity(0x0CEFF321u, 0x0CEF2121u));  // another DA
+
 /// The fields of an SHM, with the SDM identifier fields already un-inverted.
 struct SafetyHeader {
   std::uint8_t sequence{};          ///< 0..31
