@@ -239,3 +239,33 @@ TEST_CASE("runtimeMessage: any DBC message on a bus joins at a checked cycle, an
   REQUIRE(!refused);
   CHECK(refused.error().message.find("/messages/CCVS1_PGN65265: 'CCVS1_PGN65265' is already") != std::string::npos);
 }
+
+TEST_CASE("issue 18: an SDM and another message of equal PGN, SA and DA are warned about, naming both") {
+  Fixture f;
+  auto schedule = cantx::loadSchedule(f.vehicle, f.catalog);
+  REQUIRE_MESSAGE(schedule, (schedule ? "" : schedule.error().toString()));
+  const auto warnings = cantx::safetyIdentityWarnings(*schedule, f.vehicle);
+  REQUIRE(warnings.size() == 1);
+  CHECK_MESSAGE(warnings[0].starts_with("S1_ES_PGN61427 (0x0CEFF321, J1939-76 SDM) and PropA_C4_PGN61184 (0x18EFF321) "
+                                        "have the same PGN 0xEF00, source 0x21 and destination 0xF3 on bus vehicle"),
+                warnings[0]);
+  // the pairs that include one message: PropA_C4 has one, CMD_SYS_1 none
+  const auto propA = cantx::findScheduled(*schedule, f.vehicle, "PropA_C4_PGN61184");
+  const auto sys1 = cantx::findScheduled(*schedule, f.vehicle, "CMD_SYS_1");
+  REQUIRE(propA);
+  REQUIRE(sys1);
+  CHECK(cantx::safetyIdentityWarnings(*schedule, f.vehicle, *propA).size() == 1);
+  CHECK(cantx::safetyIdentityWarnings(*schedule, f.vehicle, *sys1).empty());
+}
+
+TEST_CASE("issue 18: equal PGN, SA and DA without an SDM, or the SDM alone, is not warned about") {
+  Fixture f;
+  f.vehicle.scheduleFile.clear();  // defaults: S1_ES and PropA_C4 both plain messages
+  auto plain = cantx::loadSchedule(f.vehicle, f.catalog);
+  REQUIRE(plain);
+  CHECK(cantx::safetyIdentityWarnings(*plain, f.vehicle).empty());
+  auto alone = f.load(R"({"exclude": ["PropA_C4_PGN61184"],
+                          "messages": {"S1_ES_PGN61427": {"safety": {"deltaUs": 292}}}})");
+  REQUIRE_MESSAGE(alone, (alone ? "" : alone.error().toString()));
+  CHECK(cantx::safetyIdentityWarnings(*alone, f.vehicle).empty());
+}

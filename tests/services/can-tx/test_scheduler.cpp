@@ -367,3 +367,141 @@ TEST_CASE("ErrorHistogram: percentiles in microseconds, exact maximum, overflow 
   CHECK(summary.p99Us == 150);
   CHECK(summary.maxUs == 5000);
 }
+
+// ---- issue 18: J1939-76 pairs unambiguous on the wire --------------------------------------
+
+namespace {
+
+constexpr std::uint32_t PROPA_C4 = 0x18EFF321;  // not an SDM: S1_ES's PGN 0xEF00, SA 0x21, DA 0xF3 at priority 6
+
+/// Frames a J1939-76 receiver would take for an SDM although they are not one: after each
+/// SHM, the first frame with the PGN, SA and DA the SHM names (priority not compared) is
+/// its SDM; counted when that frame is not one of the schedule's SDMs.
+std::size_t ambiguousFrames(const std::vector<Sent>& sent, const cantx::Schedule& schedule) {
+  std::vector<std::uint32_t> sdms;
+  for (const cantx::ScheduledMessage& message : schedule.messages) {
+    if (message.safetyDeltaNs) sdms.push_back(message.canId);
+  }
+  std::vector<std::uint32_t> waiting;  // identities (29-bit ID without the priority) of SHMs waiting
+  std::size_t ambiguous = 0;
+  for (const Sent& item : sent) {
+    const std::uint32_t identity = item.frame.id & 0x03FFFFFFu;
+    if (j1939::pgnOf(item.frame.id) == j1939::PGN_SAFETY_HEADER) {
+      const auto header = j1939::parseSafetyHeader(item.frame.payload());
+      REQUIRE(header);
+      j1939::Id named;
+      named.extendedDataPage = header->sdmExtendedDataPage;
+      named.dataPage = header->sdmDataPage;
+      named.pduFormat = header->sdmPduFormat;
+      named.pduSpecific = header->sdmPduSpecific;
+      named.sourceAddress = header->sdmSourceAddress;
+      waiting.push_back(named.toCanId() & 0x03FFFFFFu);
+      continue;
+    }
+    const auto found = std::find(waiting.begin(), waiting.end(), identity);
+    if (found == waiting.end()) continue;
+    waiting.erase(found);
+    if (std::find(sdms.begin(), sdms.end(), item.frame.id) == sdms.end()) ++ambiguous;
+  }
+  return ambiguous;
+}
+
+can::Frame extendedFrame(std::uint32_t id, std::uint8_t firstByte) {
+  can::Frame frame;
+  frame.id = id;
+  frame.flags = can::FLAG_EXTENDED;
+  frame.length = 8;
+  frame.data.fill(0xFF);
+  frame.data[0] = firstByte;
+  return frame;
+}
+
+}  // namespace
+
+TEST_CASE("issue 18: PropA_C4, due with the S1_ES SHM, goes out right after the S1_ES SDM, never between") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.start();
+  f.runUntil(START + 999 * MS);
+  CHECK(ambiguousFrames(f.port.sent, f.schedule) == 0);
+  const auto propA = f.port.withId(PROPA_C4);
+  const auto data = f.port.withId(S1_ES);
+  REQUIRE(propA.size() == 50);  // every cycle, none dropped
+  REQUIRE(data.size() == 50);
+  for (std::size_t i = 0; i < propA.size(); ++i) {
+    CHECK(propA[i].atNs == data[i].atNs);  // held for the 292 us of the pair, no longer
+  }
+  for (std::size_t i = 0; i + 1 < f.port.sent.size(); ++i) {
+    if (f.port.sent[i].frame.id == S1_ES_SHM) CHECK(f.port.sent[i + 1].frame.id != PROPA_C4);
+  }
+  CHECK(f.sut->counters().held.load() == 50);
+  CHECK(f.sut->counters().sdmsEarly.load() == 0);
+  CHECK(f.sut->stats(f.scheduledIndex("S1_ES_PGN61427")).deltaError.summary().maxUs == 0);  // the SDM keeps its delta
+}
+
+TEST_CASE("issue 18: a one-shot with a pending SDM's PGN, SA and DA waits for the SDM, any other goes at once") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.start();
+  f.sut->run(START);  // the S1_ES SHM is out, its SDM due 292 us later
+  REQUIRE(f.port.withId(S1_ES_SHM).size() == 1);
+  REQUIRE(f.port.withId(S1_ES).empty());
+  f.port.sent.clear();
+  constexpr std::uint32_t SAME_AT_PRIORITY_7 = 0x1CEFF321;
+  constexpr std::uint32_t OTHER_DESTINATION = 0x18EFF421;
+  f.sut->sendOnce(0, extendedFrame(SAME_AT_PRIORITY_7, 0x01));
+  f.sut->sendOnce(0, extendedFrame(OTHER_DESTINATION, 0x02));
+  f.sut->sendOnce(0, extendedFrame(SAME_AT_PRIORITY_7, 0x03));
+  REQUIRE(f.port.sent.size() == 1);
+  CHECK(f.port.sent[0].frame.id == OTHER_DESTINATION);
+  CHECK(f.sut->counters().oneShots.load() == 1);  // counted when sent
+
+  f.runUntil(START + 1 * MS);
+  std::vector<Sent> sameIdentity;  // what a J1939-76 receiver of S1_ES looks at
+  for (const Sent& item : f.port.sent) {
+    if (j1939::sameSafetyIdentity(item.frame.id, S1_ES)) sameIdentity.push_back(item);
+  }
+  // the SDM at its delta, then the held frames in the order they came (PropA_C4 was held first)
+  REQUIRE(sameIdentity.size() == 4);
+  CHECK(sameIdentity[0].frame.id == S1_ES);
+  CHECK(sameIdentity[0].atNs == START + 292 * US);
+  CHECK(sameIdentity[1].frame.id == PROPA_C4);
+  CHECK(sameIdentity[2].frame.id == SAME_AT_PRIORITY_7);
+  CHECK(sameIdentity[2].frame.data[0] == 0x01);
+  CHECK(sameIdentity[3].frame.id == SAME_AT_PRIORITY_7);
+  CHECK(sameIdentity[3].frame.data[0] == 0x03);
+  for (const Sent& item : sameIdentity) CHECK(item.atNs == START + 292 * US);
+  CHECK(f.sut->counters().oneShots.load() == 3);
+}
+
+TEST_CASE("issue 18: with the hold full the SDM goes out early and the frame after it, nothing is lost") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.start();
+  f.sut->run(START);
+  constexpr std::size_t ONE_SHOTS = 100;  // more than the hold's room
+  for (std::size_t i = 0; i < ONE_SHOTS; ++i) f.sut->sendOnce(0, extendedFrame(PROPA_C4, static_cast<std::uint8_t>(i)));
+  CHECK(ambiguousFrames(f.port.sent, f.schedule) == 0);
+  CHECK(f.sut->counters().sdmsEarly.load() == 1);
+  CHECK(f.port.withId(S1_ES).size() == 1);  // before its delta, at the moment the hold was full
+  f.runUntil(START + 1 * MS);
+  CHECK(f.port.withId(PROPA_C4).size() == ONE_SHOTS + 1);  // the cyclic one too
+  CHECK(f.sut->counters().oneShots.load() == ONE_SHOTS);
+  CHECK(ambiguousFrames(f.port.sent, f.schedule) == 0);
+}
+
+TEST_CASE("issue 18: the checker of these tests counts PropA_C4 sent between the S1_ES SHM and SDM") {
+  can::Frame header = extendedFrame(S1_ES_SHM, 0);
+  const std::array<std::uint8_t, 8> sdmData{0xE3, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF};
+  const auto bytesOfHeader = j1939::buildSafetyHeader(S1_ES, sdmData, 0);
+  std::copy(bytesOfHeader.begin(), bytesOfHeader.end(), header.data.begin());
+  cantx::Schedule declared;
+  cantx::ScheduledMessage s1;
+  s1.canId = S1_ES;
+  s1.safetyDeltaNs = 292 * US;
+  declared.messages.push_back(s1);
+  const std::vector<Sent> oldOrder{{0, header, 0}, {0, extendedFrame(PROPA_C4, 0), 0}, {0, extendedFrame(S1_ES, 0xE3), 0}};
+  const std::vector<Sent> newOrder{{0, header, 0}, {0, extendedFrame(S1_ES, 0xE3), 0}, {0, extendedFrame(PROPA_C4, 0), 0}};
+  CHECK(ambiguousFrames(oldOrder, declared) == 1);
+  CHECK(ambiguousFrames(newOrder, declared) == 0);
+}
