@@ -11,7 +11,8 @@
 #     kernel ends every process it left behind (iox-roudi, services, java, Xvfb), and
 #     --kill-child does the same when ctest kills us on a timeout.
 # Directories under /tmp that the command needs (the build tree) are bound back into the
-# fresh /tmp at the same path with --keep. Supervisor variables that would leak in from
+# fresh /tmp at the same path with --keep. /run/openvcu (command sockets) is a private tmpfs
+# too. Supervisor variables that would leak in from
 # outside (NOTIFY_SOCKET, WATCHDOG_*, JOURNAL_STREAM, OPENVCU_CONFIG) are cleared, and
 # OPENVCU_ISOLATED=1 tells the command it is inside.
 #
@@ -69,6 +70,15 @@ cd "$workdir" 2>/dev/null || true
 ipcmd="$(command -v ip || echo /usr/sbin/ip)"
 "$ipcmd" link set lo up
 "$ipcmd" route add 224.0.0.0/4 dev lo
+
+# Command sockets (docs/design/security.md) live in /run/openvcu: a private tmpfs there, so
+# stacks of parallel tests never meet; without the right to create the mount point, a
+# folder in the private /tmp instead.
+if mkdir -p /run/openvcu 2>/dev/null && mount -t tmpfs -o mode=0755,size=16m openvcu-run /run/openvcu 2>/dev/null; then
+  unset OPENVCU_RUN_DIR
+else
+  export OPENVCU_RUN_DIR=/tmp/openvcu-run
+fi
 
 export OPENVCU_ISOLATED=1
 # Not exec: PID 1 ignores default-action signals and must reap orphans; stay the parent.

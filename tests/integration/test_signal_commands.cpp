@@ -5,7 +5,7 @@
 #include <optional>
 
 #include "integration_support.hpp"
-#include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/ipc/command_socket.hpp"
 
 namespace harness = openvcu::harness;
 namespace ipc = openvcu::ipc;
@@ -68,22 +68,14 @@ TEST_CASE("the owning service refuses a request for an unknown key of its namesp
   SKIP_UNLESS_ISOLATED();
   harness::Harness sut;
   startStack(sut);
-  auto events = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, INSTANCE);
-  REQUIRE_STATUS(events);
-  constexpr std::int64_t REQUEST_ID = 4711;
-  std::optional<ipc::CommandAck> answer;
-  REQUIRE(events
-              ->onAck([&](const ipc::CommandAck& ack) {
-                if (ack.requestId == REQUEST_ID) answer = ack;
-              })
-              .ok());
+  auto client = ipc::CommandClient::connect(INSTANCE);
+  REQUIRE_STATUS(client);
 
-  REQUIRE(events->publish(ipc::CommandRequest{0, REQUEST_ID, "test_integration", ipc::CommandKind::SetSignal,
-                                              "internal.operator.Strat", 1.0, "typo on purpose"}));
-  const auto deadline = std::chrono::steady_clock::now() + harness::READY_TIMEOUT;
-  while (!answer && std::chrono::steady_clock::now() < deadline) events->handle(100ms);
+  auto answer = client->send(ipc::CommandRequest{0, 0, "test_integration", ipc::CommandKind::SetSignal,
+                                                 "internal.operator.Strat", 1.0, "typo on purpose"},
+                             harness::READY_TIMEOUT);
 
-  REQUIRE(answer);
+  REQUIRE_STATUS(answer);
   CHECK_FALSE(answer->accepted);
   CHECK(answer->issuer == "test_integration");
   CHECK(answer->responder == "vcu-fixture-service");

@@ -188,6 +188,14 @@ class CommandTracker {
   std::optional<std::pair<std::int64_t, CommandOutcome>> onAck(const ipc::CommandAck& ack);
   /// Pending requests whose time ran out, now TimedOut (removed from pending).
   std::vector<std::pair<std::int64_t, CommandOutcome>> expire(std::int64_t nowNs);
+  /// Drops a pending request that failed before any answer (not sent, no owner, expired);
+  /// true when it was pending.
+  bool forget(std::int64_t requestId) { return m_pending.erase(requestId) > 0; }
+  /// The monotonic time at which the pending request `requestId` times out (0: not pending).
+  [[nodiscard]] std::int64_t deadlineOf(std::int64_t requestId) const noexcept {
+    const auto found = m_pending.find(requestId);
+    return found == m_pending.end() ? 0 : found->second;
+  }
   [[nodiscard]] std::size_t pending() const noexcept { return m_pending.size(); }
   [[nodiscard]] const std::string& issuer() const noexcept { return m_issuer; }
 

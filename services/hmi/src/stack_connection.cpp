@@ -7,6 +7,7 @@
 #include <QJSEngine>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/ipc/command_socket.hpp"
 
 namespace openvcu::hmi {
 namespace {
@@ -96,6 +97,12 @@ void StackConnection::publishHeartbeat() {
 }
 
 StackConnection::~StackConnection() {
+  {
+    std::lock_guard lock(m_commandMutex);
+    m_commandStop = true;
+  }
+  m_commandWake.notify_all();
+  if (m_commandThread.joinable()) m_commandThread.join();  // at most one command's deadline
   m_notifier.reset();
   if (g_instance == this) g_instance = nullptr;
 }
@@ -165,17 +172,55 @@ void StackConnection::pumpEvents() {
 }
 
 std::int64_t StackConnection::sendCommand(ipc::CommandRequest request) {
-  if (!m_events) {
-    Q_EMIT commandFinished(-1, false, QStringLiteral("not sent: no event bus (") + m_errorString + ")");
-    return -1;
-  }
-  m_commands.prepare(request, signals::monotonicNowNs());
+  const std::int64_t now = signals::monotonicNowNs();
+  m_commands.prepare(request, now);
   request.timestampNs = 0;
-  if (!m_events->publish(request)) {
-    Q_EMIT commandFinished(request.requestId, false, QStringLiteral("not sent: the event bus refused the message"));
-    return -1;
+  request.deadlineNs = m_commands.deadlineOf(request.requestId);  // the tracker's timeout, same clock
+  const std::int64_t id = request.requestId;
+  {
+    std::lock_guard lock(m_commandMutex);
+    m_commandQueue.push_back(std::move(request));
   }
-  return request.requestId;
+  if (!m_commandThread.joinable()) m_commandThread = std::thread([this] { commandWorker(); });
+  m_commandWake.notify_one();
+  return id;
+}
+
+void StackConnection::commandWorker() {
+  std::unique_lock lock(m_commandMutex);
+  while (true) {
+    m_commandWake.wait(lock, [this] { return m_commandStop || !m_commandQueue.empty(); });
+    if (m_commandStop) return;
+    ipc::CommandRequest request = std::move(m_commandQueue.front());
+    m_commandQueue.pop_front();
+    lock.unlock();
+    const std::int64_t id = request.requestId;
+    std::optional<ipc::CommandAck> answer;
+    std::string failure;
+    if (auto client = ipc::CommandClient::connect(m_config.instance); !client) {
+      failure = client.error().message;
+    } else if (auto sent = client->send(std::move(request), std::chrono::nanoseconds(ACK_TIMEOUT_NS)); !sent) {
+      failure = sent.error().message;
+    } else {
+      answer = *sent;
+    }
+    // Back to the GUI thread; dropped by Qt if this object is gone by then.
+    QMetaObject::invokeMethod(
+        this,
+        [this, id, answer = std::move(answer), failure = std::move(failure)] {
+          if (answer) {
+            onAck(*answer);
+          } else {
+            onCommandFailed(id, failure);
+          }
+        },
+        Qt::QueuedConnection);
+    lock.lock();
+  }
+}
+
+void StackConnection::onCommandFailed(std::int64_t requestId, const std::string& reason) {
+  if (m_commands.forget(requestId)) Q_EMIT commandFinished(requestId, false, QString::fromStdString("not applied: " + reason));
 }
 
 void StackConnection::onAck(const ipc::CommandAck& ack) {

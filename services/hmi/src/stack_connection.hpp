@@ -15,8 +15,12 @@
 #include <QString>
 #include <QTimeZone>
 #include <QTimer>
+#include <condition_variable>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "display_logic.hpp"
@@ -91,9 +95,11 @@ class StackConnection : public QObject {
   [[nodiscard]] QString errorString() const { return m_errorString; }
   [[nodiscard]] QString clockText() const { return m_clockText; }
 
-  /// Publishes a command (request id and issuer filled in); the outcome arrives as
-  /// commandFinished(requestId, accepted, text). Returns the request id, or -1 when the
-  /// command could not be sent (then commandFinished is emitted at once with the reason).
+  /// Sends a command through the stack's command sockets (request id, issuer and a deadline
+  /// 2 s ahead filled in; a worker thread connects and waits, the GUI never blocks); the
+  /// outcome arrives as commandFinished(requestId, accepted, text). The service never
+  /// applies it after the deadline, the same instant at which the HMI shows "no answer".
+  /// Returns the request id.
   std::int64_t sendCommand(ipc::CommandRequest request);
 
   /// Dispatches waiting LCM messages now (tests with memq://, which has no readable fd).
@@ -117,6 +123,8 @@ class StackConnection : public QObject {
   void openEvents();
   void attachTable();
   void onAck(const ipc::CommandAck& ack);
+  void onCommandFailed(std::int64_t requestId, const std::string& reason);
+  void commandWorker();
   void expireCommands();
   void everySecond();
   void publishHeartbeat();
@@ -128,6 +136,12 @@ class StackConnection : public QObject {
   std::optional<ipc::EventBus> m_events;
   std::unique_ptr<QSocketNotifier> m_notifier;
   CommandTracker m_commands;
+  // Commands go out one at a time on m_commandThread (connect + wait up to the deadline).
+  std::mutex m_commandMutex;
+  std::condition_variable m_commandWake;
+  std::deque<ipc::CommandRequest> m_commandQueue;
+  bool m_commandStop{false};
+  std::thread m_commandThread;
   QTimer m_displayTimer;
   QTimer m_reconnectTimer;
   ModelStatus::Value m_tableStatus{ModelStatus::NotConnected};

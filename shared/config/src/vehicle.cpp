@@ -104,7 +104,7 @@ class Loader {
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
     m_check.onlyKeys(root, "", {"instance", "node", "dbc", "buses", "fsm", "schedule", "gpio", "simulation",
-                                "receive", "internalSignals", "lcm", "comment"});
+                                "receive", "internalSignals", "lcm", "commandGroup", "comment"});
     instance(root);
     dbcFiles(root);
     node(root);
@@ -112,6 +112,7 @@ class Loader {
     files(root);
     internalSignals(root);
     lcm(root);
+    commandGroup(root);
     gpio();
   }
 
@@ -366,6 +367,19 @@ class Loader {
     if (m_config.gpioFile.empty() || !fs::exists(m_config.gpioFile)) return;
     auto map = loadGpioMap(m_config.gpioFile, m_config.internalSignals, m_otherFiles);
     if (map) m_config.gpio = std::move(*map);
+  }
+
+  void commandGroup(const Json& root) {
+    const auto group = m_check.string(root, "", "commandGroup", false);
+    if (!group) return;
+    const bool valid = !group->empty() && group->size() <= 32 && std::all_of(group->begin(), group->end(), [](char c) {
+      return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+    });
+    if (!valid) {
+      m_check.error("/commandGroup", "must be a Unix group name (1-32 letters, digits, '_' or '-')");
+      return;
+    }
+    m_config.commandGroup = *group;
   }
 
   void lcm(const Json& root) {

@@ -1,4 +1,5 @@
 #include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/ipc/command_socket.hpp"
 
 #include "openvcu/ipc/topics.hpp"
 
@@ -81,11 +82,12 @@ bool toLcm(const CommandRequest& in, openvcu_lcm::command_request_t& out) {
   out.key = in.key;
   out.value = in.value;
   out.text = in.text;
+  out.deadline_ns = in.deadlineNs;
   return true;
 }
 CommandRequest fromLcm(const openvcu_lcm::command_request_t& in) {
   return CommandRequest{in.timestamp_ns, in.request_id, in.issuer, static_cast<CommandKind>(in.kind),
-                        in.key,          in.value,      in.text};
+                        in.key,          in.value,      in.text,   in.deadline_ns};
 }
 
 bool toLcm(const CommandAck& in, openvcu_lcm::command_ack_t& out) {
@@ -95,10 +97,12 @@ bool toLcm(const CommandAck& in, openvcu_lcm::command_ack_t& out) {
   out.responder = in.responder;
   out.accepted = in.accepted;
   out.reason = in.reason;
+  out.owner = in.owner;
   return true;
 }
 CommandAck fromLcm(const openvcu_lcm::command_ack_t& in) {
-  return CommandAck{in.timestamp_ns, in.request_id, in.issuer, in.responder, in.accepted != 0, in.reason};
+  return CommandAck{in.timestamp_ns, in.request_id, in.issuer, in.responder, in.accepted != 0, in.reason,
+                    in.owner != 0};
 }
 
 bool toLcm(const FsmTransition& in, openvcu_lcm::fsm_transition_t& out) {
@@ -203,6 +207,46 @@ void onLcmMessage(const lcm_recv_buf_t* buffer, const char* /*channel*/, void* u
 
 }  // namespace
 
+namespace {
+
+template <typename LcmType, typename Plain>
+std::vector<std::uint8_t> encodeOne(const Plain& message) {
+  LcmType encoded;
+  if (!toLcm(message, encoded)) return {};
+  const int size = encoded.getEncodedSize();
+  std::vector<std::uint8_t> buffer(static_cast<std::size_t>(size));
+  if (encoded.encode(buffer.data(), 0, size) != size) return {};
+  return buffer;
+}
+
+template <typename LcmType>
+auto decodeOne(const void* data, std::size_t size) -> std::optional<decltype(fromLcm(std::declval<LcmType>()))> {
+  if (data == nullptr || size == 0 || size > static_cast<std::size_t>(INT_MAX)) return std::nullopt;
+  try {
+    LcmType decoded;
+    if (decoded.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) return std::nullopt;
+    return fromLcm(decoded);
+  } catch (...) {  // bad_alloc on a hostile length field
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+// Command socket messages (command_socket.hpp) share the event types' encoding.
+std::vector<std::uint8_t> encodeCommandRequest(const CommandRequest& request) {
+  return encodeOne<openvcu_lcm::command_request_t>(request);
+}
+std::optional<CommandRequest> decodeCommandRequest(const void* data, std::size_t size) {
+  return decodeOne<openvcu_lcm::command_request_t>(data, size);
+}
+std::vector<std::uint8_t> encodeCommandAck(const CommandAck& ack) {
+  return encodeOne<openvcu_lcm::command_ack_t>(ack);
+}
+std::optional<CommandAck> decodeCommandAck(const void* data, std::size_t size) {
+  return decodeOne<openvcu_lcm::command_ack_t>(data, size);
+}
+
 struct EventBusImpl {
   struct Entry {
     std::uint64_t id{};
@@ -301,9 +345,6 @@ EventBus::EventBus(EventBus&& other) noexcept = default;
 EventBus& EventBus::operator=(EventBus&& other) noexcept = default;
 EventBus::~EventBus() = default;
 
-bool EventBus::publish(const CommandRequest& message) noexcept {
-  return m_impl->publish<openvcu_lcm::command_request_t>(EventKind::Command, message);
-}
 bool EventBus::publish(const CommandAck& message) noexcept {
   return m_impl->publish<openvcu_lcm::command_ack_t>(EventKind::Ack, message);
 }
@@ -323,9 +364,6 @@ bool EventBus::publish(const SignalSnapshot& message) noexcept {
   return m_impl->publish<openvcu_lcm::signal_snapshot_t>(EventKind::Snapshot, message);
 }
 
-Result<Subscription> EventBus::onCommand(std::function<void(const CommandRequest&)> callback) {
-  return m_impl->subscribe<openvcu_lcm::command_request_t>(EventKind::Command, std::move(callback));
-}
 Result<Subscription> EventBus::onAck(std::function<void(const CommandAck&)> callback) {
   return m_impl->subscribe<openvcu_lcm::command_ack_t>(EventKind::Ack, std::move(callback));
 }

@@ -36,6 +36,28 @@ bool isCustom(const CommandPolicy& policy, ipc::CommandKind kind) noexcept {
   return std::find(policy.customKinds.begin(), policy.customKinds.end(), kind) != policy.customKinds.end();
 }
 
+bool isDeferred(const CommandPolicy& policy, ipc::CommandKind kind) noexcept {
+  return std::find(policy.deferredKinds.begin(), policy.deferredKinds.end(), kind) != policy.deferredKinds.end();
+}
+
+/// Operator intent first: a flood of other commands never delays Start/Stop or a fault reset.
+int priority(ipc::CommandKind kind) noexcept {
+  return kind == ipc::CommandKind::OperatorSwitch || kind == ipc::CommandKind::FaultReset ? 0 : 1;
+}
+
+/// The deadline check (check 0); empty when the request may still be applied at `nowNs`.
+std::optional<std::string> deadlineProblem(const ipc::CommandRequest& request, std::int64_t nowNs) {
+  if (request.deadlineNs <= 0) return std::string("the request carries no deadline; nothing applied");
+  if (nowNs > request.deadlineNs) {
+    return "expired: taken " + std::to_string((nowNs - request.deadlineNs) / 1'000'000) +
+           " ms after its deadline; nothing applied";
+  }
+  if (request.deadlineNs - nowNs > ipc::MAX_COMMAND_HORIZON_NS) {
+    return std::string("the request's deadline is more than 30 s ahead; nothing applied");
+  }
+  return std::nullopt;
+}
+
 bool carriesValue(ipc::CommandKind kind) noexcept {
   return kind == ipc::CommandKind::SetSignal || kind == ipc::CommandKind::SetOverride ||
          kind == ipc::CommandKind::OperatorSwitch || kind == ipc::CommandKind::ScheduleCycle ||
@@ -55,11 +77,10 @@ CommandVerdict refuse(std::string reason, std::optional<signals::SignalIndex> in
   return CommandVerdict{CommandDecision::Refused, std::move(reason), index};
 }
 
-std::string describe(const ipc::CommandRequest& request) {
+std::string describe(const ipc::CommandRequest& request, const std::string& from) {
   std::string text = commandKindName(request.kind) + " " + request.key;
   if (carriesValue(request.kind)) text += " = " + number(request.value);
-  text += " from " + (request.issuer.empty() ? "?" : request.issuer) + " (request " +
-          std::to_string(request.requestId) + ")";
+  text += " from " + from + " (request " + std::to_string(request.requestId) + ")";
   if (!request.text.empty()) text += ", note '" + request.text + "'";
   return text;
 }
@@ -106,6 +127,10 @@ CommandVerdict checkCommand(const ipc::CommandRequest& request, const signals::C
     if (!policy.custom) return refuse(commandKindName(request.kind) + " has no handler in this service");
     return CommandVerdict{CommandDecision::Accepted, {}, {}};
   }
+  if (isDeferred(policy, request.kind)) {
+    if (!policy.defer) return refuse(commandKindName(request.kind) + " has no handler in this service");
+    return CommandVerdict{CommandDecision::Accepted, {}, {}};
+  }
   if (!policy.owns || !policy.owns(request.key)) return CommandVerdict{};
   const auto found = catalog.find(request.key);
   if (!found) return refuse(found.error().message);
@@ -133,6 +158,14 @@ CommandVerdict checkCommand(const ipc::CommandRequest& request, const signals::C
   return CommandVerdict{CommandDecision::Accepted, {}, index};
 }
 
+bool CommandReply::expired() const noexcept {
+  return ipc::monotonicNs() > m_deadlineNs;
+}
+
+void CommandReply::expire() {
+  finish(std::string("expired: the deadline passed before it could be applied; nothing applied"));
+}
+
 CommandHandler::CommandHandler(const signals::Catalog& catalog, signals::SignalTable& table, ipc::EventBus& events,
                                std::string responder, signals::WriterId writer, CommandPolicy policy, Logger* log)
     : m_catalog(catalog),
@@ -144,15 +177,39 @@ CommandHandler::CommandHandler(const signals::Catalog& catalog, signals::SignalT
       m_log(log) {}
 
 CommandHandler::~CommandHandler() {
-  if (m_subscription) m_events.unsubscribe(ipc::Subscription{*m_subscription});
+  *m_alive = false;
 }
 
-Status CommandHandler::subscribe() {
-  if (m_subscription) return {};
-  auto subscribed = m_events.onCommand([this](const ipc::CommandRequest& request) { handle(request); });
-  if (!subscribed) return subscribed.error();
-  m_subscription = subscribed->id;
+Status CommandHandler::listen(const std::string& instance, const std::string& groupName) {
+  if (m_listener) return {};
+  ipc::CommandListener::Options options;
+  options.instance = instance;
+  options.program = m_responder;
+  options.groupName = groupName;
+  auto listenerResult = ipc::CommandListener::open(std::move(options));
+  if (!listenerResult) return listenerResult.error();
+  m_listener = std::make_unique<ipc::CommandListener>(std::move(*listenerResult));
+  m_batch.reserve(64);
   return {};
+}
+
+int CommandHandler::fd() const noexcept {
+  return m_listener ? m_listener->fd() : -1;
+}
+
+void CommandHandler::onReadable() {
+  if (!m_listener) return;
+  m_batch.clear();
+  m_listener->poll(m_batch);
+  std::stable_sort(m_batch.begin(), m_batch.end(), [](const ipc::ReceivedCommand& a, const ipc::ReceivedCommand& b) {
+    return priority(a.request.kind) < priority(b.request.kind);
+  });
+  for (const ipc::ReceivedCommand& received : m_batch) {
+    const std::string from = (received.request.issuer.empty() ? std::string("?") : received.request.issuer) +
+                             ", uid " + std::to_string(received.peer.uid) + " pid " +
+                             std::to_string(received.peer.pid);
+    decide(received.request, received.connection, from);
+  }
 }
 
 bool CommandHandler::apply(const ipc::CommandRequest& request, signals::SignalIndex index) noexcept {
@@ -178,12 +235,43 @@ bool CommandHandler::apply(const ipc::CommandRequest& request, signals::SignalIn
 }
 
 CommandVerdict CommandHandler::handle(const ipc::CommandRequest& request) {
+  return decide(request, std::nullopt, request.issuer.empty() ? std::string("?") : request.issuer);
+}
+
+CommandVerdict CommandHandler::decide(const ipc::CommandRequest& request, std::optional<std::uint64_t> connection,
+                                      const std::string& from) {
   CommandVerdict verdict = checkCommand(request, m_catalog, m_policy);
   if (verdict.decision == CommandDecision::Ignored) {
     ++m_ignored;
+    if (connection && m_listener) {
+      ipc::CommandAck ack{0, request.requestId, request.issuer, m_responder, false, {}, false};
+      (void)m_listener->reply(*connection, ack);
+    }
     return verdict;
   }
-  if (verdict.decision == CommandDecision::Accepted && isCustom(m_policy, request.kind)) {
+  if (auto problem = deadlineProblem(request, ipc::monotonicNs())) {
+    if (request.deadlineNs > 0 && problem->starts_with("expired")) ++m_expired;
+    verdict = CommandVerdict{CommandDecision::Refused, std::move(*problem), verdict.index};
+  } else if (verdict.decision == CommandDecision::Accepted && isDeferred(m_policy, request.kind)) {
+    // Answered later, on this thread, through the reply; unless this handler is gone by then.
+    std::weak_ptr<bool> alive = m_alive;
+    CommandReply reply(
+        [this, alive, request, connection, from](std::optional<std::string> refusal) {
+          if (alive.expired()) return;
+          if (refusal && refusal->starts_with("expired")) ++m_expired;
+          finish(request, connection, from,
+                 refusal ? CommandVerdict{CommandDecision::Refused, std::move(*refusal), {}}
+                         : CommandVerdict{CommandDecision::Accepted, {}, {}});
+        },
+        request.deadlineNs);
+    try {
+      m_policy.defer(request, std::move(reply));
+    } catch (const std::exception& error) {
+      // `reply` was moved into the call: destroyed there unanswered, it refused already.
+      if (m_log != nullptr) m_log->error(std::string("deferred command failed to start: ") + error.what());
+    }
+    return verdict;
+  } else if (verdict.decision == CommandDecision::Accepted && isCustom(m_policy, request.kind)) {
     std::optional<std::string> refusal;
     try {
       refusal = m_policy.custom(request);
@@ -196,19 +284,27 @@ CommandVerdict CommandHandler::handle(const ipc::CommandRequest& request) {
   } else if (verdict.decision == CommandDecision::Accepted && m_policy.applied) {
     m_policy.applied(request, *verdict.index);
   }
+  finish(request, connection, from, verdict);
+  return verdict;
+}
+
+void CommandHandler::finish(const ipc::CommandRequest& request, std::optional<std::uint64_t> connection,
+                            const std::string& from, const CommandVerdict& verdict) {
   const bool accepted = verdict.decision == CommandDecision::Accepted;
   ++(accepted ? m_accepted : m_refused);
-  m_events.publish(ipc::CommandAck{0, request.requestId, request.issuer, m_responder, accepted, verdict.reason});
+  const ipc::CommandAck ack{0, request.requestId, request.issuer, m_responder, accepted, verdict.reason, true};
+  if (connection && m_listener) (void)m_listener->reply(*connection, ack);
+  m_events.publish(ack);
   if (m_log != nullptr) {
+    const std::string text = describe(request, from);
     if (!accepted) {
-      m_log->warning("refused " + describe(request) + ": " + verdict.reason);
+      m_log->warning("refused " + text + ": " + verdict.reason);
     } else if (request.kind == ipc::CommandKind::SetOverride || request.kind == ipc::CommandKind::ClearOverride) {
-      m_log->warning("accepted " + describe(request));  // overrides are always visible in the log
+      m_log->warning("accepted " + text);  // overrides are always visible in the log
     } else {
-      m_log->info("accepted " + describe(request));
+      m_log->info("accepted " + text);
     }
   }
-  return verdict;
 }
 
 }  // namespace openvcu::service

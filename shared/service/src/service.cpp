@@ -38,6 +38,9 @@ Service::Service(ServiceInfo info, ServiceOptions options, ShutdownSignals signa
       m_start(std::chrono::steady_clock::now()) {}
 
 Service::~Service() {
+  // The loop stops watching the command socket before the handler closes it.
+  if (m_commands && m_loop) m_loop->removeFd(m_commands->fd());
+  m_commands.reset();
   m_logger.attachEventBus(nullptr);
 }
 
@@ -133,12 +136,20 @@ Status Service::answerCommands(CommandPolicy policy) {
   if (m_commands) return Error{"answerCommands: this service already answers commands"};
   auto handler = std::make_unique<CommandHandler>(m_catalog, *m_table, *m_events, m_program, m_info.writerId,
                                                   std::move(policy), &m_logger);
-  if (auto subscribed = handler->subscribe(); !subscribed) return subscribed;
+  if (auto listening = handler->listen(m_config.instance, m_config.commandGroup); !listening) return listening;
+  CommandHandler* commands = handler.get();
+  if (auto added = m_loop->addFd(handler->fd(), [commands] { commands->onReadable(); }); !added) return added;
   m_commands = std::move(handler);
+  m_logger.info("commands on " + m_commands->listener()->path() +
+                (m_commands->listener()->groupAccess()
+                     ? " (root, this user and group '" + m_config.commandGroup + "')"
+                     : " (root and this user only: group '" + m_config.commandGroup + "' does not exist)"));
   m_heartbeat->addCounterSource("commands_accepted",
                                 [this] { return static_cast<std::int64_t>(m_commands->accepted()); });
   m_heartbeat->addCounterSource("commands_refused",
                                 [this] { return static_cast<std::int64_t>(m_commands->refused()); });
+  m_heartbeat->addCounterSource("commands_expired",
+                                [this] { return static_cast<std::int64_t>(m_commands->expired()); });
   return {};
 }
 

@@ -8,13 +8,19 @@
 #include <QDir>
 #include <QSignalSpy>
 #include <QTemporaryDir>
+#include <poll.h>
+
+#include <atomic>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "file_browser.hpp"
 #include "frame_trace.hpp"
 #include "hmi_app.hpp"
+#include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "plot_and_trace.hpp"
 #include "schedule_model.hpp"
@@ -53,6 +59,75 @@ std::unique_ptr<StackConnection> openStack(const std::string& dashboard = {}, co
   auto opened = StackConnection::open(settings);
   REQUIRE_MESSAGE(opened, opened.error().toString());
   return std::move(*opened);
+}
+
+/// A real command socket (ipc::CommandListener, in a private temporary folder) standing in
+/// for the stack's services: it records every request and answers with `answer`.
+class FakeCommandService {
+ public:
+  explicit FakeCommandService(const StackConnection& stack, std::string responder) : m_responder(std::move(responder)) {
+    static QTemporaryDir root;
+    ::setenv(ipc::COMMAND_ROOT_ENV, root.path().toStdString().c_str(), 1);
+    ipc::CommandListener::Options options;
+    options.instance = stack.config().instance;
+    options.program = m_responder;
+    auto listener = ipc::CommandListener::open(options);
+    REQUIRE_MESSAGE(listener, listener.error().toString());
+    m_listener.emplace(std::move(*listener));
+    m_thread = std::thread([this] { serve(); });
+  }
+  FakeCommandService(const FakeCommandService&) = delete;
+  FakeCommandService& operator=(const FakeCommandService&) = delete;
+  ~FakeCommandService() {
+    m_stop = true;
+    m_thread.join();
+  }
+  /// Answer the next requests accepted (empty reason) or refused with `reason`.
+  void answer(bool accepted, std::string reason = {}) {
+    std::lock_guard lock(m_mutex);
+    m_accepted = accepted;
+    m_reason = std::move(reason);
+  }
+  std::vector<ipc::CommandRequest> requests() {
+    std::lock_guard lock(m_mutex);
+    return m_requests;
+  }
+
+ private:
+  void serve() {
+    std::vector<ipc::ReceivedCommand> batch;
+    while (!m_stop) {
+      pollfd pfd{m_listener->fd(), POLLIN, 0};
+      if (::poll(&pfd, 1, 20) <= 0) continue;
+      batch.clear();
+      m_listener->poll(batch);
+      for (const ipc::ReceivedCommand& received : batch) {
+        std::lock_guard lock(m_mutex);
+        m_requests.push_back(received.request);
+        (void)m_listener->reply(received.connection,
+                                ipc::CommandAck{0, received.request.requestId, received.request.issuer, m_responder,
+                                                m_accepted, m_reason, true});
+      }
+    }
+  }
+  std::string m_responder;
+  std::optional<ipc::CommandListener> m_listener;
+  std::mutex m_mutex;
+  std::vector<ipc::CommandRequest> m_requests;
+  bool m_accepted{true};
+  std::string m_reason;
+  std::atomic<bool> m_stop{false};
+  std::thread m_thread;
+};
+
+/// Handles Qt events until `done()` (at most 5 s).
+template <typename Done>
+bool deliverUntil(Done done) {
+  for (int i = 0; i < 500 && !done(); ++i) {
+    QCoreApplication::processEvents();
+    ::usleep(10'000);
+  }
+  return done();
 }
 
 void deliver(StackConnection& stack) {
@@ -141,19 +216,16 @@ TEST_CASE("a schedule change is checked here, sent as ScheduleCycle and shown on
   CHECK(sut.setDefault(0, "1e9").contains("outside the range"));
   CHECK(sut.setDefault(0, "abc").contains("is not a number"));
   CHECK(sut.setDefault(-1, "1") == "no such row");
-  std::optional<ipc::CommandRequest> seen;
-  REQUIRE(stack->events()->onCommand([&](const ipc::CommandRequest& request) { seen = request; }));
+  FakeCommandService canTx(*stack, "vcu-can-tx");
   CHECK(sut.setCycle(0, "50").isEmpty());
-  deliver(*stack);
-  REQUIRE(seen);
-  CHECK(seen->kind == ipc::CommandKind::ScheduleCycle);
-  CHECK(seen->key == message.toStdString());
-  CHECK(seen->value == 50);
-  CHECK(seen->issuer == "vcu-hmi");
-  stack->events()->publish(ipc::CommandAck{
-      .requestId = seen->requestId, .issuer = "vcu-hmi", .responder = "vcu-can-tx", .accepted = true, .reason = {}});
-  deliver(*stack);
-  CHECK(sut.data(sut.index(0), ScheduleModel::CycleRole).toInt() == 50);
+  REQUIRE(deliverUntil([&] { return sut.data(sut.index(0), ScheduleModel::CycleRole).toInt() == 50; }));
+  const auto seen = canTx.requests();
+  REQUIRE(seen.size() == 1);
+  CHECK(seen[0].kind == ipc::CommandKind::ScheduleCycle);
+  CHECK(seen[0].key == message.toStdString());
+  CHECK(seen[0].value == 50);
+  CHECK(seen[0].issuer == "vcu-hmi");
+  CHECK(seen[0].deadlineNs > 0);
   CHECK(sut.lastResult().contains("accepted by vcu-can-tx"));
 }
 
@@ -172,20 +244,16 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   CHECK(sut.addMessage("HVESSD2_PGN61586", "100").contains("unknown message"));
   CHECK(sut.addMessage("CCVS1_PGN65265", "100").contains("already in the schedule"));
   CHECK(sut.addMessage("HVESSD2_PGN61585", "0").contains("1..60000"));
-  std::optional<ipc::CommandRequest> seen;
-  REQUIRE(stack->events()->onCommand([&](const ipc::CommandRequest& request) { seen = request; }));
+  FakeCommandService canTx(*stack, "vcu-can-tx");
   CHECK(sut.addMessage("HVESSD2_PGN61585", "40").isEmpty());
-  deliver(*stack);
-  REQUIRE(seen);
-  CHECK(seen->kind == ipc::CommandKind::ScheduleAdd);
-  CHECK(seen->key == "HVESSD2_PGN61585");
-  CHECK(seen->value == 40);
-  seen.reset();
+  REQUIRE(deliverUntil([&] { return canTx.requests().size() == 1; }));
+  CHECK(canTx.requests()[0].kind == ipc::CommandKind::ScheduleAdd);
+  CHECK(canTx.requests()[0].key == "HVESSD2_PGN61585");
+  CHECK(canTx.requests()[0].value == 40);
   CHECK(sut.setEnabled(ccvs, false).isEmpty());
-  deliver(*stack);
-  REQUIRE(seen);
-  CHECK(seen->kind == ipc::CommandKind::ScheduleEnable);
-  CHECK(seen->value == 0);
+  REQUIRE(deliverUntil([&] { return canTx.requests().size() == 2; }));
+  CHECK(canTx.requests()[1].kind == ipc::CommandKind::ScheduleEnable);
+  CHECK(canTx.requests()[1].value == 0);
 
   // can-tx's heartbeat: CCVS1 at 50 ms and disabled, HVESSD2 added at 40 ms
   const int before = sut.rowCount();
@@ -222,20 +290,17 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
 TEST_CASE("a refused command shows the responder's reason") {
   auto stack = openStack();
   QSignalSpy finished(stack.get(), &StackConnection::commandFinished);
-  std::optional<ipc::CommandRequest> seen;
-  REQUIRE(stack->events()->onCommand([&](const ipc::CommandRequest& request) { seen = request; }));
+  FakeCommandService fsm(*stack, "vcu-fsm");
+  fsm.answer(false, "no");
   ipc::CommandRequest request;
   request.kind = ipc::CommandKind::SetSignal;
   request.key = "internal.operator.StartStop";
   request.value = 1;
   const std::int64_t id = stack->sendCommand(request);
-  deliver(*stack);
-  REQUIRE(seen);
-  CHECK(seen->requestId == id);
-  stack->events()->publish(
-      ipc::CommandAck{.requestId = id, .issuer = "vcu-hmi", .responder = "vcu-fsm", .accepted = false, .reason = "no"});
-  deliver(*stack);
-  REQUIRE(finished.count() == 1);
+  REQUIRE(deliverUntil([&] { return finished.count() == 1; }));
+  REQUIRE(fsm.requests().size() == 1);
+  CHECK(fsm.requests()[0].requestId == id);
+  CHECK(finished.at(0).at(0).toLongLong() == id);
   CHECK(finished.at(0).at(1).toBool() == false);
   CHECK(finished.at(0).at(2).toString() == "refused by vcu-fsm: no");
 }

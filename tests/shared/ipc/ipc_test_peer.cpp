@@ -89,9 +89,8 @@ int echoEvents(const std::string& url, const std::string& instance, const std::s
   ipc::EventBus& out = *outResult;
   std::uint64_t seen = 0;
   bool ok = true;
-  ok = ok && in.onCommand([&](const ipc::CommandRequest& m) {
+  ok = ok && in.onAck([&](const ipc::CommandAck& m) {
                  out.publish(m);
-                 in.publish(ipc::CommandAck{0, m.requestId, m.issuer, "ipc_test_peer", true, ""});
                  ++seen;
                }).ok();
   ok = ok && in.onFsmTransition([&](const ipc::FsmTransition& m) {

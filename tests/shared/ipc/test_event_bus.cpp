@@ -7,6 +7,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/topics.hpp"
@@ -74,14 +75,18 @@ TEST_CASE("the bus name hash is FNV-1a 32 bit and stable") {
 TEST_CASE("every event type survives the trip through LCM's encoding unchanged") {
   ipc::EventBus sut = openMemq();
 
+  // Requests travel on command sockets, in the same encoding (command_socket.hpp).
   const ipc::CommandRequest command{SOME_TIME_NS, 42,  "vcu-hmi",      ipc::CommandKind::SetOverride,
-                                    "PDU.Relay1", 1.5, "commissioning"};
-  CHECK(roundTrip(
-            sut, [&](auto cb) { return sut.onCommand(cb); }, command) == command);
+                                    "PDU.Relay1", 1.5, "commissioning", 987654321};
+  const auto commandBytes = ipc::encodeCommandRequest(command);
+  CHECK(ipc::decodeCommandRequest(commandBytes.data(), commandBytes.size()) == command);
 
   const ipc::CommandAck ack{SOME_TIME_NS, 42, "vcu-hmi", "vcu-fsm", false, "override forbidden in Driving"};
   CHECK(roundTrip(
             sut, [&](auto cb) { return sut.onAck(cb); }, ack) == ack);
+  const ipc::CommandAck notMine{SOME_TIME_NS, 43, "vcu", "vcu-gpio", false, "", false};
+  const auto ackBytes = ipc::encodeCommandAck(notMine);
+  CHECK(ipc::decodeCommandAck(ackBytes.data(), ackBytes.size()) == notMine);
 
   const ipc::FsmTransition transition{SOME_TIME_NS, "Standby", "Precharge", "operator Start"};
   CHECK(roundTrip(
@@ -117,10 +122,21 @@ TEST_CASE("empty arrays, empty strings and unknown command kinds are carried as 
             sut, [&](auto cb) { return sut.onSnapshot(cb); }, none) == none);
   constexpr auto UNKNOWN_KIND = static_cast<ipc::CommandKind>(99);
   const ipc::CommandRequest future{SOME_TIME_NS, 1, "vcu", UNKNOWN_KIND, "k", 0.0, ""};
-  const auto received = roundTrip(
-      sut, [&](auto cb) { return sut.onCommand(cb); }, future);
+  const auto bytes = ipc::encodeCommandRequest(future);
+  const auto received = ipc::decodeCommandRequest(bytes.data(), bytes.size());
   REQUIRE(received);
   CHECK(received->kind == UNKNOWN_KIND);
+}
+
+TEST_CASE("a command message that is cut, padded or of another type does not decode") {
+  const ipc::CommandRequest request{SOME_TIME_NS, 7, "vcu", ipc::CommandKind::SetSignal, "internal.x", 1.0, "", 5};
+  auto bytes = ipc::encodeCommandRequest(request);
+  CHECK_FALSE(ipc::decodeCommandRequest(bytes.data(), bytes.size() - 1));
+  bytes.push_back(0);
+  CHECK_FALSE(ipc::decodeCommandRequest(bytes.data(), bytes.size()));
+  const auto ackBytes = ipc::encodeCommandAck(ipc::CommandAck{SOME_TIME_NS, 7, "vcu", "vcu-fsm", true, ""});
+  CHECK_FALSE(ipc::decodeCommandRequest(ackBytes.data(), ackBytes.size()));
+  CHECK_FALSE(ipc::decodeCommandRequest(nullptr, 0));
 }
 
 TEST_CASE("publishing stamps the current time into a zero timestamp and keeps a given one") {

@@ -14,6 +14,7 @@
 #include <optional>
 
 #include "harness.hpp"
+#include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/runtime.hpp"
@@ -52,20 +53,51 @@ ipc::EventBus openMemq(const std::string& instance) {
   return std::move(*eventsResult);
 }
 
-/// The handler, a table and an in-process bus; acks land in `acks`.
+/// The handler on its real command socket (in the sandbox's /tmp), a table and an
+/// in-process bus; a raw client connection sends requests; decided answers land in `acks`,
+/// "not mine" answers in `notOwner`.
 struct HandlerBench {
   HandlerBench()
       : catalog(service::testing::makeCatalog()),
         table(openTable(catalog, "svc-handler")),
         events(openMemq("svc-handler")),
         sut(catalog, table, events, "vcu-demo", WRITER, service::CommandPolicy::byPrefix("internal.")) {
-    REQUIRE_STATUS(sut.subscribe());
-    REQUIRE(events.onAck([this](const ipc::CommandAck& ack) { acks.push_back(ack); }).ok());
+    ::setenv(ipc::COMMAND_ROOT_ENV, "/tmp/openvcu-run", 1);
+    REQUIRE_STATUS(sut.listen("svc-handler", "openvcu"));
+    client = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::strncpy(address.sun_path, sut.listener()->path().c_str(), sizeof(address.sun_path) - 1);
+    REQUIRE(::connect(client, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) == 0);
   }
-  void send(ipc::CommandKind kind, const std::string& key, double value, std::int64_t requestId = 1) {
-    REQUIRE(events.publish(ipc::CommandRequest{0, requestId, "test", kind, key, value, ""}));
-    events.handleAll();  // the request: the handler answers
-    events.handleAll();  // the answer
+  HandlerBench(const HandlerBench&) = delete;
+  HandlerBench& operator=(const HandlerBench&) = delete;
+  ~HandlerBench() { ::close(client); }
+
+  /// Sends one request (deadline `deadlineInNs` from now; 0: none) and serves the socket
+  /// until its answer is back.
+  void send(ipc::CommandKind kind, const std::string& key, double value, std::int64_t requestId = 1,
+            std::int64_t deadlineInNs = 2'000'000'000) {
+    const std::int64_t deadline = deadlineInNs == 0 ? 0 : ipc::monotonicNs() + deadlineInNs;
+    sendRaw(ipc::encodeCommandRequest(ipc::CommandRequest{0, requestId, "test", kind, key, value, "", deadline}));
+  }
+  void sendRaw(const std::vector<std::uint8_t>& bytes) {
+    REQUIRE(::send(client, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size()));
+    for (int round = 0; round < 200; ++round) {
+      pollfd pfds[2] = {{sut.fd(), POLLIN, 0}, {client, POLLIN, 0}};
+      REQUIRE(::poll(pfds, 2, 20) >= 0);
+      if ((pfds[0].revents & POLLIN) != 0) sut.onReadable();
+      if ((pfds[1].revents & POLLIN) != 0) {
+        std::vector<std::uint8_t> buffer(ipc::MAX_COMMAND_BYTES);
+        const ssize_t size = ::recv(client, buffer.data(), buffer.size(), 0);
+        REQUIRE(size > 0);
+        const auto ack = ipc::decodeCommandAck(buffer.data(), static_cast<std::size_t>(size));
+        REQUIRE(ack);
+        (ack->owner ? acks : notOwner).push_back(*ack);
+        return;
+      }
+    }
+    FAIL("no answer on the command socket");
   }
   signals::SignalIndex index(const std::string& key) { return *catalog.indexOf(key); }
 
@@ -73,7 +105,9 @@ struct HandlerBench {
   signals::SignalTable table;
   ipc::EventBus events;
   service::CommandHandler sut;
+  int client{-1};
   std::vector<ipc::CommandAck> acks;
+  std::vector<ipc::CommandAck> notOwner;
 };
 
 /// A datagram socket in the sandbox's /tmp standing in for systemd; NOTIFY_SOCKET points to it.
@@ -179,15 +213,49 @@ TEST_CASE("a refused command changes nothing and is acknowledged with the reason
   CHECK(bench.sut.refused() == 1);
 }
 
-TEST_CASE("a command for a key the service does not own gets no answer from it") {
+TEST_CASE("a command for a key the service does not own is answered 'not mine' and changes nothing") {
   SKIP_UNLESS_ISOLATED();
   HandlerBench bench;
 
-  bench.send(ipc::CommandKind::SetSignal, "VCU.Command.Enable", 1);
+  bench.send(ipc::CommandKind::SetSignal, "VCU.Command.Enable", 1, 5);
 
   CHECK(bench.acks.empty());
+  REQUIRE(bench.notOwner.size() == 1);
+  CHECK(bench.notOwner[0].requestId == 5);
   CHECK(bench.sut.ignored() == 1);
   CHECK(bench.table.readCommand(bench.index("VCU.Command.Enable"))->updates == 0);
+}
+
+TEST_CASE("a request past its deadline, without one or too far ahead is refused and never applied") {
+  SKIP_UNLESS_ISOLATED();
+  HandlerBench bench;
+  const auto level = bench.index("internal.test.level");
+
+  bench.send(ipc::CommandKind::SetSignal, "internal.test.level", 10, 1, -5'000'000);  // expired 5 ms ago
+  bench.send(ipc::CommandKind::SetSignal, "internal.test.level", 11, 2, 0);           // no deadline
+  bench.send(ipc::CommandKind::SetSignal, "internal.test.level", 12, 3, 120'000'000'000);  // 2 min ahead
+
+  CHECK(bench.table.readCommand(level)->updates == 0);
+  REQUIRE(bench.acks.size() == 3);
+  for (const auto& ack : bench.acks) CHECK_FALSE(ack.accepted);
+  CHECK(bench.acks[0].reason.starts_with("expired: taken "));
+  CHECK(bench.acks[1].reason == "the request carries no deadline; nothing applied");
+  CHECK(bench.acks[2].reason == "the request's deadline is more than 30 s ahead; nothing applied");
+  CHECK(bench.sut.expired() == 1);
+}
+
+TEST_CASE("a malformed message on the command socket is refused and the connection keeps working") {
+  SKIP_UNLESS_ISOLATED();
+  HandlerBench bench;
+
+  bench.sendRaw({0x01, 0x02, 0x03});
+  bench.send(ipc::CommandKind::SetSignal, "internal.test.level", 7, 9);
+
+  REQUIRE(bench.notOwner.empty());
+  REQUIRE(bench.acks.size() == 2);
+  CHECK(bench.acks[0].reason == "malformed request: not one command_request_t");
+  CHECK(bench.acks[1].accepted);
+  CHECK(bench.table.readCommand(bench.index("internal.test.level"))->value == 7);
 }
 
 TEST_CASE("the heartbeat counts on the bus plane of its slot and continues after a restart") {

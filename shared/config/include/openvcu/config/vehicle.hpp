@@ -92,6 +92,9 @@ struct VehicleConfig {
   std::vector<InternalSignal> internalSignals;
   GpioMap gpio;                ///< loaded from gpioFile; empty when not configured
   std::string lcmUrl{DEFAULT_LCM_URL};
+  /// Besides root and the stack's own user, members of this Unix group may command the
+  /// stack (its command sockets are group-owned; docs/design/security.md).
+  std::string commandGroup{"openvcu"};
 
   /// The bus carrying a DBC message, or nullptr.
   [[nodiscard]] const BusConfig* busOf(std::size_t messageIndex) const noexcept;

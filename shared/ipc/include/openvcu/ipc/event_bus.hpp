@@ -5,7 +5,7 @@
 //   auto busResult = ipc::EventBus::open(ipc::DEFAULT_EVENT_URL, "hhea");
 //   if (!busResult) { std::cerr << busResult.error().toString() << '\n'; return 1; }
 //   ipc::EventBus& events = *busResult;
-//   events.onCommand([&](const ipc::CommandRequest& request) { ... });
+//   events.onFsmTransition([&](const ipc::FsmTransition& transition) { ... });
 //   events.publish(ipc::Heartbeat{.service = "vcu-fsm", ...});
 //   // in the main loop: poll/epoll/Waiter on events.fileno(), then events.handle(0ms)
 //
@@ -54,9 +54,10 @@ class EventBus {
   EventBus& operator=(const EventBus&) = delete;
   ~EventBus();
 
+  /// Commands are not events: they go over command sockets (command_socket.hpp); decided
+  /// acks are published here for people and recorders.
   /// Encode and send on this instance's channel. false on failure (counted in
   /// publishFailures()). A 0 timestampNs is replaced by the current CLOCK_REALTIME.
-  bool publish(const CommandRequest& message) noexcept;
   bool publish(const CommandAck& message) noexcept;
   bool publish(const FsmTransition& message) noexcept;
   bool publish(const FaultEvent& message) noexcept;
@@ -67,7 +68,6 @@ class EventBus {
   /// Calls `callback` from handle() for each message on this instance's channel.
   /// A message that does not decode is dropped and counted (decodeErrors()); an exception
   /// leaving a callback is caught and counted (callbackErrors()).
-  Result<Subscription> onCommand(std::function<void(const CommandRequest&)> callback);
   Result<Subscription> onAck(std::function<void(const CommandAck&)> callback);
   Result<Subscription> onFsmTransition(std::function<void(const FsmTransition&)> callback);
   Result<Subscription> onFault(std::function<void(const FaultEvent&)> callback);

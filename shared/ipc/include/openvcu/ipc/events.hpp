@@ -4,7 +4,7 @@
 // EventBus converts). Services use these and never see LCM's generated classes.
 //
 // Channels (INSTANCE = the stack instance in upper case, e.g. "hhea" -> HHEA):
-//   OPENVCU_<INSTANCE>_COMMAND    CommandRequest   openvcu_lcm.command_request_t
+//   (command sockets)             CommandRequest   openvcu_lcm.command_request_t (command_socket.hpp)
 //   OPENVCU_<INSTANCE>_ACK        CommandAck       openvcu_lcm.command_ack_t
 //   OPENVCU_<INSTANCE>_FSM        FsmTransition    openvcu_lcm.fsm_transition_t
 //   OPENVCU_<INSTANCE>_FAULT      FaultEvent       openvcu_lcm.fault_event_t
@@ -60,6 +60,8 @@ struct CommandRequest {
   std::string key;
   double value{};
   std::string text;
+  /// CLOCK_MONOTONIC ns after which the request is never applied (0: none given, refused).
+  std::int64_t deadlineNs{};
   bool operator==(const CommandRequest&) const = default;
 };
 
@@ -75,6 +77,8 @@ struct CommandAck {
   std::string responder;  ///< the service that decided
   bool accepted{};
   std::string reason;  ///< why refused; empty when accepted
+  /// false: the responder does not answer for this command (command sockets only).
+  bool owner{true};
   bool operator==(const CommandAck&) const = default;
 };
 

@@ -1,11 +1,15 @@
 #pragma once
-// Checked operator commands: a service answers the CommandRequests for the keys it owns,
+// Checked operator commands: a service takes CommandRequests from its command socket
+// (ipc::CommandListener: only root, the stack's user and the command group can connect),
 // checks each one before anything changes, applies it to the signal table and answers
-// with exactly one CommandAck (docs/design/ipc.md, "Commands").
+// with exactly one CommandAck on the same connection (decided acks also go to the event bus
+// for people and recorders). docs/design/security.md says who may command and why.
 //
 // Checks, in order (the first failure is the refusal reason):
+//   0. the request carries a deadline (CLOCK_MONOTONIC), it has not passed and it is at most
+//      30 s ahead: a request that waited past its deadline is refused "expired", never applied;
 //   1. the key is owned by this service (policy.owns); otherwise the request is IGNORED:
-//      no ack, another service answers. Ownership goes by key text, so the owner of
+//      the answer says owner = false, another service decides. Ownership goes by key text, so the owner of
 //      "internal." also answers for a mistyped "internal.operator.Strat";
 //   2. the key exists in the catalog ("unknown signal 'X' (did you mean 'Y'?)");
 //   3. the kind is one this service accepts (policy.kinds; unknown kind numbers are refused);
@@ -17,17 +21,20 @@
 //
 //   service::CommandPolicy policy = service::CommandPolicy::byPrefix("internal.operator.");
 //   service::CommandHandler handler(catalog, table, events, "vcu-fsm", FSM_WRITER, policy, &log);
-//   if (auto subscribed = handler.subscribe(); !subscribed) return subscribed.error();
-//   // answers come out of events.handleAll() in the service loop
+//   if (auto listening = handler.listen("hhea", "openvcu"); !listening) return listening.error();
+//   loop.addFd(handler.fd(), [&] { handler.onReadable(); });
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "openvcu/core/result.hpp"
+#include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/events.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
@@ -39,6 +46,42 @@ class EventBus;
 namespace openvcu::service {
 
 class Logger;
+
+/// The one answer still owed to a deferred command (CommandPolicy::defer). Move-only; call
+/// accept() or refuse() once, on the loop thread (the one that runs the service's Loop).
+/// Destroyed unanswered, it refuses with "internal error: the command was dropped".
+class CommandReply {
+ public:
+  using Finish = std::function<void(std::optional<std::string> refusal)>;
+  CommandReply(Finish finish, std::int64_t deadlineNs) : m_finish(std::move(finish)), m_deadlineNs(deadlineNs) {}
+  CommandReply(CommandReply&& other) noexcept
+      : m_finish(std::exchange(other.m_finish, nullptr)), m_deadlineNs(other.m_deadlineNs) {}
+  CommandReply& operator=(CommandReply&&) = delete;
+  CommandReply(const CommandReply&) = delete;
+  CommandReply& operator=(const CommandReply&) = delete;
+  ~CommandReply() {
+    if (m_finish) m_finish(std::string("internal error: the command was dropped"));
+  }
+
+  /// The request's deadline (CLOCK_MONOTONIC ns).
+  [[nodiscard]] std::int64_t deadlineNs() const noexcept { return m_deadlineNs; }
+  /// true once CLOCK_MONOTONIC is past the deadline: answer with expire(), apply nothing.
+  [[nodiscard]] bool expired() const noexcept;
+  /// Applied: answers "accepted".
+  void accept() { finish(std::nullopt); }
+  /// Nothing changed: answers "refused: <reason>".
+  void refuse(std::string reason) { finish(std::move(reason)); }
+  /// Past the deadline, nothing applied: answers "expired ...".
+  void expire();
+  [[nodiscard]] bool answered() const noexcept { return !m_finish; }
+
+ private:
+  void finish(std::optional<std::string> refusal) {
+    if (auto call = std::exchange(m_finish, nullptr)) call(std::move(refusal));
+  }
+  Finish m_finish;
+  std::int64_t m_deadlineNs;
+};
 
 /// Which commands a service answers, and what it permits.
 struct CommandPolicy {
@@ -55,6 +98,13 @@ struct CommandPolicy {
   /// when it was applied.
   std::vector<ipc::CommandKind> customKinds;
   std::function<std::optional<std::string>(const ipc::CommandRequest&)> custom;
+  /// Custom kinds decided later, off the command path (vcu-fsm's FsmReload reads and checks a
+  /// file on a worker thread). The request passed checks 1-5 like a custom kind; `defer`
+  /// starts the work and returns at once; the service answers later, on the loop thread,
+  /// through the CommandReply (exactly once). Before applying anything the service must ask
+  /// `reply.expired()`: a request past its deadline is answered "expired" and never applied.
+  std::vector<ipc::CommandKind> deferredKinds;
+  std::function<void(const ipc::CommandRequest&, CommandReply)> defer;
   /// Called after an accepted table command was applied (e.g. to persist it). Optional.
   std::function<void(const ipc::CommandRequest&, signals::SignalIndex)> applied;
 
@@ -83,8 +133,8 @@ struct CommandVerdict {
 [[nodiscard]] CommandVerdict checkCommand(const ipc::CommandRequest& request, const signals::Catalog& catalog,
                                           const CommandPolicy& policy);
 
-/// @note restricted thread-safe: subscribe and handle on the thread that runs the event
-///       bus's handle(). Not movable: the subscription refers to this object.
+/// @note restricted thread-safe: listen, onReadable and handle on the service's loop thread.
+///       Not movable: deferred replies refer to this object.
 class CommandHandler {
  public:
   /// `responder`: the program name put in acks ("vcu-fsm"); `writer`: the writer id of the
@@ -95,20 +145,36 @@ class CommandHandler {
   CommandHandler& operator=(const CommandHandler&) = delete;
   ~CommandHandler();
 
-  /// Subscribes to the instance's command channel; requests are then handled inside
-  /// events.handle()/handleAll().
-  Status subscribe();
+  /// Opens this service's command socket (ipc::CommandListener, <program>.sock of
+  /// `instance`; members of `groupName` may command). Then put fd() into the loop and call
+  /// onReadable() when it is readable.
+  Status listen(const std::string& instance, const std::string& groupName);
+  /// The socket's fd (readable when requests wait), -1 before listen().
+  [[nodiscard]] int fd() const noexcept;
+  /// The listener (after listen()), for its path and counters.
+  [[nodiscard]] const ipc::CommandListener* listener() const noexcept { return m_listener.get(); }
+  /// Takes the requests waiting on the socket (at most one per connection: a flood on one
+  /// connection cannot starve the others), operator commands (OperatorSwitch, FaultReset)
+  /// first, and decides and answers each.
+  void onReadable();
 
-  /// Checks, applies and acknowledges one request (what the subscription calls).
+  /// Decides one request that did not come through the socket (tests, in-process callers):
+  /// checks it (deadline included), applies it and publishes the decided ack on the bus.
   CommandVerdict handle(const ipc::CommandRequest& request);
 
   /// Counters (also reported in the heartbeat when the Service created the handler).
   [[nodiscard]] std::uint64_t accepted() const noexcept { return m_accepted; }
   [[nodiscard]] std::uint64_t refused() const noexcept { return m_refused; }
   [[nodiscard]] std::uint64_t ignored() const noexcept { return m_ignored; }
+  /// Requests refused because they arrived (or their deferred work ended) past their deadline.
+  [[nodiscard]] std::uint64_t expired() const noexcept { return m_expired; }
   [[nodiscard]] const CommandPolicy& policy() const noexcept { return m_policy; }
 
  private:
+  CommandVerdict decide(const ipc::CommandRequest& request, std::optional<std::uint64_t> connection,
+                        const std::string& from);
+  void finish(const ipc::CommandRequest& request, std::optional<std::uint64_t> connection, const std::string& from,
+              const CommandVerdict& verdict);
   bool apply(const ipc::CommandRequest& request, signals::SignalIndex index) noexcept;
 
   const signals::Catalog& m_catalog;
@@ -118,10 +184,13 @@ class CommandHandler {
   signals::WriterId m_writer;
   CommandPolicy m_policy;
   Logger* m_log;
-  std::optional<std::uint64_t> m_subscription;
+  std::unique_ptr<ipc::CommandListener> m_listener;
+  std::vector<ipc::ReceivedCommand> m_batch;
+  std::shared_ptr<bool> m_alive = std::make_shared<bool>(true);  ///< deferred replies check it
   std::uint64_t m_accepted{};
   std::uint64_t m_refused{};
   std::uint64_t m_ignored{};
+  std::uint64_t m_expired{};
 };
 
 }  // namespace openvcu::service

@@ -1,0 +1,163 @@
+#pragma once
+// Commands travel over Unix sockets, never over the network (docs/design/security.md).
+//
+// Each service that answers commands listens on one SOCK_SEQPACKET socket,
+// <root>/<instance>/<program>.sock (root: $OPENVCU_RUN_DIR, default /run/openvcu). The folder
+// is 0750 and the socket 0660, owned by the stack's user and the command group (default
+// `openvcu`; 0700/0600 when the group does not exist), so the kernel lets only root, the
+// stack's user and the group's members connect; the listener checks the peer's credentials
+// (SO_PEERCRED and its groups) once more. One message is one LCM-encoded
+// command_request_t or command_ack_t (shared/ipc/lcm), at most MAX_COMMAND_BYTES.
+//
+// An issuer (CommandClient) connects to every socket of the instance, sends the request to
+// each and takes the answer of the one service that owns the command; the others answer
+// `owner = false`. It believes only answers from a socket served by root or by the owner of
+// the folder, on its own connection, to its own random request id: a forged answer has no
+// way in.
+//
+//   auto clientResult = ipc::CommandClient::connect("hhea");
+//   if (!clientResult) return fail(clientResult.error());            // no stack, no access
+//   auto answer = clientResult->send(request, std::chrono::seconds(2));
+//   if (!answer) return fail(answer.error());                         // nobody decided in time
+//   std::cout << (answer->accepted ? "accepted" : "refused: " + answer->reason);
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "openvcu/core/result.hpp"
+#include "openvcu/ipc/events.hpp"
+
+namespace openvcu::ipc {
+
+/// Where command sockets live unless $OPENVCU_RUN_DIR says otherwise.
+inline constexpr std::string_view DEFAULT_COMMAND_ROOT = "/run/openvcu";
+inline constexpr const char* COMMAND_ROOT_ENV = "OPENVCU_RUN_DIR";
+/// The largest request or answer accepted on a command socket.
+inline constexpr std::size_t MAX_COMMAND_BYTES = 8192;
+/// A request whose deadline lies further ahead than this is refused.
+inline constexpr std::int64_t MAX_COMMAND_HORIZON_NS = 30'000'000'000;
+
+/// $OPENVCU_RUN_DIR, else /run/openvcu.
+[[nodiscard]] std::string commandRoot();
+/// "<commandRoot()>/<instance>".
+[[nodiscard]] std::string commandSocketDir(std::string_view instance);
+
+/// LCM encoding of one request/answer (the .lcm files are the contract). Decoding returns
+/// nothing for a message that is not exactly one well-formed value of the type.
+[[nodiscard]] std::vector<std::uint8_t> encodeCommandRequest(const CommandRequest& request);
+[[nodiscard]] std::optional<CommandRequest> decodeCommandRequest(const void* data, std::size_t size);
+[[nodiscard]] std::vector<std::uint8_t> encodeCommandAck(const CommandAck& ack);
+[[nodiscard]] std::optional<CommandAck> decodeCommandAck(const void* data, std::size_t size);
+
+/// CLOCK_MONOTONIC now, in ns (the clock of deadlineNs).
+[[nodiscard]] std::int64_t monotonicNs() noexcept;
+
+/// Who is at the other end of a Unix socket (SO_PEERCRED).
+struct PeerCredentials {
+  std::int32_t pid{};
+  std::uint32_t uid{};
+  std::uint32_t gid{};
+};
+
+/// The group `name`'s id, or nothing when no such group exists.
+[[nodiscard]] std::optional<std::uint32_t> groupId(const std::string& name);
+
+/// Root, this process's own user, or a member of `group` (primary or supplementary group,
+/// read from /proc/<pid>/status) may command.
+[[nodiscard]] bool mayCommand(const PeerCredentials& peer, std::optional<std::uint32_t> group);
+
+/// One request taken from a connection.
+struct ReceivedCommand {
+  std::uint64_t connection{};
+  PeerCredentials peer;
+  CommandRequest request;
+};
+
+struct CommandListenerImpl;
+
+/// The server side of one service's command socket.
+/// @note restricted thread-safe: everything on one thread (the service's loop).
+class CommandListener {
+ public:
+  struct Options {
+    std::string instance;                ///< isValidName
+    std::string program;                 ///< "vcu-fsm": the socket is <program>.sock
+    std::string groupName{"openvcu"};    ///< the command group
+    std::size_t maxConnections{64};      ///< open connections in all
+    std::size_t maxConnectionsPerUser{16};
+  };
+
+  /// Creates the folder (0750, or 0700 without the group) and the socket (0660/0600).
+  /// Fails when the folder is owned by another user or writable by others, or when a live
+  /// process already serves this socket (the same service running twice).
+  static Result<CommandListener> open(Options options);
+
+  CommandListener(CommandListener&& other) noexcept;
+  CommandListener& operator=(CommandListener&& other) noexcept;
+  CommandListener(const CommandListener&) = delete;
+  CommandListener& operator=(const CommandListener&) = delete;
+  /// Closes every connection and removes the socket (when it is still this one's).
+  ~CommandListener();
+
+  /// Readable while a connection waits to be accepted or a request to be taken.
+  [[nodiscard]] int fd() const noexcept;
+  [[nodiscard]] const std::string& path() const noexcept;
+  /// true when the command group exists (socket 0660) rather than owner-only (0600).
+  [[nodiscard]] bool groupAccess() const noexcept;
+
+  /// Accepts waiting connections (refusing peers that may not command and connections
+  /// beyond the limits, with an answer that says why) and takes at most ONE request from
+  /// each connection that has one, so a flood on one connection waits its turn behind the
+  /// others. Malformed messages are answered "refused: malformed request" here. Appends to
+  /// `out`; never blocks.
+  void poll(std::vector<ReceivedCommand>& out);
+  /// Sends `ack` on `connection`. false when the connection is gone or full.
+  bool reply(std::uint64_t connection, const CommandAck& ack) noexcept;
+
+  [[nodiscard]] std::uint64_t refusedPeers() const noexcept;
+  [[nodiscard]] std::uint64_t malformed() const noexcept;
+  [[nodiscard]] std::size_t connections() const noexcept;
+
+ private:
+  explicit CommandListener(std::unique_ptr<CommandListenerImpl> impl) noexcept;
+  std::unique_ptr<CommandListenerImpl> m_impl;
+};
+
+struct CommandClientImpl;
+
+/// The issuer side: `vcu`, the HMI, the web and telemetry services.
+/// @note not thread-safe; one send at a time. Blocks up to the timeout given to send().
+class CommandClient {
+ public:
+  /// Connects to every command socket of `instance`. Fails with a clear reason when the
+  /// folder is missing (no stack running), not accessible (not root, not in the group) or
+  /// untrustworthy (writable by others), or when no socket answers.
+  static Result<CommandClient> connect(std::string_view instance);
+
+  CommandClient(CommandClient&& other) noexcept;
+  CommandClient& operator=(CommandClient&& other) noexcept;
+  CommandClient(const CommandClient&) = delete;
+  CommandClient& operator=(const CommandClient&) = delete;
+  ~CommandClient();
+
+  /// Sends `request` to every service and waits for the owner's answer. A zero requestId
+  /// becomes a fresh random one; a zero deadlineNs becomes now + `timeout` (an issuer that
+  /// tracks its own timeouts, like the HMI, sets both). An error when no service owns it or
+  /// none answered by the deadline: then nothing was or will be applied.
+  Result<CommandAck> send(CommandRequest request, std::chrono::nanoseconds timeout);
+
+  /// The services connected ("vcu-fsm", ...).
+  [[nodiscard]] std::vector<std::string> services() const;
+
+ private:
+  explicit CommandClient(std::unique_ptr<CommandClientImpl> impl) noexcept;
+  std::unique_ptr<CommandClientImpl> m_impl;
+};
+
+}  // namespace openvcu::ipc
