@@ -235,14 +235,26 @@ void Engine::evaluate(std::int64_t monoNs, std::int64_t realNs) {
       break;
     }
     std::copy(m_conditions.begin(), m_conditions.begin() + static_cast<std::ptrdiff_t>(count), m_held.begin());
+    // Only the machine's own timers: its own writes were read back by refresh() and are no
+    // change, so after a loop guard the next evaluation waits for an input or a deadline.
     m_deadline = m_pendingDeadline;
-    if (chosen == count) return;
+    if (chosen == count) {
+      if (m_looping) {
+        m_looping = false;
+        m_outputs.faults.push_back(ipc::FaultEvent{0, "fsm_loop", "vcu-fsm", ipc::FaultSeverity::Error, false,
+                                                   "settled in '" + stateName() + "'"});
+      }
+      return;
+    }
     if (firing == MAX_FIRINGS) {
       ++m_counters.loopGuards;
-      m_outputs.faults.push_back(ipc::FaultEvent{0, "fsm_loop", "vcu-fsm", ipc::FaultSeverity::Error, true,
-                                                 std::to_string(MAX_FIRINGS) + " transitions in one step, stopped in '" +
-                                                     stateName() + "': the machine does not settle"});
-      m_deadline = monoNs;  // try again at the next step
+      if (!m_looping) {
+        m_looping = true;
+        m_outputs.faults.push_back(ipc::FaultEvent{
+            0, "fsm_loop", "vcu-fsm", ipc::FaultSeverity::Error, true,
+            std::to_string(MAX_FIRINGS) + " transitions in one step, stopped in '" + stateName() +
+                "': the machine does not settle; it waits for an input change or a deadline"});
+      }
       return;
     }
     const Transition& transition = state.transitions[chosen];

@@ -30,7 +30,10 @@ namespace openvcu::fsm {
 
 /// vcu-fsm's writer id in the signal table.
 inline constexpr signals::WriterId FSM_WRITER = 3;
-/// Transitions taken in one step before the loop guard stops it and raises "fsm_loop".
+/// Transitions taken in one step before the loop guard stops it and raises "fsm_loop". The
+/// stopped machine evaluates again only when one of its state's signals changes or one of
+/// its deadlines passes (never because of its own writes), so a machine that does not settle
+/// costs at most MAX_FIRINGS transitions per input change, never a spinning core.
 inline constexpr std::uint32_t MAX_FIRINGS = 32;
 inline constexpr std::int64_t NO_DEADLINE = std::numeric_limits<std::int64_t>::max();
 
@@ -111,7 +114,7 @@ struct EngineCounters {
   std::uint64_t transitions{};  ///< to another state
   std::uint64_t selfTransitions{};
   std::uint64_t commandsWritten{};
-  std::uint64_t loopGuards{};   ///< steps stopped by MAX_FIRINGS
+  std::uint64_t loopGuards{};   ///< evaluations stopped by MAX_FIRINGS
 };
 
 /// @note restricted thread-safe: one thread. step() does not allocate unless a transition
@@ -177,6 +180,7 @@ class Engine {
   std::int64_t m_enteredNs{};
   std::int64_t m_deadline{NO_DEADLINE};
   std::int64_t m_pendingDeadline{NO_DEADLINE};
+  bool m_looping{};  ///< the last evaluation was stopped by the loop guard (fsm_loop raised)
   Outputs m_outputs;
   EngineCounters m_counters;
 };

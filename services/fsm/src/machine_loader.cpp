@@ -10,6 +10,7 @@
 
 #include "machine.hpp"
 #include "machine_checks.hpp"
+#include "machine_cycles.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/core/text.hpp"
@@ -701,6 +702,7 @@ Result<Machine> compile(std::string_view text, const std::string& fileName, cons
   Machine machine = loader.take();
   machine.file = fileName;
   checkMachineGraph(check, machine, catalog, loader.initialDefined());
+  checkSpinningCycles(check, machine, catalog);
   for (State& state : machine.states) collectStateSignals(machine, state);
   if (diagnostics != nullptr) {
     diagnostics->insert(diagnostics->end(), check.diagnostics().begin(), check.diagnostics().end());

@@ -48,12 +48,15 @@ struct Bench {
   [[nodiscard]] double status(const char* key) const { return memory.slot(hhea.key(key)).bus.value; }
 };
 
-/// Two states: A -> B when `condition` holds; B has no way back.
+/// Two states: A -> B when `condition` holds; back to A on a FaultReset, which the way back
+/// consumes (so that A and B cannot take turns forever while FaultReset stays 1: issue 18).
 std::string machineAB(const std::string& condition, const std::string& extra = "") {
   return R"({"initialState": "A", "states": [
     {"name": "A", "transitions": [{"condition": )" +
          condition + extra + R"(, "nextState": "B"}]},
-    {"name": "B", "transitions": [{"condition": {"key": "internal.operator.FaultReset", "eq": 1}, "nextState": "A"}]}]})";
+    {"name": "B", "transitions": [{"condition": {"key": "internal.operator.FaultReset", "eq": 1},
+                                   "actions": [{"signal": "internal.operator.FaultReset", "value": 0}],
+                                   "nextState": "A"}]}]})";
 }
 
 }  // namespace
@@ -274,18 +277,53 @@ TEST_CASE("self-transitions fire on the rising edge, step 6 -> 3 -> 5 at once, a
   CHECK(bench.state() == "Full");
 }
 
-TEST_CASE("the loop guard stops a machine that never settles and raises fsm_loop") {
+TEST_CASE("the loop guard stops a machine that never settles, raises fsm_loop once and waits for an input (#18)") {
   Bench bench;
-  bench.start(R"({"initialState": "A", "states": [
+  // The checker refuses A <-> B on one condition (machine_cycles.hpp); the engine must not
+  // spin even on such a machine, so the cycle is closed after compiling: B -> C becomes B -> A.
+  fsm::Machine machine = bench.hhea.good(R"({"initialState": "A", "states": [
     {"name": "A", "transitions": [{"condition": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "gt": 10}, "nextState": "B"}]},
-    {"name": "B", "transitions": [{"condition": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "gt": 10}, "nextState": "A"}]}]})");
+    {"name": "B", "transitions": [{"condition": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "gt": 10}, "nextState": "C"}]},
+    {"name": "C", "transitions": []}]})");
+  machine.states[1].transitions[0].target = 0;
+  auto slots = fsm::StatusSlots::find(bench.hhea.catalog);
+  REQUIRE(slots);
+  bench.engine.emplace(std::move(machine), bench.hhea.catalog, bench.memory, std::move(*slots));
+  bench.engine->start(bench.now, REALTIME + bench.now, fsm::StartMode::Fresh);
   bench.engine->clearOutputs();
+
   bench.bus(fsmtest::SOC, 20);
   bench.step();
   CHECK(bench.engine->counters().loopGuards == 1);
   CHECK(bench.engine->counters().transitions == fsm::MAX_FIRINGS);
   REQUIRE(bench.engine->outputs().faults.size() == 1);
   CHECK(bench.engine->outputs().faults[0].name == "fsm_loop");
+  CHECK(bench.engine->outputs().faults[0].active);
+  // No deadline and no input change: the stopped machine is not evaluated again, however
+  // often the engine is stepped (its own writes woke the service's thread: no spin).
+  CHECK(bench.engine->nextDeadlineNs() == fsm::NO_DEADLINE);
+  bench.engine->clearOutputs();
+  const std::uint64_t evaluations = bench.engine->counters().evaluations;
+  for (int wake = 0; wake < 100; ++wake) {
+    bench.now += MS;
+    CHECK_FALSE(bench.step());
+  }
+  CHECK(bench.engine->counters().evaluations == evaluations);
+  CHECK(bench.engine->counters().transitions == fsm::MAX_FIRINGS);
+
+  // An input change: at most MAX_FIRINGS + 1 more transitions, the fault is not raised again.
+  bench.bus(fsmtest::SOC, 30);
+  CHECK(bench.step());
+  CHECK(bench.engine->counters().loopGuards == 2);
+  CHECK(bench.engine->counters().transitions <= 2 * fsm::MAX_FIRINGS + 1);
+  CHECK(bench.engine->outputs().faults.empty());
+  // The input that lets it settle clears the fault.
+  bench.bus(fsmtest::SOC, 5);
+  CHECK(bench.step());
+  REQUIRE(bench.engine->outputs().faults.size() == 1);
+  CHECK(bench.engine->outputs().faults[0].name == "fsm_loop");
+  CHECK_FALSE(bench.engine->outputs().faults[0].active);
+  CHECK(bench.engine->counters().loopGuards == 2);
 }
 
 TEST_CASE("only changes of the current state's signals evaluate, equal commands are not rewritten") {

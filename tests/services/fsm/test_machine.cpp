@@ -98,7 +98,8 @@ TEST_CASE("compiled: keys are table indices, value names are numbers, send group
   const fsm::Machine machine = hhea.good(R"({"initialState": "A", "states": [
       {"name": "A", "entry": [{"sendGroup": "keepAlive", "on": true}], "transitions": [
         {"condition": {"key": "internal.operator.StartStop", "eq": "Start"},
-         "actions": [{"signal": "Vehicle_Control_Unit.PDU_Rx_1.Close_GroupA_Contactors", "value": 1}],
+         "actions": [{"signal": "Vehicle_Control_Unit.PDU_Rx_1.Close_GroupA_Contactors", "value": 1},
+                     {"signal": "Vehicle_Control_Unit.BMS.BMS_Control", "value": 1}],
          "nextState": "B"}]},
       {"name": "B", "transitions": [
         {"condition": {"all": [{"key": "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts", "eq": 1},
@@ -218,9 +219,9 @@ TEST_CASE("warnings: unreachable, shadowed, repeated, self-transitions doing not
         {"condition": {"key": "internal.operator.StartStop", "eq": 0}, "nextState": "B"}]},
       {"name": "B", "transitions": [
         {"condition": {"any": [{"key": "internal.operator.StartStop", "eq": 0},
-                               {"key": "internal.operator.StartStop", "eq": 0}]}, "nextState": "A"},
+                               {"key": "internal.operator.StartStop", "eq": 0}]}, "after": "1s", "nextState": "A"},
         {"condition": {"any": [{"key": "internal.operator.StartStop", "eq": 0},
-                               {"key": "internal.operator.StartStop", "eq": 0}]}, "nextState": "A"}]},
+                               {"key": "internal.operator.StartStop", "eq": 0}]}, "after": "1s", "nextState": "A"}]},
       {"name": "Orphan", "transitions": []}]})",
                                    &diagnostics);
   INFO(listing(diagnostics));
