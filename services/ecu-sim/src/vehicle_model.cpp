@@ -149,14 +149,24 @@ void VehicleModel::setFault(Fault fault, bool active) noexcept {
 }
 
 void VehicleModel::receive(const can::Frame& frame, std::int64_t atNs) noexcept {
-  // Exact identifiers, priority included: the HHEA VCU sends two SDMs with the same PGN,
-  // SA and DA (S1_ES at priority 3, PropA_C4 at 6), whose SHMs differ only in priority.
+  // As a J1939-76 receiver: an SHM is PGN 0x0E00 from the SDM's SA to its DA (any priority)
+  // naming this SDM in its bytes; the SDM is the next frame after it with the SDM's PGN, SA
+  // and DA, whatever its priority (j1939::sameSafetyIdentity). HHEA's PropA_C4 (0x18EFF321)
+  // shares S1_ES's (0x0CEFF321): sent between S1_ES's SHM and SDM it is taken for the SDM and
+  // fails the CRC. Without an SHM waiting, only the SDM's own identifier is judged (an SDM
+  // without its SHM: MissingHeader); other frames of its identity are ordinary frames.
   for (Pair& pair : m_pairs) {
-    if (frame.id == pair.headerId) {
+    const std::uint32_t dataId = pair.checker.dataCanId();
+    if (frame.extended() && j1939::sameSafetyIdentity(frame.id, pair.headerId)) {
+      const auto header = j1939::parseSafetyHeader(frame.payload());
+      if (header && !header->matchesData(dataId)) continue;  // another SDM's SHM to the same DA (HVESSC1's)
       pair.checker.onHeader(frame.payload(), atNs);
+      pair.awaitingData = true;
       return;
     }
-    if (frame.id != pair.checker.dataCanId()) continue;
+    const bool next = pair.awaitingData && frame.extended() && j1939::sameSafetyIdentity(frame.id, dataId);
+    if (!next && frame.id != dataId) continue;
+    pair.awaitingData = false;
     std::array<std::uint8_t, 8> data{};
     const std::size_t length = std::min<std::size_t>(frame.length, data.size());
     std::copy_n(frame.data.begin(), length, data.begin());

@@ -2,7 +2,9 @@
 // The HHEA nodes' behaviour on top of the virtual bus, stepped with the time passed in
 // (tests drive it with a fake clock):
 //   VIC/BMS  checks the VCU's J1939-76 pairs (SafetyPairChecker: CRC, sequence, SHM->SDM
-//            time, SHM cycle) and uses Control_Es_Relay only from a good pair; sleeps (falls
+//            time, SHM cycle), taking as the SDM the next frame after the SHM with the
+//            SDM's PGN, SA and DA (priority not compared, as J1939-76 does), and uses
+//            Control_Es_Relay only from a good pair; sleeps (falls
 //            silent) without the keep-alive (CCVS1, HVESSC1, CN) or the wake signal; HV
 //            connection: awaiting -> connecting -> connected (3) / connected for charging
 //            (2, 5) with consent and no fault, disconnecting on 0; pack voltage, current and
@@ -98,6 +100,7 @@ class VehicleModel {
   struct Pair {
     j1939::SafetyPairChecker checker;
     std::uint32_t headerId;
+    bool awaitingData{};  ///< an SHM came: the next frame with the SDM's PGN, SA and DA is the SDM
   };
 
   VehicleModel(VirtualBus& bus, const SimConfig& config) : m_bus(&bus), m_config(&config) {}

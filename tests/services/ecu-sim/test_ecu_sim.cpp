@@ -32,6 +32,8 @@ struct Fixture {
   dbc::DatabaseCodec codecs;
   std::vector<can::Frame> sent;
   std::optional<j1939::SafetyPairBuilder> builder;
+  std::vector<can::Frame> betweenShmAndSdm;  ///< sent after each S1_ES SHM, before its SDM
+  std::vector<can::Frame> afterSdm;          ///< sent right after each S1_ES SDM
 
   Fixture() {
     auto loaded = config::loadVehicleConfig(HHEA);
@@ -86,7 +88,9 @@ struct Fixture {
     std::copy(header.begin(), header.end(), shm.data.begin());
     if (corrupt) data.data[7] ^= 0x01;
     model->receive(shm, at);
+    for (const can::Frame& other : betweenShmAndSdm) model->receive(other, at + 100'000);
     model->receive(data, at + 300'000);
+    for (const can::Frame& other : afterSdm) model->receive(other, at + 300'000);
   }
 
   /// Runs the models and the bus from `from` to `to` in 10 ms steps, feeding the keep-alive.
@@ -165,4 +169,59 @@ TEST_CASE("a battery fault reports 14 and clears to awaiting, the keep-alive los
   CHECK_FALSE(f.model->awake());
   CHECK(ecusim::faultByName("shm_expectation") == ecusim::Fault::ShmExpectation);
   CHECK_FALSE(ecusim::faultByName("batery"));
+}
+
+// ---- issue 18: the VIC finds the SDM as J1939-76 does: by PGN, SA and DA ----------------------
+
+TEST_CASE("issue 18: a frame with S1_ES's PGN, SA and DA between its SHM and SDM is taken as the SDM: a CRC fault") {
+  Fixture f;
+  const can::Frame propA = f.frame("PropA_C4_PGN61184", {});
+  REQUIRE(propA.id == 0x18EFF321u);  // priority 6; S1_ES is 0x0CEFF321, priority 3
+  const can::Frame sdm = f.frame("S1_ES_PGN61427", {{"Control_Es_Relay", 3}});
+  const auto header = f.builder->nextHeader(j1939::SafetyDataView(sdm.data.data(), 8));
+  can::Frame shm;
+  shm.id = f.builder->headerCanId();
+  shm.flags = can::FLAG_EXTENDED;
+  shm.length = 8;
+  std::copy(header.begin(), header.end(), shm.data.begin());
+
+  f.model->receive(shm, T0);
+  f.model->receive(propA, T0 + 100'000);
+  CHECK(f.model->safety().last == j1939::SafetyResult::CrcMismatch);  // PropA_C4 taken as the SDM
+  CHECK(f.model->safety().refused == 1);
+  f.model->receive(sdm, T0 + 300'000);
+  CHECK(f.model->safety().last == j1939::SafetyResult::MissingHeader);  // its SHM was used up
+  CHECK(f.model->safety().refused == 2);
+
+  f.betweenShmAndSdm.push_back(propA);  // every pair so: the VIC never connects
+  f.run(T0 + 20 * MS, T0 + 1000 * MS, 3);
+  CHECK(f.model->connection() == 0);
+  CHECK(f.model->safety().ok == 0);
+}
+
+TEST_CASE("issue 18: the same frame after the SDM is an ordinary frame and the pairs stay good") {
+  Fixture f;
+  f.afterSdm.push_back(f.frame("PropA_C4_PGN61184", {}));
+  f.run(T0, T0 + 1000 * MS, 3);
+  CHECK(f.model->connection() == 1);
+  CHECK(f.model->safety().ok > 40);
+  CHECK(f.model->safety().refused == 0);
+}
+
+TEST_CASE("issue 18: an SHM naming another SDM to the same DA is not taken for S1_ES's, whatever its priority") {
+  Fixture f;
+  // HVESSC1's SHM (PGN 0x1B00 to 0xF3) sent at S1_ES's priority 3: the very identifier of S1_ES's SHM
+  j1939::SafetyPairBuilder hvesscPair(0x0C1BF321u);
+  const can::Frame hvessc = f.frame("HVESSC1_PGN6912", {{"HS_OperConsent", 1}});
+  const auto header = hvesscPair.nextHeader(j1939::SafetyDataView(hvessc.data.data(), 8));
+  can::Frame shm;
+  shm.id = hvesscPair.headerCanId();
+  REQUIRE(shm.id == 0x0C0EF321u);
+  shm.flags = can::FLAG_EXTENDED;
+  shm.length = 8;
+  std::copy(header.begin(), header.end(), shm.data.begin());
+  f.betweenShmAndSdm.push_back(shm);
+  f.run(T0, T0 + 1000 * MS, 3);
+  CHECK(f.model->connection() == 1);
+  CHECK(f.model->safety().refused == 0);
 }
