@@ -1,21 +1,31 @@
 #include "fsm_app.hpp"
 
+#include <sys/eventfd.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <cerrno>
 #include <condition_variable>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <mutex>
 #include <thread>
 
 #include "engine.hpp"
 #include "machine.hpp"
+#include "reload_file.hpp"
 
 namespace openvcu::fsm {
 namespace {
 
 /// The longest the engine thread sleeps without a table change or a deadline: it also
-/// bounds how long stop() and a reload wait.
+/// bounds how long stop() waits.
 constexpr std::chrono::milliseconds LONGEST_SLEEP{250};
-constexpr std::chrono::seconds RELOAD_WAIT{3};
+/// The reload diagnostics quote the file: they go to stderr only (journal), in one burst.
+constexpr std::uint32_t RELOAD_LOG_BURST = 200;
 /// Keys vcu-fsm answers commands for: the internal signals except can-tx's send groups and
 /// vcu-gpio's keys (internal.gpio.* and the signals of input lines).
 constexpr std::string_view OWNED_PREFIX = "internal.";
@@ -46,18 +56,55 @@ struct FsmAppImpl {
   std::atomic<std::int64_t> commands{};
   std::atomic<std::int64_t> loopGuards{};
   std::atomic<std::int64_t> state{};
-  // A reload handed from the loop thread to the engine thread.
+  // A reload (docs/fsm.md "Reload"): the loop thread hands the path to the worker, which
+  // reads and checks the file; back on the loop thread the machine goes to the engine
+  // thread, which switches (or not) and answers; the loop thread answers the command. Each
+  // hand-over back to the loop thread writes reloadFd.
+  std::vector<std::string> folders;        ///< where a reload may read (reload_file.hpp)
+  service::Logger localLog;                ///< stderr only: reload diagnostics quote the file
+  int reloadFd{-1};                        ///< eventfd: the worker or the engine thread finished
+  std::optional<service::CommandReply> reloadReply;  ///< loop thread: the reload in progress
+  std::string switchingFile;                         ///< loop thread: the file handed to the engine
+  std::thread worker;
+  std::mutex workerMutex;
+  std::condition_variable workerWake;
+  bool workerStop{};
+  std::optional<std::string> workerJob;  ///< the path to read
+  struct Loaded {
+    std::optional<Machine> machine;
+    std::string refusal;  ///< when no machine: "PATH: reason" (never the file's content)
+  };
+  std::optional<Loaded> workerResult;
   std::mutex reloadMutex;
-  std::condition_variable reloadDone;
-  std::optional<Machine> pendingMachine;
-  std::optional<Status> reloadResult;
+  std::optional<Machine> pendingMachine;  ///< for the engine thread
+  std::int64_t pendingDeadlineNs{};       ///< the command's deadline: never switched after it
+  struct Switched {
+    bool expired{};
+    Status status;
+  };
+  std::optional<Switched> reloadResult;  ///< from the engine thread
   std::uint64_t reloadRequests{};
 
-  explicit FsmAppImpl(service::Service& service) : runtime(service), access(service.table(), FSM_WRITER) {}
+  explicit FsmAppImpl(service::Service& service)
+      : runtime(service),
+        access(service.table(), FSM_WRITER),
+        localLog(service.program(), service::LoggerOptions{.threshold = ipc::LogLevel::Info,
+                                                           .ratePerSecond = 20.0,
+                                                           .burst = RELOAD_LOG_BURST,
+                                                           .journalFormat = std::getenv("JOURNAL_STREAM") != nullptr}) {}
 
   ~FsmAppImpl() {
-    stopping.store(true);  // the engine thread sees it within LONGEST_SLEEP
+    if (reloadFd >= 0) runtime.loop().removeFd(reloadFd);
+    {
+      std::lock_guard lock(workerMutex);
+      workerStop = true;
+    }
+    workerWake.notify_all();
+    if (worker.joinable()) worker.join();  // it reads a regular file at most: never blocked for long
+    stopping.store(true);                   // the engine thread sees it within LONGEST_SLEEP
     if (thread.joinable()) thread.join();
+    if (reloadReply) reloadReply->refuse("vcu-fsm is stopping; nothing was switched");
+    if (reloadFd >= 0) ::close(reloadFd);
   }
 
   /// Counts a reload request in internal.fsm.reloads, which also wakes the engine thread
@@ -92,10 +139,21 @@ struct FsmAppImpl {
     publishOutputs();
     mirrorCounters();
 
+    folders = reloadFolders(vehicle);
+    reloadFd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (reloadFd < 0) return Error{std::string("eventfd: ") + std::strerror(errno)};
+    if (Status added = runtime.loop().addFd(reloadFd, [this] { onReloadProgress(); }); !added) return added.error();
     if (Status answering = runtime.answerCommands(commandPolicy()); !answering) return answering.error();
     registerCounters();
+    worker = std::thread([this] { runWorker(); });
     thread = std::thread([this] { runEngine(); });
     return {};
+  }
+
+  /// Wakes the loop thread (onReloadProgress); any thread.
+  void signalLoop() const noexcept {
+    const std::uint64_t one = 1;
+    (void)!::write(reloadFd, &one, sizeof one);
   }
 
   // ---- engine thread ----------------------------------------------------------------------
@@ -133,18 +191,67 @@ struct FsmAppImpl {
     }
   }
 
-  /// true when a new machine was taken (or refused) for a pending reload.
+  /// true when a new machine was taken (switched, refused or past its deadline) for a
+  /// pending reload.
   bool takeReload() {
     std::unique_lock lock(reloadMutex);
     if (!pendingMachine) return false;
     Machine machine = std::move(*pendingMachine);
     pendingMachine.reset();
+    const std::int64_t deadline = pendingDeadlineNs;
     lock.unlock();
-    Status result = engine->replace(std::move(machine), signals::monotonicNowNs(), realtimeNs());
+    Switched result;
+    const std::int64_t now = signals::monotonicNowNs();
+    if (now > deadline) {
+      result.expired = true;  // a command past its deadline is never applied
+    } else {
+      result.status = engine->replace(std::move(machine), now, realtimeNs());
+    }
     lock.lock();
     reloadResult = std::move(result);
-    reloadDone.notify_all();
+    lock.unlock();
+    signalLoop();
     return true;
+  }
+
+  // ---- reload worker ----------------------------------------------------------------------
+
+  void runWorker() {
+    std::unique_lock lock(workerMutex);
+    for (;;) {
+      workerWake.wait(lock, [this] { return workerStop || workerJob.has_value(); });
+      if (workerStop) return;
+      const std::string path = std::move(*workerJob);
+      workerJob.reset();
+      lock.unlock();
+      Loaded loaded = load(path);
+      lock.lock();
+      workerResult = std::move(loaded);
+      signalLoop();
+    }
+  }
+
+  /// Reads (reload_file.hpp) and checks the file. The diagnostics quote the file, so they go
+  /// to the local log only; the refusal names the path and counts.
+  Loaded load(const std::string& path) {
+    auto text = readReloadFile(path, folders, RELOAD_MAX_BYTES);
+    if (!text) return Loaded{std::nullopt, text.error().message};
+    std::vector<Error> diagnostics;
+    auto machineResult = parseMachine(*text, path, runtime.config(), runtime.catalog(), &diagnostics);
+    std::size_t errors = 0;
+    for (const Error& diagnostic : diagnostics) {
+      if (diagnostic.severity == Severity::Error) ++errors;
+      localLog.log(diagnostic.severity == Severity::Error ? ipc::LogLevel::Error : ipc::LogLevel::Warning,
+                   "reload: " + diagnostic.toString());
+    }
+    if (!machineResult) {
+      std::string reason = path + ": " + std::to_string(std::max<std::size_t>(errors, 1)) +
+                           (errors > 1 ? " errors" : " error");
+      const Location& first = machineResult.error().location;
+      if (first.line > 0) reason += " (the first at line " + std::to_string(first.line) + ")";
+      return Loaded{std::nullopt, reason + "; details in vcu-fsm's log or from `vcu fsm check " + path + "`"};
+    }
+    return Loaded{std::move(*machineResult), {}};
   }
 
   void publishOutputs() {
@@ -209,34 +316,86 @@ struct FsmAppImpl {
       }
       return std::nullopt;
     };
-    policy.customKinds = {ipc::CommandKind::FsmReload};
-    policy.custom = [this](const ipc::CommandRequest& request) { return reload(request.key); };
+    policy.deferredKinds = {ipc::CommandKind::FsmReload};
+    policy.defer = [this](const ipc::CommandRequest& request, service::CommandReply reply) {
+      startReload(request.key, std::move(reply));
+    };
     return policy;
   }
 
-  /// Loads and checks the file here (the engine keeps running), then hands it to the engine
-  /// thread, which switches between two steps. The reason when refused.
-  std::optional<std::string> reload(const std::string& requested) {
-    const std::string path = requested.empty() ? runtime.config().fsmFile : requested;
-    std::vector<Error> diagnostics;
-    auto machineResult = loadMachine(path, runtime.config(), runtime.catalog(), &diagnostics);
-    if (!machineResult) return machineResult.error().toString() + "; the running machine is kept";
-    report(diagnostics);
-    std::unique_lock lock(reloadMutex);
-    pendingMachine = std::move(*machineResult);
-    reloadResult.reset();
-    ++reloadRequests;
-    lock.unlock();
-    wakeEngine();
-    lock.lock();
-    if (!reloadDone.wait_for(lock, RELOAD_WAIT, [this] { return reloadResult.has_value(); })) {
-      pendingMachine.reset();
-      return "the engine did not take the new machine within " + std::to_string(RELOAD_WAIT.count()) +
-             " s; the running machine is kept";
+  /// Hands the file to the worker and returns at once; one reload at a time.
+  void startReload(const std::string& requested, service::CommandReply reply) {
+    if (reloadReply) {
+      reply.refuse("a reload is already in progress; the running machine is kept");
+      return;
     }
-    if (!*reloadResult) return reloadResult->error().message;
-    runtime.log().info("reloaded " + path);
-    return std::nullopt;
+    std::string path = requested;
+    if (path.empty()) {
+      std::error_code error;
+      path = std::filesystem::absolute(runtime.config().fsmFile, error).lexically_normal().string();
+    }
+    runtime.log().info("reload of " + path + " requested");
+    reloadReply.emplace(std::move(reply));
+    {
+      std::lock_guard lock(workerMutex);
+      workerJob = std::move(path);
+    }
+    workerWake.notify_one();
+  }
+
+  /// Loop thread, when reloadFd is readable: a checked file goes to the engine thread (unless
+  /// the command's deadline passed), the engine's answer goes to the command.
+  void onReloadProgress() {
+    std::uint64_t count = 0;
+    (void)!::read(reloadFd, &count, sizeof count);
+    std::optional<Loaded> loaded;
+    {
+      std::lock_guard lock(workerMutex);
+      loaded = std::move(workerResult);
+      workerResult.reset();
+    }
+    if (loaded && reloadReply) {
+      if (!loaded->machine) {
+        runtime.log().warning("reload refused: " + loaded->refusal);
+        finishReload([&](service::CommandReply& reply) { reply.refuse(loaded->refusal + "; the running machine is kept"); });
+      } else if (reloadReply->expired()) {
+        runtime.log().warning("reload of " + loaded->machine->file + " not switched: its deadline passed");
+        finishReload([](service::CommandReply& reply) { reply.expire(); });
+      } else {
+        switchingFile = loaded->machine->file;
+        std::lock_guard lock(reloadMutex);
+        pendingMachine = std::move(*loaded->machine);
+        pendingDeadlineNs = reloadReply->deadlineNs();
+        reloadResult.reset();
+        ++reloadRequests;
+        wakeEngine();
+      }
+    }
+    std::optional<Switched> switched;
+    {
+      std::lock_guard lock(reloadMutex);
+      switched = std::move(reloadResult);
+      reloadResult.reset();
+    }
+    if (switched && reloadReply) {
+      if (switched->expired) {
+        runtime.log().warning("reload not switched: its deadline passed");
+        finishReload([](service::CommandReply& reply) { reply.expire(); });
+      } else if (!switched->status) {
+        runtime.log().warning("reload refused: " + switched->status.error().message);
+        finishReload([&](service::CommandReply& reply) { reply.refuse(switched->status.error().message); });
+      } else {
+        runtime.log().info("reloaded " + switchingFile);
+        finishReload([](service::CommandReply& reply) { reply.accept(); });
+      }
+    }
+  }
+
+  template <typename Answer>
+  void finishReload(Answer answer) {
+    service::CommandReply reply = std::move(*reloadReply);
+    reloadReply.reset();
+    answer(reply);
   }
 };
 
