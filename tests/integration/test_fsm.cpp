@@ -81,6 +81,7 @@ fs::path copyConfig(const std::string& machine) {
 struct Fixture : ConfiguredStack {
   std::optional<ipc::EventBus> events;
   std::vector<ipc::FsmTransition> transitions;
+  std::vector<ipc::LogRecord> logs;
 
   explicit Fixture(const std::string& machine) : ConfiguredStack(copyConfig(machine)) {
     openTable();
@@ -88,6 +89,7 @@ struct Fixture : ConfiguredStack {
     REQUIRE_STATUS(bus);
     events.emplace(std::move(*bus));
     REQUIRE(events->onFsmTransition([this](const ipc::FsmTransition& transition) { transitions.push_back(transition); }));
+    REQUIRE(events->onLog([this](const ipc::LogRecord& record) { logs.push_back(record); }));
   }
 
   harness::Process& startFsm() { return startService("fsm", FSM); }
@@ -100,6 +102,18 @@ struct Fixture : ConfiguredStack {
 
   void drainEvents() {
     while (events->handle(0ms) == ipc::HandleResult::Handled) {
+    }
+  }
+  /// Waits up to 3 s for a log record (LCM) that contains `part`.
+  bool sawLog(const std::string& part) {
+    const auto end = std::chrono::steady_clock::now() + 3s;
+    for (;;) {
+      drainEvents();
+      for (const ipc::LogRecord& record : logs) {
+        if (contains(record.text, part)) return true;
+      }
+      if (std::chrono::steady_clock::now() >= end) return false;
+      (void)events->handle(100ms);
     }
   }
   /// Waits up to 3 s for a transition whose cause contains `part` (the table shows a new
@@ -167,7 +181,7 @@ TEST_CASE("vcu-fsm SIGKILLed mid-sequence resumes the same state and its running
 TEST_CASE("reload: a bad file is refused and the old machine runs on, a good one switches in place") {
   SKIP_UNLESS_ISOLATED();
   Fixture f(SEQUENCE);
-  f.startFsm();
+  harness::Process& fsm = f.startFsm();
   REQUIRE(f.waitForState(0, 5s));
   const fs::path folder = f.config.parent_path();
   writeFile(folder / "bad.json", R"({"initialState": "Standby", "states": [{"name": "Standby", "transitions": [
@@ -184,6 +198,11 @@ TEST_CASE("reload: a bad file is refused and the old machine runs on, a good one
   // stay in vcu-fsm's own log (issue 18)
   CHECK_MESSAGE(contains(bad.out, "bad.json: 1 error"), bad.describe());
   CHECK_MESSAGE(!contains(bad.out, "StrtStop"), bad.describe());
+  CHECK(fsm.waitForLine("did you mean 'internal.operator.StartStop'", 3s));  // vcu-fsm's stderr
+  CHECK(f.sawLog("reload refused: " + (folder / "bad.json").string()));
+  for (const ipc::LogRecord& record : f.logs) {
+    CHECK_MESSAGE(!contains(record.text, "StrtStop"), record.text);  // nothing of the file on the bus
+  }
   const auto missing = f.vcu({"fsm", "reload", (folder / "without-standby.json").string()});
   CHECK(missing.exitCode() == 1);
   CHECK_MESSAGE(contains(missing.out, "the current state 'Standby' does not exist"), missing.describe());
