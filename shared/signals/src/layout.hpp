@@ -95,8 +95,10 @@ struct alignas(CACHE_LINE_BYTES) WatchEntry {
 static_assert(sizeof(WatchEntry) == CACHE_LINE_BYTES);
 
 /// The segment starts with this header; the slots follow at offset sizeof(TableHeader).
-/// All fields but `magic` and `changeWord` are written once by the creator before it
-/// stores `magic` (release) and are read-only afterwards.
+/// All fields but `magic`, `generation` and `changeWord` are written once by the creator
+/// before it stores `magic` (release) and are read-only afterwards, unless the segment was
+/// damaged (truncated or overwritten): then an attached process writes the same values again
+/// (fault_guard.cpp) through std::atomic_ref and stores `magic` last.
 struct alignas(CACHE_LINE_BYTES) TableHeader {
   AtomicWord magic;                ///< TABLE_MAGIC once the table is complete
   std::uint32_t formatVersion;     ///< SIGNAL_TABLE_FORMAT_VERSION of the creator
@@ -107,6 +109,10 @@ struct alignas(CACHE_LINE_BYTES) TableHeader {
   std::int64_t createdRealtimeNs;  ///< CLOCK_REALTIME at creation
   std::int32_t creatorPid;         ///< for `vcu table status`; may be long gone
   std::uint32_t reserved;
+  /// Non-zero, random per creation and per restoration after damage (std::atomic_ref): an
+  /// attached process that finds another value than the one it attached to knows the values
+  /// were lost meanwhile. Lives in what was padding; tables of older builds hold 0 here.
+  std::uint64_t generation;
   /// Change notification (futex word, on its own cache line): epoch << 1 | waiters flag.
   /// Accessed through std::atomic_ref because the kernel needs a plain 32-bit word.
   alignas(CACHE_LINE_BYTES) std::uint32_t changeWord;
@@ -119,6 +125,8 @@ static_assert(MAX_WATCHES <= 64);  // bits of Plane::watchers
 static_assert(std::is_trivially_destructible_v<TableHeader> && std::is_trivially_destructible_v<Slot>);
 static_assert(std::atomic_ref<std::uint32_t>::is_always_lock_free);
 static_assert(offsetof(TableHeader, changeWord) % std::atomic_ref<std::uint32_t>::required_alignment == 0);
+static_assert(offsetof(TableHeader, generation) == 48 && offsetof(TableHeader, changeWord) == CACHE_LINE_BYTES);
+static_assert(std::atomic_ref<std::uint64_t>::is_always_lock_free);
 
 /// Bytes of a table with `slotCount` slots.
 [[nodiscard]] constexpr std::size_t tableBytes(std::size_t slotCount) noexcept {

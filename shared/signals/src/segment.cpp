@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cinttypes>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include <ctime>
 #include <new>
 
+#include "fault_guard.hpp"
 #include "layout.hpp"
 #include "openvcu/signals/catalog.hpp"
 
@@ -190,6 +192,8 @@ Result<Probe> probeSegment(const Names& names, const Expected& expected) {
   void* base = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, segment.get(), 0);
   if (base == MAP_FAILED) return systemError("cannot map", names.segmentPath, errno);
   Mapping mapping(base, bytes);
+  // Truncated while we look: the reads below see zeros (an incomplete table), not SIGBUS.
+  const ScopedGuard guard(base, bytes, -1);
   // Attachers see the objects the creator constructed in the shared segment.
   const auto* header = std::launder(static_cast<const TableHeader*>(base));
   if (header->magic.load(std::memory_order_acquire) != TABLE_MAGIC) return probe;
@@ -213,7 +217,10 @@ Result<Probe> probeSegment(const Names& names, const Expected& expected) {
   }
   probe.state = SegmentState::Ready;
   probe.reason.clear();
+  probe.generation = std::atomic_ref<std::uint64_t>(const_cast<TableHeader*>(header)->generation)
+                         .load(std::memory_order_acquire);
   probe.mapping = std::move(mapping);
+  probe.segment = std::move(segment);
   return probe;
 }
 
@@ -236,6 +243,9 @@ Result<ino_t> createSegment(const Names& names, const Expected& expected, mode_t
   void* base = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, segment.get(), 0);
   if (base == MAP_FAILED) return systemError("cannot map", names.segmentPath, errno);
   Mapping mapping(base, bytes);
+  // Truncated while we build it: the size is restored and the stores land (the next probe
+  // checks the result like any other table).
+  const ScopedGuard guard(base, bytes, segment.get());
 
   // The pages are zero, which is the valid empty state of every slot; constructing the
   // objects starts their lifetime without changing a byte.
@@ -249,6 +259,7 @@ Result<ino_t> createSegment(const Names& names, const Expected& expected, mode_t
   header->slotBytes = sizeof(Slot);
   header->createdRealtimeNs = clockNs(CLOCK_REALTIME);
   header->creatorPid = static_cast<std::int32_t>(getpid());
+  std::atomic_ref<std::uint64_t>(header->generation).store(freshGeneration(), std::memory_order_relaxed);
   // Last: the magic number says "complete". Release pairs with the attachers' acquire load.
   header->magic.store(TABLE_MAGIC, std::memory_order_release);
 

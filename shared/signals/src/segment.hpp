@@ -91,6 +91,8 @@ enum class SegmentState : std::uint8_t {
 struct Probe {
   SegmentState state{SegmentState::Missing};
   Mapping mapping;     ///< Ready only
+  UniqueFd segment;    ///< Ready only: the segment, read-write (kept to restore its size after damage)
+  std::uint64_t generation{};  ///< Ready only: the header's generation (0: a table of an older build)
   ino_t inode{};       ///< the segment's inode when it exists
   std::string reason;  ///< Missing / Incomplete / Mismatch: a sentence for the user
 };

@@ -9,9 +9,11 @@
 #include <cerrno>
 #include <new>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "fault_guard.hpp"
 #include "layout.hpp"
 #include "notifier.hpp"
 #include "segment.hpp"
@@ -127,7 +129,8 @@ Result<SignalTable> SignalTable::open(const Catalog& catalog, std::string_view i
       if (probe.state == detail::SegmentState::Ready) {
         const bool created = maybeCreatedInode == probe.inode;
         const std::size_t bytes = probe.mapping.bytes();
-        return SignalTable(lock.release(), probe.mapping.release(), bytes, names.display, created);
+        return SignalTable(lock.release(), probe.segment.release(), probe.mapping.release(), bytes, expected.layoutHash,
+                           expected.slotCount, probe.generation, names.display, created);
       }
       if (mode == OpenMode::AttachOnly) return Error{probe.reason};
       if (!detail::tryLockExclusive(lock.get())) {
@@ -151,19 +154,26 @@ Result<SignalTable> SignalTable::open(const Catalog& catalog, std::string_view i
   return Error{"cannot open table '" + names.display + "': it kept being created or reset by other processes"};
 }
 
-SignalTable::SignalTable(int lockFd, void* base, std::size_t bytes, std::string name, bool created) noexcept
+SignalTable::SignalTable(int lockFd, int segmentFd, void* base, std::size_t bytes, std::uint64_t layoutHash,
+                         std::uint32_t slotCount, std::uint64_t generation, std::string name, bool created) noexcept
     : m_lockFd(lockFd),
+      m_segmentFd(segmentFd),
       m_base(base),
       m_bytes(bytes),
       m_header(std::launder(static_cast<detail::TableHeader*>(base))),
       m_slots(std::launder(
           reinterpret_cast<detail::Slot*>(static_cast<unsigned char*>(base) + sizeof(detail::TableHeader)))),
-      m_slotCount(m_header->slotCount),
+      m_slotCount(slotCount),
       m_name(std::move(name)),
-      m_created(created) {}
+      m_created(created) {
+  const detail::GuardedHeader header{layoutHash, slotCount, generation};
+  m_guard = detail::guardMapping(base, bytes, segmentFd, &header);
+}
 
 SignalTable::SignalTable(SignalTable&& other) noexcept
     : m_lockFd(std::exchange(other.m_lockFd, -1)),
+      m_segmentFd(std::exchange(other.m_segmentFd, -1)),
+      m_guard(std::exchange(other.m_guard, nullptr)),
       m_base(std::exchange(other.m_base, nullptr)),
       m_bytes(std::exchange(other.m_bytes, 0)),
       m_header(std::exchange(other.m_header, nullptr)),
@@ -176,6 +186,8 @@ SignalTable& SignalTable::operator=(SignalTable&& other) noexcept {
   if (this != &other) {
     release();
     m_lockFd = std::exchange(other.m_lockFd, -1);
+    m_segmentFd = std::exchange(other.m_segmentFd, -1);
+    m_guard = std::exchange(other.m_guard, nullptr);
     m_base = std::exchange(other.m_base, nullptr);
     m_bytes = std::exchange(other.m_bytes, 0);
     m_header = std::exchange(other.m_header, nullptr);
@@ -192,9 +204,13 @@ SignalTable::~SignalTable() {
 }
 
 void SignalTable::release() noexcept {
+  detail::unguardMapping(m_guard);
   if (m_base != nullptr) munmap(m_base, m_bytes);
+  if (m_segmentFd >= 0) ::close(m_segmentFd);
   if (m_lockFd >= 0) ::close(m_lockFd);  // drops our LOCK_SH: we are no longer attached
+  m_guard = nullptr;
   m_base = nullptr;
+  m_segmentFd = -1;
   m_lockFd = -1;
   m_header = nullptr;
   m_slots = nullptr;
@@ -205,12 +221,13 @@ TableInfo SignalTable::info() const {
   TableInfo info;
   info.name = m_name;
   if (m_header == nullptr) return info;
-  info.formatVersion = m_header->formatVersion;
-  info.layoutHash = m_header->layoutHash;
-  info.slotCount = m_header->slotCount;
+  // atomic_ref: a process restoring a damaged header may write these fields meanwhile.
+  info.formatVersion = std::atomic_ref<std::uint32_t>(m_header->formatVersion).load(std::memory_order_relaxed);
+  info.layoutHash = std::atomic_ref<std::uint64_t>(m_header->layoutHash).load(std::memory_order_relaxed);
+  info.slotCount = std::atomic_ref<std::uint32_t>(m_header->slotCount).load(std::memory_order_relaxed);
   info.bytes = m_bytes;
-  info.createdRealtimeNs = m_header->createdRealtimeNs;
-  info.creatorPid = m_header->creatorPid;
+  info.createdRealtimeNs = std::atomic_ref<std::int64_t>(m_header->createdRealtimeNs).load(std::memory_order_relaxed);
+  info.creatorPid = std::atomic_ref<std::int32_t>(m_header->creatorPid).load(std::memory_order_relaxed);
   info.createdByThisProcess = m_created;
   return info;
 }
@@ -323,6 +340,59 @@ std::uint32_t SignalTable::waitForChange(std::uint32_t lastEpoch, std::chrono::n
   return detail::waitForEpochChange(m_header->changeWord, lastEpoch, timeout);
 }
 
+// ---- damage -----------------------------------------------------------------------------
+
+std::string TableDamage::describe(std::string_view tableName) const {
+  std::string line = "signal table '" + std::string(tableName) + "' was damaged (";
+  std::string facts;
+  const auto add = [&facts](const std::string& fact) { facts += (facts.empty() ? "" : ", ") + fact; };
+  if (foundBytes >= 0) add("truncated to " + std::to_string(foundBytes) + " of " + std::to_string(tableBytes) + " bytes");
+  if (busErrors > 0) add(std::to_string(busErrors) + " bus error" + (busErrors == 1 ? "" : "s") + " absorbed");
+  if (restoredElsewhere) add("restored by another process");
+  if (facts.empty()) add("header overwritten");
+  line += facts + "): ";
+  std::string done;
+  if (sizeRestored) done = "size";
+  if (headerRestored) done += done.empty() ? "header" : " and header";
+  line += done.empty() ? "table whole again" : done + " restored";
+  if (privatePages) line += ", private pages replaced by the table";
+  return line + "; values written before are lost";
+}
+
+std::uint64_t SignalTable::damageCount() const noexcept {
+  if (m_guard == nullptr) return 0;
+  (void)detail::checkHeader(*m_guard);
+  return m_guard->damage.load(std::memory_order_relaxed);
+}
+
+bool SignalTable::damaged() const noexcept {
+  if (m_guard == nullptr) return false;
+  return damageCount() != m_guard->reported.load(std::memory_order_relaxed) ||
+         m_guard->detached.load(std::memory_order_relaxed);
+}
+
+std::optional<TableDamage> SignalTable::checkAndRepair() {
+  if (m_guard == nullptr) return std::nullopt;
+  detail::GuardEntry& guard = *m_guard;
+  (void)detail::restoreSize(guard);
+  (void)detail::reattach(guard);
+  (void)detail::checkHeader(guard);
+  const std::uint64_t damage = guard.damage.load(std::memory_order_relaxed);
+  if (damage == guard.reported.load(std::memory_order_relaxed)) return std::nullopt;
+  guard.reported.store(damage, std::memory_order_relaxed);
+  guard.lastFaultPage.store(0, std::memory_order_relaxed);
+  const std::uint32_t events = guard.events.exchange(0, std::memory_order_relaxed);
+  TableDamage report;
+  report.busErrors = guard.faults.exchange(0, std::memory_order_relaxed);
+  report.foundBytes = guard.foundBytes.exchange(-1, std::memory_order_relaxed);
+  report.tableBytes = m_bytes;
+  report.sizeRestored = (events & detail::EVENT_SIZE_RESTORED) != 0;
+  report.headerRestored = (events & detail::EVENT_HEADER_RESTORED) != 0;
+  report.restoredElsewhere = (events & detail::EVENT_RESTORED_ELSEWHERE) != 0;
+  report.privatePages = (events & detail::EVENT_PRIVATE_PAGES) != 0;
+  return report;
+}
+
 // ---- watches ----------------------------------------------------------------------------
 
 namespace {
@@ -406,12 +476,18 @@ SignalWatch::~SignalWatch() {
 
 void SignalWatch::release() noexcept {
   if (m_header == nullptr || m_entry < 0) return;
-  const std::uint64_t bit = std::uint64_t{1} << m_entry;
-  for (const SignalIndex index : m_indexes) {
-    forEachPlane(m_slots[index], [bit](detail::Plane& plane) { plane.watchers.fetch_and(~bit, std::memory_order_relaxed); });
+  std::atomic_ref<std::int32_t> owner(m_header->watches[static_cast<std::size_t>(m_entry)].ownerPid);
+  std::int32_t self = static_cast<std::int32_t>(::getpid());
+  // After damage wiped the table, the entry may belong to another process's watch: then
+  // neither its bits nor its claim are ours to clear.
+  if (owner.load(std::memory_order_acquire) == self) {
+    const std::uint64_t bit = std::uint64_t{1} << m_entry;
+    for (const SignalIndex index : m_indexes) {
+      forEachPlane(m_slots[index],
+                   [bit](detail::Plane& plane) { plane.watchers.fetch_and(~bit, std::memory_order_relaxed); });
+    }
+    (void)owner.compare_exchange_strong(self, 0, std::memory_order_release, std::memory_order_relaxed);
   }
-  std::atomic_ref<std::int32_t>(m_header->watches[static_cast<std::size_t>(m_entry)].ownerPid)
-      .store(0, std::memory_order_release);
   m_entry = -1;
 }
 

@@ -37,6 +37,7 @@ namespace detail {
 struct TableHeader;
 struct Slot;
 struct Plane;
+struct GuardEntry;
 }  // namespace detail
 
 enum class Quality : std::uint8_t {
@@ -130,6 +131,23 @@ struct TableInfo {
   std::int64_t createdRealtimeNs{};  ///< CLOCK_REALTIME at creation
   std::int32_t creatorPid{};
   bool createdByThisProcess{};  ///< this open() created (or re-created) the table
+};
+
+/// What SignalTable::checkAndRepair() found since its last report (issue 18: the segment
+/// truncated or overwritten under running processes). The table is whole again when it is
+/// reported; the values written before the damage are lost (every slot reads as never
+/// written until its writer writes it again).
+struct TableDamage {
+  std::uint64_t busErrors{};     ///< SIGBUS faults in the table absorbed by this process
+  std::int64_t foundBytes{-1};   ///< the segment's size when this process found it short; -1: not seen short
+  std::size_t tableBytes{};      ///< the size it has again
+  bool sizeRestored{};           ///< this process restored the segment's size
+  bool headerRestored{};         ///< this process wrote the wiped or overwritten header again
+  bool restoredElsewhere{};      ///< another process restored it (this one saw a new generation)
+  bool privatePages{};           ///< some accesses used private zero pages until the segment was mapped again
+  /// One line: "signal table 'openvcu-hhea' was damaged (truncated to 0 of 578688 bytes,
+  /// 3 bus errors absorbed): size and header restored; values written before are lost".
+  [[nodiscard]] std::string describe(std::string_view tableName) const;
 };
 
 /// A mapped signal table. Valid once open() returned it; move-only; unmapping (destructor)
@@ -263,12 +281,38 @@ class SignalTable {
   /// @note start-up only: allocates, walks every slot once.
   SignalWatch watch(std::span<const SignalIndex> indexes);
 
+  // ---- damage (docs/design/signal-table.md, "Damage") ------------------------------------
+  // A truncated segment makes accesses to its lost pages raise SIGBUS. The table library
+  // handles SIGBUS for its mappings: the faulting process restores the segment's size and
+  // header (every process sees the restored, now empty table) and the access completes;
+  // no process is killed. The values are lost: writers must write theirs again.
+
+  /// Changes (grows) whenever this process meets damage: a SIGBUS absorbed in this table, a
+  /// header found wiped or overwritten (restored on the spot), or a restoration by another
+  /// process (a new generation in the header). A consumer that must re-publish its state
+  /// compares it with the value it saw last, e.g. once per loop iteration.
+  /// @note thread-safe; noexcept, lock-free, no system call, a few loads.
+  [[nodiscard]] std::uint64_t damageCount() const noexcept;
+  /// true while damage met by this process has not yet been reported by checkAndRepair().
+  /// @note thread-safe; noexcept, lock-free, no system call.
+  [[nodiscard]] bool damaged() const noexcept;
+  /// Looks for damage and repairs it: restores a short segment's size and the header, maps
+  /// the segment again where private pages stood in, and reports what happened since the
+  /// last call (empty when nothing did). Meant for the service's 1 s heartbeat tick: log
+  /// the report's describe() as one line.
+  /// @note restricted thread-safe: one thread calls it (others may use the table meanwhile);
+  ///       system calls (fstat, maybe ftruncate and mmap); allocates only for a report.
+  [[nodiscard]] std::optional<TableDamage> checkAndRepair();
+
  private:
-  SignalTable(int lockFd, void* base, std::size_t bytes, std::string name, bool created) noexcept;
+  SignalTable(int lockFd, int segmentFd, void* base, std::size_t bytes, std::uint64_t layoutHash,
+              std::uint32_t slotCount, std::uint64_t generation, std::string name, bool created) noexcept;
   void release() noexcept;
   void notify(detail::Plane& plane) noexcept;
 
   int m_lockFd{-1};  ///< holds LOCK_SH on the lock file for as long as we are attached
+  int m_segmentFd{-1};  ///< the segment, read-write: restores its size after a truncation
+  detail::GuardEntry* m_guard{nullptr};  ///< this mapping's entry in the SIGBUS guard (may be null)
   void* m_base{nullptr};
   std::size_t m_bytes{};
   detail::TableHeader* m_header{nullptr};
