@@ -154,7 +154,9 @@ void VehicleModel::receive(const can::Frame& frame, std::int64_t atNs) noexcept 
   // and DA, whatever its priority (j1939::sameSafetyIdentity). HHEA's PropA_C4 (0x18EFF321)
   // shares S1_ES's (0x0CEFF321): sent between S1_ES's SHM and SDM it is taken for the SDM and
   // fails the CRC. Without an SHM waiting, only the SDM's own identifier is judged (an SDM
-  // without its SHM: MissingHeader); other frames of its identity are ordinary frames.
+  // without its SHM: MissingHeader), unless another frame just took its SHM: that pair has
+  // its verdict already (one per SHM, so a fault is reported as what it is, not flipping).
+  // Other frames of its identity are ordinary frames.
   for (Pair& pair : m_pairs) {
     const std::uint32_t dataId = pair.checker.dataCanId();
     if (frame.extended() && j1939::sameSafetyIdentity(frame.id, pair.headerId)) {
@@ -162,10 +164,16 @@ void VehicleModel::receive(const can::Frame& frame, std::int64_t atNs) noexcept 
       if (header && !header->matchesData(dataId)) continue;  // another SDM's SHM to the same DA (HVESSC1's)
       pair.checker.onHeader(frame.payload(), atNs);
       pair.awaitingData = true;
+      pair.headerTakenByOther = false;
       return;
     }
     const bool next = pair.awaitingData && frame.extended() && j1939::sameSafetyIdentity(frame.id, dataId);
     if (!next && frame.id != dataId) continue;
+    if (!next && pair.headerTakenByOther) {
+      pair.headerTakenByOther = false;  // the SDM whose SHM another frame took: not used, judged already
+      return;
+    }
+    pair.headerTakenByOther = next && frame.id != dataId;
     pair.awaitingData = false;
     std::array<std::uint8_t, 8> data{};
     const std::size_t length = std::min<std::size_t>(frame.length, data.size());

@@ -101,6 +101,7 @@ class VehicleModel {
     j1939::SafetyPairChecker checker;
     std::uint32_t headerId;
     bool awaitingData{};  ///< an SHM came: the next frame with the SDM's PGN, SA and DA is the SDM
+    bool headerTakenByOther{};  ///< that frame was not the SDM's identifier: the SDM after it is not judged
   };
 
   VehicleModel(VirtualBus& bus, const SimConfig& config) : m_bus(&bus), m_config(&config) {}

@@ -189,14 +189,19 @@ TEST_CASE("issue 18: a frame with S1_ES's PGN, SA and DA between its SHM and SDM
   f.model->receive(propA, T0 + 100'000);
   CHECK(f.model->safety().last == j1939::SafetyResult::CrcMismatch);  // PropA_C4 taken as the SDM
   CHECK(f.model->safety().refused == 1);
-  f.model->receive(sdm, T0 + 300'000);
-  CHECK(f.model->safety().last == j1939::SafetyResult::MissingHeader);  // its SHM was used up
+  f.model->receive(sdm, T0 + 300'000);  // its SHM is used up: not used, and not judged twice
+  CHECK(f.model->safety().last == j1939::SafetyResult::CrcMismatch);
+  CHECK(f.model->safety().refused == 1);
+  CHECK(f.model->takeSafetyChange() == j1939::SafetyResult::CrcMismatch);
+  f.model->receive(sdm, T0 + 400'000);  // an SDM with no SHM at all
+  CHECK(f.model->safety().last == j1939::SafetyResult::MissingHeader);
   CHECK(f.model->safety().refused == 2);
 
   f.betweenShmAndSdm.push_back(propA);  // every pair so: the VIC never connects
   f.run(T0 + 20 * MS, T0 + 1000 * MS, 3);
   CHECK(f.model->connection() == 0);
   CHECK(f.model->safety().ok == 0);
+  CHECK(f.model->safety().last == j1939::SafetyResult::CrcMismatch);  // the cause, every pair
 }
 
 TEST_CASE("issue 18: the same frame after the SDM is an ordinary frame and the pairs stay good") {
