@@ -382,3 +382,16 @@ TEST_CASE("every safety result has a name") {
   }
   CHECK(safetyResultName(SafetyResult::CrcMismatch) == "CrcMismatch");
 }
+
+TEST_CASE("sameSafetyIdentity: identifiers equal but for the priority are one SDM to a receiver (issue 18)") {
+  constexpr std::uint32_t PROPA_C4 = 0x18EFF321;  // HHEA: S1_ES's PGN, SA and DA at priority 6
+  CHECK(sameSafetyIdentity(THESIS_SDM_ID, PROPA_C4));
+  for (std::uint32_t priority = 0; priority < 8; ++priority) {
+    CHECK(sameSafetyIdentity(THESIS_SDM_ID, (THESIS_SDM_ID & SAFETY_IDENTITY_MASK) | priority << 26));
+  }
+  // every other identifier bit (EDP, DP, PF, PS = DA, SA) tells them apart
+  for (int bit = 0; bit < 26; ++bit) {
+    CHECK_FALSE(sameSafetyIdentity(THESIS_SDM_ID, THESIS_SDM_ID ^ (1u << bit)));
+  }
+  CHECK_FALSE(sameSafetyIdentity(THESIS_SDM_ID, THESIS_SHM_ID));
+}
