@@ -39,7 +39,7 @@ const std::string CAN_TX = CAN_TX_BINARY;
 constexpr std::uint32_t S1_ES = 0x0CEFF321;     ///< SDM, priority 3, PGN 0xEF00, SA 0x21, DA 0xF3
 constexpr std::uint32_t PROPA_C4 = 0x18EFF321;  ///< not an SDM: priority 6, the same PGN, SA and DA
 constexpr std::uint32_t S1_ES_SHM = 0x0C0EF321;
-constexpr std::uint8_t SHM_PDU_FORMAT = 0x0E;   ///< SAE J1939-76 SHM PGN 0x0E00 (3584), PDU1
+constexpr std::uint8_t SHM_PDU_FORMAT = 0x0E;  ///< SAE J1939-76 SHM PGN 0x0E00 (3584), PDU1
 
 /// J1939-76 CRC-32 bit by bit: polynomial 0x6938392D, initial 0xFFFFFFFF, not reflected,
 /// final XOR 0 (EF FF FF FF FF FF FF FF -> 0x8100EFA3, the thesis' example).
@@ -58,13 +58,13 @@ std::uint32_t crc32(const std::uint8_t* data, std::size_t length) {
 class J1939_76Checker {
  public:
   struct Verdicts {
-    std::size_t pairs{};          ///< SDMs taken after their SHM
-    std::size_t ambiguities{};    ///< the frame taken as the SDM was not the declared SDM
-    std::size_t crcFaults{};      ///< CRC in the SHM differs from the CRC of the frame taken
-    std::size_t sequenceFaults{}; ///< sequence number not previous + 1 mod 32
-    std::size_t headerFaults{};   ///< SHM not 8 bytes, or its SA / DA disagree with the SDM it names
-    std::size_t lostSdms{};       ///< an SHM replaced by the next SHM for the same SDM
-    std::size_t sdmsWithoutShm{}; ///< a declared SDM identifier with no SHM waiting
+    std::size_t pairs{};           ///< SDMs taken after their SHM
+    std::size_t ambiguities{};     ///< the frame taken as the SDM was not the declared SDM
+    std::size_t crcFaults{};       ///< CRC in the SHM differs from the CRC of the frame taken
+    std::size_t sequenceFaults{};  ///< sequence number not previous + 1 mod 32
+    std::size_t headerFaults{};    ///< SHM not 8 bytes, or its SA / DA disagree with the SDM it names
+    std::size_t lostSdms{};        ///< an SHM replaced by the next SHM for the same SDM
+    std::size_t sdmsWithoutShm{};  ///< a declared SDM identifier with no SHM waiting
   };
 
   explicit J1939_76Checker(std::vector<std::uint32_t> sdmIds) : m_sdmIds(std::move(sdmIds)) {}
@@ -117,8 +117,8 @@ class J1939_76Checker {
     const auto sa = static_cast<std::uint8_t>(~d[1]);
     const auto ps = static_cast<std::uint8_t>(~d[2]);
     const auto pf = static_cast<std::uint8_t>(~d[3]);
-    const std::uint32_t identity = edp << 25 | dp << 24 | static_cast<std::uint32_t>(pf) << 16 |
-                                   static_cast<std::uint32_t>(ps) << 8 | sa;
+    const std::uint32_t identity =
+        edp << 25 | dp << 24 | static_cast<std::uint32_t>(pf) << 16 | static_cast<std::uint32_t>(ps) << 8 | sa;
     const auto shmSource = static_cast<std::uint8_t>(id);
     const auto shmDestination = static_cast<std::uint8_t>(id >> 8);
     const std::uint8_t sdmDestination = pf < 0xF0 ? ps : 0xFF;
@@ -137,7 +137,7 @@ class J1939_76Checker {
   }
 
   std::vector<std::uint32_t> m_sdmIds;
-  std::map<std::uint32_t, Header> m_waiting;       ///< by SDM identity: the SHM waiting for its SDM
+  std::map<std::uint32_t, Header> m_waiting;  ///< by SDM identity: the SHM waiting for its SDM
   std::map<std::uint32_t, std::uint8_t> m_lastSequence;
   Verdicts m_verdicts;
   bool m_started{};  ///< an SHM was seen: an SDM before the first one lost its SHM to the recording's start

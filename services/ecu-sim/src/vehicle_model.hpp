@@ -100,7 +100,7 @@ class VehicleModel {
   struct Pair {
     j1939::SafetyPairChecker checker;
     std::uint32_t headerId;
-    bool awaitingData{};  ///< an SHM came: the next frame with the SDM's PGN, SA and DA is the SDM
+    bool awaitingData{};        ///< an SHM came: the next frame with the SDM's PGN, SA and DA is the SDM
     bool headerTakenByOther{};  ///< that frame was not the SDM's identifier: the SDM after it is not judged
   };
 
