@@ -7,19 +7,25 @@
 //     file switches in place, one without the current state is refused;
 //   - a reload reads only regular files inside the configuration's folders: a file outside,
 //     a path climbing out, a FIFO and a device are refused at once without content (#18);
+//   - a machine that never settles (one the check cannot prove) raises fsm_loop and then
+//     costs no CPU until an input changes (#18);
 //   - a machine with errors does not start (exit 1, the file and JSON path on stderr).
 // The configuration is copied into the sandbox's /tmp with the test's own FSM files.
 
 #include <doctest/doctest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <iterator>
 #include <optional>
+#include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "integration_support.hpp"
@@ -268,6 +274,64 @@ TEST_CASE("reload reads only regular files inside the configuration's folders, n
   // the configured file itself (no FILE) is inside its folder: accepted
   const auto again = f.vcu({"fsm", "reload"});
   CHECK_MESSAGE(again.exitCode() == 0, again.describe());
+}
+
+/// CPU time (user + system) of process `pid` in clock ticks, from /proc/PID/stat.
+long cpuTicks(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t close = text.rfind(')');
+  REQUIRE(close != std::string::npos);
+  std::istringstream fields(text.substr(close + 2));
+  std::string field;
+  long utime = 0;
+  long stime = 0;
+  for (int index = 3; fields >> field; ++index) {  // field 3 is the state; 14 utime, 15 stime
+    if (index == 14) utime = std::stol(field);
+    if (index == 15) {
+      stime = std::stol(field);
+      break;
+    }
+  }
+  return utime + stime;
+}
+
+TEST_CASE("a machine that never settles but passes the check does not spin: fsm_loop, then idle (#18)") {
+  SKIP_UNLESS_ISOLATED();
+  // The check cannot prove this one (Cl15 is copied from StartStop, and B's first transition
+  // reads it): with StartStop = Start, A -> B -> A -> ... would run forever; the loop guard
+  // stops it and it waits for an input.
+  Fixture f(R"({"initialState": "A", "states": [
+    {"name": "A", "transitions": [{"condition": {}, "nextState": "B",
+      "actions": [{"signal": "internal.relay.Cl15", "from": "internal.operator.StartStop"}]}]},
+    {"name": "B", "transitions": [{"condition": {"key": "internal.relay.Cl15", "eq": 1}, "nextState": "A"},
+                                  {"condition": {"key": "internal.operator.StartStop", "eq": "Start"}, "nextState": "A"}]}]})");
+  std::vector<ipc::FaultEvent> faults;
+  REQUIRE(f.events->onFault([&faults](const ipc::FaultEvent& fault) { faults.push_back(fault); }));
+  harness::Process& fsm = f.startFsm();
+  REQUIRE(f.waitForState(1, 5s));  // B: StartStop is Stop
+  f.set("internal.operator.StartStop", "Start");
+  const auto end = std::chrono::steady_clock::now() + 3s;
+  const auto sawLoop = [&] {
+    return std::any_of(faults.begin(), faults.end(), [](const ipc::FaultEvent& fault) { return fault.name == "fsm_loop"; });
+  };
+  while (!sawLoop() && std::chrono::steady_clock::now() < end) (void)f.events->handle(100ms);
+  REQUIRE(sawLoop());
+  // Idle from then on: one second of wall time costs (almost) no CPU time.
+  const long ticksPerSecond = ::sysconf(_SC_CLK_TCK);
+  const long before = cpuTicks(fsm.pid());
+  std::this_thread::sleep_for(1s);  // measuring an interval: the sleep is the measurement
+  const long used = cpuTicks(fsm.pid()) - before;
+  CHECK_MESSAGE(used * 10 < ticksPerSecond, "vcu-fsm used " << used << " of " << ticksPerSecond << " ticks in 1 s");
+  // An input that lets it settle clears the fault.
+  f.set("internal.operator.StartStop", "Stop");
+  const auto cleared = [&] {
+    return std::any_of(faults.begin(), faults.end(),
+                       [](const ipc::FaultEvent& fault) { return fault.name == "fsm_loop" && !fault.active; });
+  };
+  const auto later = std::chrono::steady_clock::now() + 3s;
+  while (!cleared() && std::chrono::steady_clock::now() < later) (void)f.events->handle(100ms);
+  CHECK(cleared());
 }
 
 TEST_CASE("a machine with errors does not start: exit 1 with the file, the JSON path and the reason") {
