@@ -76,7 +76,7 @@ json.dump(vehicle, open(sys.argv[2], "w"), indent=2)
 PY
   config=$copy
 fi
-export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run
+export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run OPENVCU_ROUDI=$root/config/iceoryx/iox-roudi.sh
 sed -e "s/^;user=root.*/$( [ "$(id -u)" = 0 ] && echo 'user=root' || echo ';not root')/" \
   config/supervisor/openvcu.conf > "$run/openvcu.conf"
 if [ -n "$bus" ]; then

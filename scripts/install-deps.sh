@@ -29,6 +29,8 @@ PACKAGES=(
   qemu-system-x86 busybox-static cpio kmod make gcc-12 bc xz-utils can-utils
   # ./run.sh runs the stack under supervisord
   supervisor
+  # setfacl/getfacl: iox-roudi's shared memory without ACL (config/iceoryx/iox-roudi.sh) and its test
+  acl
   # the Qt 6 HMI (services/hmi) and its offscreen / Xvfb tests and screenshots
   qt6-base-dev qt6-declarative-dev qt6-charts-dev qml6-module-qtquick qml6-module-qtqml
   qml6-module-qtquick-controls qml6-module-qtquick-layouts qml6-module-qtquick-window

@@ -14,7 +14,7 @@ bin=${OPENVCU_BIN:-$root/build/bin}
 vcu=$bin/vcu
 config=$root/config/hhea/vehicle.json
 run=$(mktemp -d)
-export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run
+export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run OPENVCU_ROUDI=$root/config/iceoryx/iox-roudi.sh
 sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
 # the HMI joins when it is built, offscreen (no display in the sandbox)
 hmi=0

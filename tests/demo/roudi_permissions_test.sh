@@ -1,0 +1,126 @@
+#!/bin/bash
+# Issue 18: iox-roudi as the stack starts it (the [program:roudi] command of
+# config/supervisor/openvcu.conf, i.e. config/iceoryx/iox-roudi.sh) leaves its shared memory
+# (/dev/shm/iceoryx_mgmt, the data segment that carries every CAN frame) and its socket
+# /tmp/roudi to the stack only: owned by group openvcu with no ACL entry for another group,
+# or owner-only (0600, no ACL) when that group is missing or the user is not in it. Before,
+# all three were 0660 root:root and the data segment's ACL granted group 0 read/write.
+# Each case runs against its own /etc/group (bind-mounted in this private mount namespace,
+# so the machine's is never touched), starts RouDi, checks modes, owners and ACLs with
+# stat and getfacl, and checks that a client of the stack's user still publishes and
+# receives a frame (vcu send --direct / vcu dump).
+#   run_isolated.sh -- tests/demo/roudi_permissions_test.sh      (ctest: label integration)
+set -euo pipefail
+NAME=roudi_permissions_test
+root=$(cd "$(dirname "$0")/../.." && pwd)
+bin=${OPENVCU_BIN:-$root/build/bin}
+config=$root/config/hhea/vehicle.json
+
+if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then echo "$NAME: SKIP: run inside tests/harness/run_isolated.sh"; exit 77; fi
+if ! awk '$1 == 0 && $2 == 0 && $3 == 4294967295 { found = 1 } END { exit !found }' /proc/self/gid_map; then
+  echo "$NAME: SKIP: needs real root (a user namespace maps no group openvcu could run as)"; exit 77
+fi
+command -v getfacl >/dev/null || { echo "$NAME: FAIL: getfacl missing (package acl, scripts/install-deps.sh)"; exit 1; }
+
+# The command supervisord runs for RouDi, with its variable filled as run.sh fills it.
+roudi_command=$(sed -n '/^\[program:roudi\]/,/^$/s/^command=//p' "$root/config/supervisor/openvcu.conf")
+roudi_command=${roudi_command//%(ENV_OPENVCU_ROUDI)s/$root/config/iceoryx/iox-roudi.sh}
+[ -n "$roudi_command" ] || { echo "$NAME: FAIL: no [program:roudi] command in openvcu.conf"; exit 1; }
+user=$(id -un)
+work=$(mktemp -d)
+failures=0
+fail() { echo "$NAME: FAIL: $*"; failures=$((failures + 1)); }
+
+# group_file NAME LINE: /etc/group without any openvcu line, plus LINE when given
+group_file() {
+  grep -v '^openvcu:' /etc/group > "$work/group.$1" || true
+  [ -z "$2" ] || echo "$2" >> "$work/group.$1"
+  echo "$work/group.$1"
+}
+
+free_gid() {
+  local gid=990
+  while getent group "$gid" >/dev/null; do gid=$((gid - 1)); done
+  echo "$gid"
+}
+
+# acl_of FILE: the ACL as one line, e.g. "user::rw- group::rw- group:openvcu:rw- mask::rw- other::---"
+acl_of() { getfacl -c -p "$1" 2>/dev/null | grep -v '^$' | tr '\n' ' ' | sed 's/ $//'; }
+
+wait_for_socket() {
+  for _ in $(seq 1 250); do
+    [ -S /tmp/roudi ] && return 0
+    kill -0 "$roudi" 2>/dev/null || return 1
+    sleep 0.02
+  done
+  return 1
+}
+
+# A client as the stack runs them: a frame sent on the simulated bus reaches `vcu dump`
+# (sent 20 times over 1 s: a subscriber may need a moment to be connected).
+client_works() {
+  timeout 10 "$bin/vcu" dump vehicle -s wire -n 1 --timeout 5 --config "$config" > "$work/dump" 2>&1 &
+  local dump=$!
+  for _ in $(seq 1 100); do grep -q '^listening' "$work/dump" && break; sleep 0.05; done
+  timeout 10 "$bin/vcu" send vehicle 123#DEADBEEF --direct --repeat 20 --interval 50 --config "$config" > "$work/send" 2>&1 || true
+  wait "$dump" || true
+  grep -q '123#DEADBEEF' "$work/dump"
+}
+
+# run_case NAME GROUP_LINE EXPECT [IOX-ROUDI ARGS...]   EXPECT: group | owner
+run_case() {
+  local name=$1 line=$2 expect=$3
+  shift 3
+  local file
+  file=$(group_file "$name" "$line")
+  mount --bind "$file" /etc/group
+  rm -f /tmp/roudi
+  $roudi_command "$@" > "$work/roudi.$name.log" 2>&1 &
+  roudi=$!
+  if ! wait_for_socket; then
+    fail "$name: iox-roudi did not open its socket: $(tail -3 "$work/roudi.$name.log")"
+  else
+    local segment mode want_mode want_group
+    if [ "$expect" = group ]; then
+      segment=/dev/shm/openvcu want_mode=660 want_group=openvcu
+    else
+      segment=/dev/shm/$(id -gn) want_mode=600 want_group=$(id -gn)
+      # the launcher's helper closes the files right after RouDi's socket appears
+      for _ in $(seq 1 250); do [ "$(stat -c %a /tmp/roudi)" = 600 ] && break; sleep 0.02; done
+    fi
+    for path in /dev/shm/iceoryx_mgmt "$segment" /tmp/roudi; do
+      if [ ! -e "$path" ]; then fail "$name: $path missing ($(ls /dev/shm | tr '\n' ' '))"; continue; fi
+      mode=$(stat -c '%a %U:%G' "$path")
+      echo "$NAME: $name: $path: $mode; ACL: $(acl_of "$path")"
+      [ "$mode" = "$want_mode $user:$want_group" ] || fail "$name: $path is '$mode', expected '$want_mode $user:$want_group'"
+      # no named ACL entry for any group but openvcu (iceoryx adds group:<writer group>)
+      local named
+      named=$(getfacl -c -p "$path" 2>/dev/null | grep -E '^group:[^:]+:' | grep -v '^group:openvcu:' || true)
+      [ -z "$named" ] || fail "$name: $path grants a group beyond openvcu: $named"
+      if [ "$expect" = owner ]; then
+        [ -z "$(getfacl -c -p -s "$path" 2>/dev/null)" ] || fail "$name: $path still has an ACL: $(acl_of "$path")"
+      fi
+    done
+    if [ "$expect" = group ]; then
+      [ "$(acl_of "$segment")" = "user::rw- group::rw- group:openvcu:rw- mask::rw- other::---" ] ||
+        fail "$name: $segment ACL is '$(acl_of "$segment")'"
+    fi
+    client_works || fail "$name: a client of user $user could not send and receive a frame: $(cat "$work/send" "$work/dump" | tail -4)"
+  fi
+  kill -TERM "$roudi" 2>/dev/null || true
+  wait "$roudi" 2>/dev/null || true
+  # a helper of the owner-only start may still be waiting when RouDi failed: it gives up alone
+  umount /etc/group
+  rm -f /tmp/roudi /dev/shm/iceoryx_mgmt /dev/shm/openvcu "/dev/shm/$(id -gn)"
+}
+
+gid=$(getent group openvcu | cut -d: -f3 || true)
+[ -n "$gid" ] || gid=$(free_gid)
+run_case "group openvcu with $user as member (supervisor's command)" "openvcu:x:$gid:$user" group
+run_case "group openvcu with $user as member (roudi.toml, as the test harness)" "openvcu:x:$gid:$user" group \
+  -c "$root/config/iceoryx/roudi.toml" -l warning
+run_case "no group openvcu" "" owner
+run_case "group openvcu without $user" "openvcu:x:$gid:" owner
+rm -rf "$work"
+if [ $failures -ne 0 ]; then echo "$NAME: $failures failure(s)"; exit 1; fi
+echo "$NAME: PASS"
