@@ -46,8 +46,21 @@ for pkg in "${PACKAGES[@]}"; do
   fi
 done
 
+# The command group (docs/design/security.md): root and its members may command the stack.
+ensure_group() {
+  getent group openvcu >/dev/null 2>&1 && return 0
+  if [ "$(id -u)" -eq 0 ]; then
+    groupadd --system openvcu && echo "install-deps: created the system group openvcu (who may command the stack)"
+  elif command -v sudo >/dev/null 2>&1; then
+    sudo groupadd --system openvcu && echo "install-deps: created the system group openvcu (who may command the stack)"
+  else
+    echo "install-deps: no group openvcu and not root: only root and the stack's user may command it" >&2
+  fi
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
   [ $quiet -eq 1 ] || echo "install-deps: all ${#PACKAGES[@]} packages present"
+  ensure_group
   exit 0
 fi
 
@@ -63,3 +76,4 @@ echo "install-deps: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get -o DPkg::Lock::Timeout=600 update -q
 $SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -q --no-install-recommends "${missing[@]}"
+ensure_group

@@ -204,7 +204,36 @@ void CommandHandler::onReadable() {
   std::stable_sort(m_batch.begin(), m_batch.end(), [](const ipc::ReceivedCommand& a, const ipc::ReceivedCommand& b) {
     return priority(a.request.kind) < priority(b.request.kind);
   });
+  const std::int64_t now = ipc::monotonicNs();
+  // Forget issuers quiet for 10 s (their bucket is full again anyway).
+  if (m_buckets.size() > 64) {
+    std::erase_if(m_buckets, [now](const auto& entry) { return now - entry.second.refilledNs > 10'000'000'000; });
+  }
   for (const ipc::ReceivedCommand& received : m_batch) {
+    Bucket& bucket = m_buckets[received.peer.pid];
+    bucket.tokens = bucket.refilledNs == 0
+                        ? ISSUER_BURST
+                        : std::min(ISSUER_BURST,
+                                   bucket.tokens + static_cast<double>(now - bucket.refilledNs) * 1e-9 * ISSUER_RATE);
+    bucket.refilledNs = now;
+    if (bucket.tokens < 1.0) {
+      ++m_limited;
+      ++bucket.limitedSinceLog;
+      const ipc::CommandAck ack{0,     received.request.requestId,
+                                received.request.issuer, m_responder,
+                                false, "rate limit: more than " + number(ISSUER_RATE) + " commands/s from pid " +
+                                           std::to_string(received.peer.pid) + "; nothing applied",
+                                true};
+      (void)m_listener->reply(received.connection, ack);
+      if (m_log != nullptr && now - bucket.loggedNs >= 1'000'000'000) {
+        m_log->warning("rate limit: refused " + std::to_string(bucket.limitedSinceLog) + " commands from pid " +
+                       std::to_string(received.peer.pid) + " (uid " + std::to_string(received.peer.uid) + ")");
+        bucket.loggedNs = now;
+        bucket.limitedSinceLog = 0;
+      }
+      continue;
+    }
+    bucket.tokens -= 1.0;
     const std::string from = (received.request.issuer.empty() ? std::string("?") : received.request.issuer) +
                              ", uid " + std::to_string(received.peer.uid) + " pid " +
                              std::to_string(received.peer.pid);

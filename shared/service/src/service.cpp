@@ -150,6 +150,8 @@ Status Service::answerCommands(CommandPolicy policy) {
                                 [this] { return static_cast<std::int64_t>(m_commands->refused()); });
   m_heartbeat->addCounterSource("commands_expired",
                                 [this] { return static_cast<std::int64_t>(m_commands->expired()); });
+  m_heartbeat->addCounterSource("commands_limited",
+                                [this] { return static_cast<std::int64_t>(m_commands->limited()); });
   return {};
 }
 

@@ -26,6 +26,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -135,6 +136,10 @@ struct CommandVerdict {
 
 /// @note restricted thread-safe: listen, onReadable and handle on the service's loop thread.
 ///       Not movable: deferred replies refer to this object.
+/// Per issuing process: requests decided at once, and per second after that.
+inline constexpr double ISSUER_BURST = 50;
+inline constexpr double ISSUER_RATE = 20;
+
 class CommandHandler {
  public:
   /// `responder`: the program name put in acks ("vcu-fsm"); `writer`: the writer id of the
@@ -155,7 +160,9 @@ class CommandHandler {
   [[nodiscard]] const ipc::CommandListener* listener() const noexcept { return m_listener.get(); }
   /// Takes the requests waiting on the socket (at most one per connection: a flood on one
   /// connection cannot starve the others), operator commands (OperatorSwitch, FaultReset)
-  /// first, and decides and answers each.
+  /// first, and decides and answers each. One issuing process gets at most ISSUER_BURST
+  /// requests at once and ISSUER_RATE per second after that; beyond, requests are refused
+  /// "rate limit" on its socket only (a flood never floods the event bus with acks and logs).
   void onReadable();
 
   /// Decides one request that did not come through the socket (tests, in-process callers):
@@ -168,6 +175,9 @@ class CommandHandler {
   [[nodiscard]] std::uint64_t ignored() const noexcept { return m_ignored; }
   /// Requests refused because they arrived (or their deferred work ended) past their deadline.
   [[nodiscard]] std::uint64_t expired() const noexcept { return m_expired; }
+  /// Requests refused by the per-issuer limit (answered on the socket only, not logged one
+  /// by one, not published).
+  [[nodiscard]] std::uint64_t limited() const noexcept { return m_limited; }
   [[nodiscard]] const CommandPolicy& policy() const noexcept { return m_policy; }
 
  private:
@@ -191,6 +201,15 @@ class CommandHandler {
   std::uint64_t m_refused{};
   std::uint64_t m_ignored{};
   std::uint64_t m_expired{};
+  std::uint64_t m_limited{};
+  /// Per issuing process (pid): a token bucket of ISSUER_BURST, refilled at ISSUER_RATE per s.
+  struct Bucket {
+    double tokens{};
+    std::int64_t refilledNs{};
+    std::uint64_t limitedSinceLog{};
+    std::int64_t loggedNs{};
+  };
+  std::map<std::int32_t, Bucket> m_buckets;
 };
 
 }  // namespace openvcu::service
