@@ -21,6 +21,10 @@ using config::JsonChecker;
 /// says so); far above what a vehicle's machine needs (HHEA: a few hundred evaluations).
 constexpr std::size_t MAX_CYCLES = 20'000;
 constexpr std::size_t MAX_EVALUATIONS = 2'000'000;
+/// Steps of the cycle enumeration (edges followed) and the longest cycle followed: a file
+/// of tens of thousands of states neither stalls the check nor exhausts the stack.
+constexpr std::size_t MAX_STEPS = 2'000'000;
+constexpr std::size_t MAX_CYCLE_LENGTH = 64;
 /// Errors reported one by one; further spinning cycles are counted in one more error.
 constexpr std::size_t MAX_REPORTED = 5;
 constexpr std::size_t MAX_WITNESS_SIGNALS = 4;
@@ -431,15 +435,31 @@ void checkSpinningCycles(JsonChecker& check, const Machine& machine, const signa
                     "; vcu-fsm would never settle. Make one of them false once the cycle ran (a condition on a "
                     "signal the cycle sets), or add an \"after\" or a \"for\"");
   };
+  // Only states that can still lead back to `start` through states above it are followed.
+  std::vector<std::vector<std::uint32_t>> incoming(count);
+  for (std::uint32_t s = 0; s < count; ++s) {
+    for (const Edge& edge : edges[s]) incoming[edge.to].push_back(s);
+  }
+  std::vector<bool> leadsBack(count, false);
+  std::size_t steps = 0;
+  bool truncated = false;  ///< a work limit: the enumeration stopped
+  bool tooLong = false;    ///< a cycle longer than MAX_CYCLE_LENGTH was not followed
   const auto visit = [&](auto&& self, std::uint32_t start, std::uint32_t state) -> void {
     for (const Edge& edge : edges[state]) {
-      if (cycles >= MAX_CYCLES || search.exhausted()) return;
+      if (cycles >= MAX_CYCLES || search.exhausted() || ++steps > MAX_STEPS) {
+        truncated = true;
+        return;
+      }
       if (edge.to == start) {
         path.push_back(edge);
         ++cycles;
         if (const auto witness = search.prove(path)) report(path, *witness);
         path.pop_back();
-      } else if (edge.to > start && !onPath[edge.to]) {
+      } else if (edge.to > start && !onPath[edge.to] && leadsBack[edge.to]) {
+        if (path.size() + 1 >= MAX_CYCLE_LENGTH) {
+          tooLong = true;  // not followed; the other cycles still are
+          continue;
+        }
         onPath[edge.to] = true;
         path.push_back(edge);
         self(self, start, edge.to);
@@ -448,7 +468,24 @@ void checkSpinningCycles(JsonChecker& check, const Machine& machine, const signa
       }
     }
   };
-  for (std::uint32_t start = 0; start < count; ++start) {
+  for (std::uint32_t start = 0; start < count && !truncated; ++start) {
+    std::fill(leadsBack.begin(), leadsBack.end(), false);
+    std::vector<std::uint32_t> pending{start};
+    while (!pending.empty()) {
+      const std::uint32_t s = pending.back();
+      pending.pop_back();
+      for (const std::uint32_t from : incoming[s]) {
+        if (++steps > MAX_STEPS) {
+          truncated = true;
+          break;
+        }
+        if (from > start && !leadsBack[from]) {
+          leadsBack[from] = true;
+          pending.push_back(from);
+        }
+      }
+    }
+    if (truncated) break;
     onPath[start] = true;
     visit(visit, start, start);
     onPath[start] = false;
@@ -456,9 +493,13 @@ void checkSpinningCycles(JsonChecker& check, const Machine& machine, const signa
   if (proved > MAX_REPORTED) {
     check.error("/", std::to_string(proved - MAX_REPORTED) + " more cycles of transitions can fire without any input change");
   }
-  if (cycles >= MAX_CYCLES || search.exhausted()) {
+  truncated = truncated || search.exhausted();
+  if (truncated) {
     check.warning("/", "the cycle check stopped at its work limit after " + std::to_string(cycles) +
                            " cycles; cycles not examined are bounded at run time by the loop guard");
+  } else if (tooLong) {
+    check.warning("/", "cycles of more than " + std::to_string(MAX_CYCLE_LENGTH) +
+                           " states were not examined; at run time the loop guard bounds them");
   }
 }
 

@@ -4,6 +4,8 @@
 
 #include <doctest/doctest.h>
 
+#include <chrono>
+
 #include "fsm_test_support.hpp"
 
 using namespace openvcu;
@@ -196,4 +198,28 @@ TEST_CASE("the HHEA machine is accepted without a cycle error") {
   REQUIRE(result);
   CHECK(spinErrors(diagnostics) == 0);
   for (const Error& diagnostic : diagnostics) CHECK(diagnostic.message.find("cycle check stopped") == std::string::npos);
+}
+
+TEST_CASE("a huge machine neither stalls the cycle check nor exhausts the stack, and its short cycles are still checked") {
+  const fsmtest::Hhea hhea;
+  // 20000 states in a ring: one cycle longer than the check follows; then a spinning pair,
+  // which is still found.
+  constexpr int STATES = 20'000;
+  std::string text = R"({"initialState": "S0", "states": [)";
+  for (int s = 0; s < STATES; ++s) {
+    if (s > 0) text += ',';
+    text += R"({"name": "S)" + std::to_string(s) + R"(", "transitions": [{"condition": {"key": "internal.operator.StartStop", "eq": 1}, "nextState": "S)" +
+            std::to_string((s + 1) % STATES) + R"("}]})";
+  }
+  text += R"(,{"name": "P", "transitions": [{"condition": {}, "nextState": "Q"}]},
+             {"name": "Q", "transitions": [{"condition": {}, "nextState": "P"}]}]})";
+  std::vector<Error> diagnostics;
+  const auto start = std::chrono::steady_clock::now();
+  const auto result = hhea.compile(text, &diagnostics);
+  const auto took = std::chrono::steady_clock::now() - start;
+  CHECK_FALSE(result);
+  CHECK(spinErrors(diagnostics) == 1);  // P <-> Q; the ring is not proved: the loop guard bounds it
+  CHECK(count(diagnostics, Severity::Error, "/states/20000/transitions/0", "'P' -> 'Q' -> 'P'") == 1);
+  CHECK(count(diagnostics, Severity::Warning, "/", "cycles of more than 64 states were not examined") == 1);
+  CHECK(took < std::chrono::seconds(10));
 }
