@@ -5,6 +5,7 @@
 #include "machine_cycles.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <optional>
 #include <set>
@@ -227,19 +228,25 @@ class CycleSearch {
     }
     std::sort(constants.begin(), constants.end());
     constants.erase(std::unique(constants.begin(), constants.end()), constants.end());
+    const SignalRef& ref = m_machine.signals[slot];
+    const signals::SignalInfo& info = m_catalog[ref.index];
+    const bool integral = !info.valueTexts.empty();
     std::vector<double> values;
     if (constants.empty()) {
       values.push_back(0);
     } else {
-      values.push_back(constants.front() - 1);
+      values.push_back(integral ? std::ceil(constants.front()) - 1 : constants.front() - 1);
       for (std::size_t c = 0; c < constants.size(); ++c) {
         values.push_back(constants[c]);
-        if (c + 1 < constants.size()) values.push_back((constants[c] + constants[c + 1]) / 2);
+        if (c + 1 < constants.size()) {
+          // Between two constants; a signal with a value table takes whole numbers only.
+          double between = (constants[c] + constants[c + 1]) / 2;
+          if (integral) between = std::floor(constants[c]) + 1;
+          if (between > constants[c] && between < constants[c + 1]) values.push_back(between);
+        }
       }
-      values.push_back(constants.back() + 1);
+      values.push_back(integral ? std::floor(constants.back()) + 1 : constants.back() + 1);
     }
-    const SignalRef& ref = m_machine.signals[slot];
-    const signals::SignalInfo& info = m_catalog[ref.index];
     if (info.minimum < info.maximum) {  // only values the DBC range allows, its ends included
       values.push_back(info.minimum);
       values.push_back(info.maximum);

@@ -17,10 +17,12 @@
 // actions write read as the values the cycle writes (as if no override were active); `for`
 // conditions are false at the moment of entry (their timers restart); values are tried at
 // and between the constants the conditions compare with, with and without a value, and, for
-// `quality` and `ageGt`, every quality and age that makes a difference. Whatever cannot be
-// decided (a `from` action's value, a signal a self-transition of the cycle writes) counts
-// as not proved: the check never refuses a machine that can settle, and the engine's loop
-// guard (engine.hpp, MAX_FIRINGS) bounds what it cannot prove.
+// `quality` and `ageGt`, every quality and age that makes a difference (within the DBC
+// range; whole numbers for a signal with a value table). Whatever cannot be decided (a
+// `from` action's value, a signal a self-transition of the cycle writes) counts as not
+// proved: a cycle is refused only with values found that keep it firing, and the engine's loop
+// guard (engine.hpp, MAX_FIRINGS) bounds what it cannot prove, cycles of more than 64 states
+// and whatever lies beyond the work limits (each reported as a warning).
 
 #include "machine.hpp"
 #include "openvcu/config/json.hpp"

@@ -87,6 +87,23 @@ TEST_CASE("a longer cycle is named state by state; every state's edge is checked
   CHECK(spinErrors(settled) == 0);
 }
 
+TEST_CASE("a signal with a value table takes whole numbers only: gt 0 and lt 1 never hold together") {
+  const fsmtest::Hhea hhea;
+  std::vector<Error> diagnostics;
+  const auto result = hhea.compile(twoStates(R"("condition": {"key": "internal.operator.StartStop", "gt": 0})",
+                                             R"("condition": {"key": "internal.operator.StartStop", "lt": 1})"),
+                                   &diagnostics);
+  INFO(listing(diagnostics));
+  CHECK(result);
+  CHECK(spinErrors(diagnostics) == 0);
+  // a signal without a value table can be 0.5
+  std::vector<Error> real;
+  CHECK_FALSE(hhea.compile(twoStates(R"("condition": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "gt": 50})",
+                                     R"("condition": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "lt": 51})"),
+                           &real));
+  CHECK(count(real, Severity::Error, "/states/0/transitions/0", "HS_FastUpdSOC = 50.5") == 1);
+}
+
 TEST_CASE("a cycle that needs an input to change is accepted") {
   const fsmtest::Hhea hhea;
   std::vector<Error> diagnostics;
