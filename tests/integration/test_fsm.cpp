@@ -18,8 +18,10 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <iterator>
 #include <optional>
@@ -274,6 +276,42 @@ TEST_CASE("reload reads only regular files inside the configuration's folders, n
   // the configured file itself (no FILE) is inside its folder: accepted
   const auto again = f.vcu({"fsm", "reload"});
   CHECK_MESSAGE(again.exitCode() == 0, again.describe());
+}
+
+TEST_CASE("a reload in progress: a second one is refused, other commands are answered meanwhile (#18)") {
+  SKIP_UNLESS_ISOLATED();
+  Fixture f(SEQUENCE);
+  harness::Process& fsm = f.startFsm();
+  REQUIRE(f.waitForState(0, 5s));
+  const fs::path folder = f.config.parent_path();
+  // A large machine (about 2 MB, 20000 states): checking it keeps the worker busy a while.
+  constexpr int STATES = 20'000;
+  std::string text =
+      R"({"initialState": "Standby", "states": [{"name": "Standby", "transitions": []}, {"name": "Started", "transitions": []})";
+  for (int s = 0; s < STATES; ++s) {
+    text += R"(,{"name": "S)" + std::to_string(s) +
+            R"(", "transitions": [{"condition": {"key": "internal.operator.StartStop", "eq": 1}, "nextState": "S)" +
+            std::to_string((s + 1) % STATES) + R"("}]})";
+  }
+  text += "]}";
+  const fs::path big = folder / "big.json";
+  writeFile(big, text);
+  const fs::path firstAnswer = folder / "first-answer.txt";
+  const std::string first = VCU + " fsm reload " + big.string() + " --timeout 20 --config " + f.config.string() + " > " +
+                            firstAnswer.string() + " 2>&1";
+  auto running = std::async(std::launch::async, [&first] { return std::system(first.c_str()); });
+  REQUIRE(fsm.waitForLine("reload of " + big.string() + " requested", 5s));
+  const auto second = f.vcu({"fsm", "reload", big.string()});
+  CHECK(second.exitCode() == 1);
+  CHECK_MESSAGE(contains(second.out, "a reload is already in progress"), second.describe());
+  const auto start = std::chrono::steady_clock::now();
+  f.set("internal.operator.StartStop", "Start");
+  CHECK(std::chrono::steady_clock::now() - start < 2s);
+  REQUIRE(running.wait_for(30s) == std::future_status::ready);
+  CHECK(running.get() == 0);  // accepted: Started exists in it
+  std::ifstream in(firstAnswer);
+  const std::string answer((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK_MESSAGE(contains(answer, "accepted"), answer);
 }
 
 /// CPU time (user + system) of process `pid` in clock ticks, from /proc/PID/stat.
