@@ -3,7 +3,8 @@
 # config/supervisor/openvcu.conf, i.e. config/iceoryx/iox-roudi.sh) leaves its shared memory
 # (/dev/shm/iceoryx_mgmt, the data segment that carries every CAN frame) and its socket
 # /tmp/roudi to the stack only: owned by group openvcu with no ACL entry for another group,
-# or owner-only (0600, no ACL) when that group is missing or the user is not in it. Before,
+# or owner-only (0600, no ACL) where that group cannot be used (the three cases A, B, C of
+# config/iceoryx/iox-roudi.sh). Before,
 # all three were 0660 root:root and the data segment's ACL granted group 0 read/write.
 # Each case runs against its own /etc/group (bind-mounted in this private mount namespace,
 # so the machine's is never touched), starts RouDi, checks modes, owners and ACLs with
@@ -67,7 +68,10 @@ client_works() {
   grep -q '123#DEADBEEF' "$work/dump"
 }
 
-# run_case NAME GROUP_LINE EXPECT [IOX-ROUDI ARGS...]   EXPECT: group | owner
+# run_case NAME GROUP_LINE EXPECT [IOX-ROUDI ARGS...]
+#   EXPECT member:    all three <user>:openvcu 0660, the segment /dev/shm/openvcu with an ACL for openvcu only
+#          nonmember: iceoryx_mgmt and /tmp/roudi <user>:openvcu 0660, /dev/shm/<user's group> 0600 without ACL
+#          nogroup:   all three 0600 without ACL
 run_case() {
   local name=$1 line=$2 expect=$3
   shift 3
@@ -80,47 +84,55 @@ run_case() {
   if ! wait_for_socket; then
     fail "$name: iox-roudi did not open its socket: $(tail -3 "$work/roudi.$name.log")"
   else
-    local segment mode want_mode want_group
-    if [ "$expect" = group ]; then
-      segment=/dev/shm/openvcu want_mode=660 want_group=openvcu
-    else
-      segment=/dev/shm/$(id -gn) want_mode=600 want_group=$(id -gn)
-      # the launcher's helper closes the files right after RouDi's socket appears
-      for _ in $(seq 1 250); do [ "$(stat -c %a /tmp/roudi)" = 600 ] && break; sleep 0.02; done
-    fi
+    local socket_changed segment path mode named
+    socket_changed=$(stat -c %z /tmp/roudi)
+    declare -A want
+    case "$expect" in
+      member) segment=/dev/shm/openvcu
+        want=([/dev/shm/iceoryx_mgmt]="660 $user:openvcu" [$segment]="660 $user:openvcu" [/tmp/roudi]="660 $user:openvcu") ;;
+      nonmember) segment=/dev/shm/$(id -gn)
+        want=([/dev/shm/iceoryx_mgmt]="660 $user:openvcu" [$segment]="600 $user:openvcu" [/tmp/roudi]="660 $user:openvcu") ;;
+      nogroup) segment=/dev/shm/$(id -gn)
+        want=([/dev/shm/iceoryx_mgmt]="600 $user:$(id -gn)" [$segment]="600 $user:$(id -gn)" [/tmp/roudi]="600 $user:$(id -gn)") ;;
+    esac
+    # the launcher's helper closes files right after RouDi's socket appears: wait for it
+    [ "$expect" = member ] || for _ in $(seq 1 250); do [ "$(stat -c %a "$segment" 2>/dev/null)" = 600 ] && break; sleep 0.02; done
     for path in /dev/shm/iceoryx_mgmt "$segment" /tmp/roudi; do
       if [ ! -e "$path" ]; then fail "$name: $path missing ($(ls /dev/shm | tr '\n' ' '))"; continue; fi
       mode=$(stat -c '%a %U:%G' "$path")
       echo "$NAME: $name: $path: $mode; ACL: $(acl_of "$path")"
-      [ "$mode" = "$want_mode $user:$want_group" ] || fail "$name: $path is '$mode', expected '$want_mode $user:$want_group'"
+      [ "$mode" = "${want[$path]}" ] || fail "$name: $path is '$mode', expected '${want[$path]}'"
       # no named ACL entry for any group but openvcu (iceoryx adds group:<writer group>)
-      local named
       named=$(getfacl -c -p "$path" 2>/dev/null | grep -E '^group:[^:]+:' | grep -v '^group:openvcu:' || true)
       [ -z "$named" ] || fail "$name: $path grants a group beyond openvcu: $named"
-      if [ "$expect" = owner ]; then
-        [ -z "$(getfacl -c -p -s "$path" 2>/dev/null)" ] || fail "$name: $path still has an ACL: $(acl_of "$path")"
+      if [ "$path" != "$segment" ] || [ "$expect" != member ]; then
+        [ -z "$(getfacl -c -p -s "$path" 2>/dev/null)" ] || fail "$name: $path has an ACL: $(acl_of "$path")"
       fi
     done
-    if [ "$expect" = group ]; then
+    if [ "$expect" = member ]; then
       [ "$(acl_of "$segment")" = "user::rw- group::rw- group:openvcu:rw- mask::rw- other::---" ] ||
         fail "$name: $segment ACL is '$(acl_of "$segment")'"
+    fi
+    # services take a socket whose change time moved for a new RouDi (and restart): only the
+    # owner-only start may touch it
+    if [ "$expect" != nogroup ] && [ "$(stat -c %z /tmp/roudi)" != "$socket_changed" ]; then
+      fail "$name: /tmp/roudi was changed after RouDi created it (services would restart)"
     fi
     client_works || fail "$name: a client of user $user could not send and receive a frame: $(cat "$work/send" "$work/dump" | tail -4)"
   fi
   kill -TERM "$roudi" 2>/dev/null || true
   wait "$roudi" 2>/dev/null || true
-  # a helper of the owner-only start may still be waiting when RouDi failed: it gives up alone
   umount /etc/group
   rm -f /tmp/roudi /dev/shm/iceoryx_mgmt /dev/shm/openvcu "/dev/shm/$(id -gn)"
 }
 
 gid=$(getent group openvcu | cut -d: -f3 || true)
 [ -n "$gid" ] || gid=$(free_gid)
-run_case "group openvcu with $user as member (supervisor's command)" "openvcu:x:$gid:$user" group
-run_case "group openvcu with $user as member (roudi.toml, as the test harness)" "openvcu:x:$gid:$user" group \
+run_case "group openvcu with $user as member" "openvcu:x:$gid:$user" member
+run_case "group openvcu with $user as member, the test harness's arguments" "openvcu:x:$gid:$user" member \
   -c "$root/config/iceoryx/roudi.toml" -l warning
-run_case "no group openvcu" "" owner
-run_case "group openvcu without $user" "openvcu:x:$gid:" owner
+run_case "group openvcu without $user" "openvcu:x:$gid:" nonmember
+run_case "no group openvcu" "" nogroup
 rm -rf "$work"
 if [ $failures -ne 0 ]; then echo "$NAME: $failures failure(s)"; exit 1; fi
 echo "$NAME: PASS"
