@@ -61,7 +61,7 @@ TEST_CASE("one input value that holds both ways is refused, with that value name
         1);
 }
 
-TEST_CASE("a longer cycle is named state by state; every state's edge is checked") {
+TEST_CASE("a longer cycle is named state by state, and every state's edge is checked") {
   const fsmtest::Hhea hhea;
   std::vector<Error> diagnostics;
   const auto result = hhea.compile(R"({"initialState": "A", "states": [
