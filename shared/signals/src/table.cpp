@@ -371,7 +371,7 @@ bool SignalTable::damaged() const noexcept {
          m_guard->detached.load(std::memory_order_relaxed);
 }
 
-std::optional<TableDamage> SignalTable::checkAndRepair() {
+std::optional<TableDamage> SignalTable::checkAndRepair() noexcept {
   if (m_guard == nullptr) return std::nullopt;
   detail::GuardEntry& guard = *m_guard;
   (void)detail::restoreSize(guard);

@@ -301,8 +301,8 @@ class SignalTable {
   /// last call (empty when nothing did). Meant for the service's 1 s heartbeat tick: log
   /// the report's describe() as one line.
   /// @note restricted thread-safe: one thread calls it (others may use the table meanwhile);
-  ///       system calls (fstat, maybe ftruncate and mmap); allocates only for a report.
-  [[nodiscard]] std::optional<TableDamage> checkAndRepair();
+  ///       noexcept, no allocation; system calls (fstat, maybe ftruncate and mmap).
+  [[nodiscard]] std::optional<TableDamage> checkAndRepair() noexcept;
 
  private:
   SignalTable(int lockFd, int segmentFd, void* base, std::size_t bytes, std::uint64_t layoutHash,
