@@ -177,7 +177,7 @@ TEST_CASE("an earlier transition that must be taken instead breaks the cycle (fi
   CHECK(spinErrors(diagnostics) == 0);
 }
 
-TEST_CASE("ageGt: never received is old, so an ageGt both ways spins; ageGt one way and not ageGt back does not") {
+TEST_CASE("ageGt: never received is old, so an ageGt both ways spins, but ageGt one way and not ageGt back does not") {
   const fsmtest::Hhea hhea;
   const std::string old = R"("condition": {"key": "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts", "ageGt": "3s"})";
   std::vector<Error> both;
