@@ -133,6 +133,30 @@ run_case "group openvcu with $user as member, the test harness's arguments" "ope
   -c "$root/config/iceoryx/roudi.toml" -l warning
 run_case "group openvcu without $user" "openvcu:x:$gid:" nonmember
 run_case "no group openvcu" "" nogroup
+
+# A RouDi SIGKILLed and started again (supervisord's autorestart, the soak test) leaves its
+# socket and segments behind: the launcher must close the new segment, not the old one.
+restart_name="group openvcu without $user, RouDi SIGKILLed and started again"
+mount --bind "$(group_file restart "openvcu:x:$gid:")" /etc/group
+$roudi_command > "$work/roudi.first.log" 2>&1 &
+roudi=$!
+if wait_for_socket; then
+  old_socket=$(stat -c %i /tmp/roudi)
+  kill -KILL "$roudi"; wait "$roudi" 2>/dev/null || true
+  $roudi_command > "$work/roudi.second.log" 2>&1 &
+  roudi=$!
+  for _ in $(seq 1 250); do [ "$(stat -c %i /tmp/roudi 2>/dev/null)" != "$old_socket" ] && break; sleep 0.02; done
+  segment=/dev/shm/$(id -gn)
+  for _ in $(seq 1 250); do [ "$(stat -c %a "$segment" 2>/dev/null)" = 600 ] && break; sleep 0.02; done
+  echo "$NAME: $restart_name: $segment: $(stat -c '%a %U:%G' "$segment"); ACL: $(acl_of "$segment")"
+  [ "$(stat -c %a "$segment")" = 600 ] || fail "$restart_name: $segment is $(stat -c %a "$segment")"
+  [ -z "$(getfacl -c -p -s "$segment" 2>/dev/null)" ] || fail "$restart_name: $segment has an ACL: $(acl_of "$segment")"
+  kill -TERM "$roudi" 2>/dev/null || true
+  wait "$roudi" 2>/dev/null || true
+else
+  fail "$restart_name: iox-roudi did not open its socket: $(tail -3 "$work/roudi.first.log")"
+fi
+umount /etc/group
 rm -rf "$work"
 if [ $failures -ne 0 ]; then echo "$NAME: $failures failure(s)"; exit 1; fi
 echo "$NAME: PASS"
