@@ -5,7 +5,6 @@
 
 #include <atomic>
 #include <cerrno>
-#include <condition_variable>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -17,6 +16,7 @@
 #include "engine.hpp"
 #include "machine.hpp"
 #include "reload_file.hpp"
+#include "reload_worker.hpp"
 
 namespace openvcu::fsm {
 namespace {
@@ -65,16 +65,7 @@ struct FsmAppImpl {
   int reloadFd{-1};                        ///< eventfd: the worker or the engine thread finished
   std::optional<service::CommandReply> reloadReply;  ///< loop thread: the reload in progress
   std::string switchingFile;                         ///< loop thread: the file handed to the engine
-  std::thread worker;
-  std::mutex workerMutex;
-  std::condition_variable workerWake;
-  bool workerStop{};
-  std::optional<std::string> workerJob;  ///< the path to read
-  struct Loaded {
-    std::optional<Machine> machine;
-    std::string refusal;  ///< when no machine: "PATH: reason" (never the file's content)
-  };
-  std::optional<Loaded> workerResult;
+  std::optional<ReloadWorker> reloader;
   std::mutex reloadMutex;
   std::optional<Machine> pendingMachine;  ///< for the engine thread
   std::int64_t pendingDeadlineNs{};       ///< the command's deadline: never switched after it
@@ -95,13 +86,8 @@ struct FsmAppImpl {
 
   ~FsmAppImpl() {
     if (reloadFd >= 0) runtime.loop().removeFd(reloadFd);
-    {
-      std::lock_guard lock(workerMutex);
-      workerStop = true;
-    }
-    workerWake.notify_all();
-    if (worker.joinable()) worker.join();  // it reads a regular file at most: never blocked for long
-    stopping.store(true);                   // the engine thread sees it within LONGEST_SLEEP
+    reloader.reset();     // waits for a job in progress: a bounded read and check
+    stopping.store(true);  // the engine thread sees it within LONGEST_SLEEP
     if (thread.joinable()) thread.join();
     if (reloadReply) reloadReply->refuse("vcu-fsm is stopping; nothing was switched");
     if (reloadFd >= 0) ::close(reloadFd);
@@ -145,7 +131,7 @@ struct FsmAppImpl {
     if (Status added = runtime.loop().addFd(reloadFd, [this] { onReloadProgress(); }); !added) return added.error();
     if (Status answering = runtime.answerCommands(commandPolicy()); !answering) return answering.error();
     registerCounters();
-    worker = std::thread([this] { runWorker(); });
+    reloader.emplace([this](const std::string& path) { return loadForReload(path); }, [this] { signalLoop(); });
     thread = std::thread([this] { runEngine(); });
     return {};
   }
@@ -214,44 +200,18 @@ struct FsmAppImpl {
     return true;
   }
 
-  // ---- reload worker ----------------------------------------------------------------------
+  // ---- reload worker thread ---------------------------------------------------------------
 
-  void runWorker() {
-    std::unique_lock lock(workerMutex);
-    for (;;) {
-      workerWake.wait(lock, [this] { return workerStop || workerJob.has_value(); });
-      if (workerStop) return;
-      const std::string path = std::move(*workerJob);
-      workerJob.reset();
-      lock.unlock();
-      Loaded loaded = load(path);
-      lock.lock();
-      workerResult = std::move(loaded);
-      signalLoop();
-    }
-  }
-
-  /// Reads (reload_file.hpp) and checks the file. The diagnostics quote the file, so they go
-  /// to the local log only; the refusal names the path and counts.
-  Loaded load(const std::string& path) {
-    auto text = readReloadFile(path, folders, RELOAD_MAX_BYTES);
-    if (!text) return Loaded{std::nullopt, text.error().message};
+  /// The checked machine, or a refusal that names the path and never quotes the file; the
+  /// diagnostics, which do, go to the local log only (stderr, not the bus).
+  Result<Machine> loadForReload(const std::string& path) {
     std::vector<Error> diagnostics;
-    auto machineResult = parseMachine(*text, path, runtime.config(), runtime.catalog(), &diagnostics);
-    std::size_t errors = 0;
+    auto machineResult = loadReloadMachine(path, folders, runtime.config(), runtime.catalog(), &diagnostics);
     for (const Error& diagnostic : diagnostics) {
-      if (diagnostic.severity == Severity::Error) ++errors;
       localLog.log(diagnostic.severity == Severity::Error ? ipc::LogLevel::Error : ipc::LogLevel::Warning,
                    "reload: " + diagnostic.toString());
     }
-    if (!machineResult) {
-      std::string reason = path + ": " + std::to_string(std::max<std::size_t>(errors, 1)) +
-                           (errors > 1 ? " errors" : " error");
-      const Location& first = machineResult.error().location;
-      if (first.line > 0) reason += " (the first at line " + std::to_string(first.line) + ")";
-      return Loaded{std::nullopt, reason + "; details in vcu-fsm's log or from `vcu fsm check " + path + "`"};
-    }
-    return Loaded{std::move(*machineResult), {}};
+    return machineResult;
   }
 
   void publishOutputs() {
@@ -336,11 +296,7 @@ struct FsmAppImpl {
     }
     runtime.log().info("reload of " + path + " requested");
     reloadReply.emplace(std::move(reply));
-    {
-      std::lock_guard lock(workerMutex);
-      workerJob = std::move(path);
-    }
-    workerWake.notify_one();
+    reloader->start(std::move(path));
   }
 
   /// Loop thread, when reloadFd is readable: a checked file goes to the engine thread (unless
@@ -348,23 +304,19 @@ struct FsmAppImpl {
   void onReloadProgress() {
     std::uint64_t count = 0;
     (void)!::read(reloadFd, &count, sizeof count);
-    std::optional<Loaded> loaded;
-    {
-      std::lock_guard lock(workerMutex);
-      loaded = std::move(workerResult);
-      workerResult.reset();
-    }
+    std::optional<Result<Machine>> loaded = reloader->take();
     if (loaded && reloadReply) {
-      if (!loaded->machine) {
-        runtime.log().warning("reload refused: " + loaded->refusal);
-        finishReload([&](service::CommandReply& reply) { reply.refuse(loaded->refusal + "; the running machine is kept"); });
+      if (!*loaded) {
+        const std::string reason = loaded->error().message;
+        runtime.log().warning("reload refused: " + reason);
+        finishReload([&](service::CommandReply& reply) { reply.refuse(reason + "; the running machine is kept"); });
       } else if (reloadReply->expired()) {
-        runtime.log().warning("reload of " + loaded->machine->file + " not switched: its deadline passed");
+        runtime.log().warning("reload of " + (*loaded)->file + " not switched: its deadline passed");
         finishReload([](service::CommandReply& reply) { reply.expire(); });
       } else {
-        switchingFile = loaded->machine->file;
+        switchingFile = (*loaded)->file;
         std::lock_guard lock(reloadMutex);
-        pendingMachine = std::move(*loaded->machine);
+        pendingMachine = std::move(**loaded);
         pendingDeadlineNs = reloadReply->deadlineNs();
         reloadResult.reset();
         ++reloadRequests;

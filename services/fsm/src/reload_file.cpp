@@ -155,4 +155,23 @@ Result<std::string> readReloadFile(const std::string& path, const std::vector<st
   return content;
 }
 
+Result<Machine> loadReloadMachine(const std::string& path, const std::vector<std::string>& allowedFolders,
+                                  const config::VehicleConfig& vehicle, const signals::Catalog& catalog,
+                                  std::vector<Error>* diagnostics) {
+  auto text = readReloadFile(path, allowedFolders, RELOAD_MAX_BYTES);
+  if (!text) return text.error();
+  std::vector<Error> found;
+  auto machineResult = parseMachine(*text, path, vehicle, catalog, &found);
+  const std::size_t errors = static_cast<std::size_t>(
+      std::count_if(found.begin(), found.end(), [](const Error& error) { return error.severity == Severity::Error; }));
+  if (diagnostics != nullptr) diagnostics->insert(diagnostics->end(), found.begin(), found.end());
+  if (machineResult) return machineResult;
+  const std::size_t shown = std::max<std::size_t>(errors, 1);
+  std::string reason = std::to_string(shown) + (shown == 1 ? " error" : " errors");
+  if (const Location& first = machineResult.error().location; first.line > 0) {
+    reason += " (the first at line " + std::to_string(first.line) + ")";
+  }
+  return refusal(path, reason + "; details in vcu-fsm's log or from `vcu fsm check " + path + "`");
+}
+
 }  // namespace openvcu::fsm

@@ -26,8 +26,10 @@
 #include <string>
 #include <vector>
 
+#include "machine.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
+#include "openvcu/signals/catalog.hpp"
 
 namespace openvcu::fsm {
 
@@ -43,5 +45,14 @@ inline constexpr std::size_t RELOAD_MAX_BYTES = 4 * 1024 * 1024;
 /// @note thread-safe; blocks only on the file system (never on a FIFO or a device).
 Result<std::string> readReloadFile(const std::string& path, const std::vector<std::string>& allowedFolders,
                                    std::size_t maxBytes);
+
+/// readReloadFile, then the complete check (parseMachine). Refused: readReloadFile's error,
+/// or "PATH: N errors (the first at line L); details in vcu-fsm's log or from `vcu fsm check
+/// PATH`", which never quotes the file; the diagnostics themselves (they do quote it) are
+/// appended to *diagnostics, for a log that stays on this machine.
+/// @note thread-safe (the configuration and the catalog are only read).
+Result<Machine> loadReloadMachine(const std::string& path, const std::vector<std::string>& allowedFolders,
+                                  const config::VehicleConfig& vehicle, const signals::Catalog& catalog,
+                                  std::vector<Error>* diagnostics);
 
 }  // namespace openvcu::fsm

@@ -7,13 +7,18 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdlib>
+#include <mutex>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "fsm_test_support.hpp"
 #include "reload_file.hpp"
+#include "reload_worker.hpp"
 
 using namespace openvcu;
 namespace fs = std::filesystem;
@@ -61,8 +66,9 @@ struct Folders {
   }
 };
 
-/// Refused, quickly, with "PATH: ...REASON..." and without the secret.
-void requireRefused(const Result<std::string>& result, const std::string& path, const std::string& reason) {
+/// Refused with "PATH: ...REASON..." and without the secret.
+template <typename T>
+void requireRefused(const Result<T>& result, const std::string& path, const std::string& reason) {
   REQUIRE_FALSE(result);
   const std::string& message = result.error().message;
   INFO(message);
@@ -191,4 +197,61 @@ TEST_CASE("the reload folders are the FSM file's folder and the vehicle configur
   CHECK(fsm::reloadFolders(vehicle) == std::vector<std::string>{"/srv/fsm/v2", "/etc/openvcu/hhea"});
   vehicle.fsmFile = "/etc/openvcu/hhea/fsm.json";
   CHECK(fsm::reloadFolders(vehicle) == std::vector<std::string>{"/etc/openvcu/hhea"});
+}
+
+TEST_CASE("loadReloadMachine: a file with errors is refused with its path and error count, never its content") {
+  const Folders folders;
+  const fsmtest::Hhea hhea;
+  const fs::path leaky = folders.config / "leaky.json";
+  Folders::write(leaky, std::string(R"({"initialState": ")") + SECRET + R"(", "states": [{"name": "A"}]})");
+  fs::permissions(leaky, fs::perms::owner_read | fs::perms::owner_write);
+  std::vector<Error> diagnostics;
+  const auto result = fsm::loadReloadMachine(leaky.string(), folders.allowed(), hhea.vehicle, hhea.catalog, &diagnostics);
+  requireRefused(result, leaky.string(), "1 error; details in vcu-fsm's log or from `vcu fsm check " + leaky.string() + "`");
+  // the diagnostics (for the local log only) do say what is wrong
+  REQUIRE_FALSE(diagnostics.empty());
+  CHECK(diagnostics.front().message.find(SECRET) != std::string::npos);
+
+  const fs::path broken = folders.config / "broken.json";
+  Folders::write(broken, "{\n  \"initialState\": \"A\",\n  \"states\": [,]\n}");
+  requireRefused(fsm::loadReloadMachine(broken.string(), folders.allowed(), hhea.vehicle, hhea.catalog, nullptr),
+                 broken.string(), "1 error (the first at line 3)");
+
+  const auto good = fsm::loadReloadMachine((folders.config / "fsm.json").string(), folders.allowed(), hhea.vehicle,
+                                           hhea.catalog, nullptr);
+  REQUIRE_MESSAGE(good, (good ? "" : good.error().message));
+  CHECK(good->states.size() == 1);
+  // outside the folders: readReloadFile's refusal
+  requireRefused(fsm::loadReloadMachine((folders.outside / "secret.json").string(), folders.allowed(), hhea.vehicle,
+                                        hhea.catalog, nullptr),
+                 (folders.outside / "secret.json").string(), "outside the folders");
+}
+
+TEST_CASE("the reload worker loads on its own thread and reports when it finished") {
+  std::mutex mutex;
+  std::condition_variable done;
+  bool finished = false;
+  std::thread::id loadedOn;
+  fsm::ReloadWorker sut(
+      [&](const std::string& path) -> Result<fsm::Machine> {
+        loadedOn = std::this_thread::get_id();
+        return Error{path + ": refused for the test"};
+      },
+      [&] {
+        std::lock_guard lock(mutex);
+        finished = true;
+        done.notify_all();
+      });
+  CHECK_FALSE(sut.take());
+  sut.start("/x/fsm.json");
+  {
+    std::unique_lock lock(mutex);
+    REQUIRE(done.wait_for(lock, std::chrono::seconds(5), [&] { return finished; }));
+  }
+  auto result = sut.take();
+  REQUIRE(result);
+  REQUIRE_FALSE(*result);
+  CHECK(result->error().message == "/x/fsm.json: refused for the test");
+  CHECK(loadedOn != std::this_thread::get_id());
+  CHECK_FALSE(sut.take());  // once
 }
