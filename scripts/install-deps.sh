@@ -48,13 +48,21 @@ done
 
 # The command group (docs/design/security.md): root and its members may command the stack.
 ensure_group() {
-  getent group openvcu >/dev/null 2>&1 && return 0
-  if [ "$(id -u)" -eq 0 ]; then
-    groupadd --system openvcu && echo "install-deps: created the system group openvcu (who may command the stack)"
-  elif command -v sudo >/dev/null 2>&1; then
-    sudo groupadd --system openvcu && echo "install-deps: created the system group openvcu (who may command the stack)"
-  else
-    echo "install-deps: no group openvcu and not root: only root and the stack's user may command it" >&2
+  local sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then sudo="sudo"; else
+      getent group openvcu >/dev/null 2>&1 ||
+        echo "install-deps: no group openvcu and not root: only root and the stack's user may command it" >&2
+      return 0
+    fi
+  fi
+  if ! getent group openvcu >/dev/null 2>&1; then
+    $sudo groupadd --system openvcu && echo "install-deps: created the system group openvcu (who may command the stack)"
+  fi
+  # The services run as root: as a member, RouDi's shared memory is root:openvcu with no
+  # other ACL (config/iceoryx/iox-roudi.sh, case A).
+  if ! id -nG root | tr ' ' '\n' | grep -qx openvcu; then
+    $sudo usermod -a -G openvcu root && echo "install-deps: root joined group openvcu"
   fi
 }
 

@@ -407,7 +407,9 @@ Status Harness::startRoudi(const std::string& configPath) {
   if (!isolated()) return Error{NOT_ISOLATED};
   const std::string config =
       configPath.empty() ? std::string(OPENVCU_HARNESS_SOURCE_DIR) + "/config/iceoryx/roudi.toml" : configPath;
-  ProcessSpec spec{.name = "iox-roudi", .argv = {"iox-roudi", "-c", config, "-l", "warning"}};
+  // The stack's launcher (group openvcu, no group-root ACL: config/iceoryx/iox-roudi.sh).
+  const std::string launcher = std::string(OPENVCU_HARNESS_SOURCE_DIR) + "/config/iceoryx/iox-roudi.sh";
+  ProcessSpec spec{.name = "iox-roudi", .argv = {launcher, "-c", config, "-l", "warning"}};
   auto started = spawn(std::move(spec), false, nextLogName("iox-roudi") + ".log");
   if (!started) return started.error();
   m_roudi = *started;

@@ -95,6 +95,7 @@ Status Service::start() {
   const auto maybeSlot = m_catalog.indexOf(slotKey);
   m_heartbeat.emplace(m_program, m_config.instance, &*m_events, &*m_table, maybeSlot, m_info.writerId);
   m_heartbeat->addCounterSource("log_suppressed", [this] { return static_cast<std::int64_t>(m_logger.suppressed()); });
+  m_heartbeat->addCounterSource("table_damage", [this] { return m_tableDamage; });
   m_heartbeat->addCounterSource("event_errors", [this] {
     return static_cast<std::int64_t>(m_events->publishFailures() + m_events->decodeErrors() +
                                      m_events->callbackErrors());
@@ -167,6 +168,12 @@ void Service::markReady() {
 }
 
 void Service::onHeartbeatTick() {
+  // A truncated or overwritten table (docs/design/signal-table.md, "Damage"): the table
+  // library has absorbed the bus error and restored the segment; say so once, here.
+  if (const auto maybeDamage = m_table->checkAndRepair()) {
+    ++m_tableDamage;
+    m_logger.error(maybeDamage->describe(m_table->info().name));
+  }
   m_heartbeat->beat();
   // Once a second: a RouDi restarted under this process has cut its iceoryx ports off for
   // good (iceoryx 2.0 cannot re-register them), so end with a code the supervisor restarts.

@@ -136,6 +136,7 @@ class Service {
   std::unique_ptr<CommandHandler> m_commands;
   std::chrono::steady_clock::time_point m_start;
   std::string m_stopReason;
+  std::int64_t m_tableDamage{0};  ///< damage episodes reported (heartbeat "table_damage")
   bool m_readinessDeferred{false};
   bool m_ready{false};
   bool m_stopping{false};
