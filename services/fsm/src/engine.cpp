@@ -99,6 +99,33 @@ void Engine::resize() {
   m_held.assign(most, 0);
   m_conditions.assign(most, 0);
   m_outputs.transitions.reserve(MAX_FIRINGS + 2);
+
+  // The signals whose commands restoreTable() may write back: every action target and
+  // every input read on the command plane. What was known of them survives a reload.
+  std::vector<OwnedCommand> owned;
+  std::vector<std::uint32_t> ownedOf(m_catalog.size(), NONE);
+  const auto own = [&](signals::SignalIndex index) {
+    if (index >= ownedOf.size() || ownedOf[index] != NONE) return;
+    ownedOf[index] = static_cast<std::uint32_t>(owned.size());
+    OwnedCommand entry{index, 0.0, false};
+    if (index < m_ownedOf.size() && m_ownedOf[index] != NONE) entry = m_owned[m_ownedOf[index]];
+    owned.push_back(entry);
+  };
+  const auto ownTargets = [&](const std::vector<Action>& actions) {
+    for (const Action& action : actions) {
+      if (action.kind == ActionKind::SetSignal) own(action.signal);
+    }
+  };
+  for (const State& state : m_machine.states) {
+    ownTargets(state.entry);
+    ownTargets(state.exit);
+    for (const Transition& transition : state.transitions) ownTargets(transition.actions);
+  }
+  for (const SignalRef& ref : m_machine.signals) {
+    if (ref.plane == ReadPlane::Command) own(ref.index);
+  }
+  m_owned = std::move(owned);
+  m_ownedOf = std::move(ownedOf);
 }
 
 void Engine::clearOutputs() noexcept {
@@ -158,7 +185,42 @@ Status Engine::replace(Machine machine, std::int64_t monoNs, std::int64_t realNs
   return {};
 }
 
-bool Engine::refresh() noexcept {
+std::size_t Engine::restoreTable(std::int64_t monoNs, std::int64_t realNs) noexcept {
+  m_graceUntilNs = monoNs + DAMAGE_GRACE_NS;
+  for (Sample& sample : m_samples) sample.written = 0;  // the table's counters start again from 0
+  m_access.writeStatus(m_slots.machine, static_cast<double>(m_machine.hash), monoNs);
+  for (std::uint32_t timer = 0; timer < m_slots.timers.size(); ++timer) {
+    const std::int64_t since = timer < m_timers.size() ? m_timers[timer] : 0;
+    m_access.writeStatus(m_slots.timers[timer], static_cast<double>(since) / NS_PER_S, monoNs);
+  }
+  std::size_t written = 0;
+  for (const OwnedCommand& owned : m_owned) {
+    if (!owned.ours) continue;
+    m_access.writeCommand(owned.index, owned.value, monoNs);
+    ++written;
+  }
+  writeState(monoNs, realNs);  // last, as after a transition
+  return written;
+}
+
+void Engine::remember(signals::SignalIndex index, double value, bool ours) noexcept {
+  if (index >= m_ownedOf.size() || m_ownedOf[index] == NONE) return;
+  OwnedCommand& owned = m_owned[m_ownedOf[index]];
+  owned.value = value;
+  owned.ours = ours;
+}
+
+void Engine::trackCommands() noexcept {
+  for (OwnedCommand& owned : m_owned) {
+    const auto snapshot = m_access.read(owned.index);
+    // Never commanded (or the table lost it): keep what was known, restoreTable() needs it.
+    if (!snapshot || snapshot->command.updates == 0) continue;
+    owned.value = snapshot->command.value;
+    owned.ours = snapshot->command.writer == FSM_WRITER;
+  }
+}
+
+bool Engine::refresh(std::int64_t monoNs) noexcept {
   bool any = false;
   for (std::size_t s = 0; s < m_machine.signals.size(); ++s) {
     const SignalRef& ref = m_machine.signals[s];
@@ -167,13 +229,23 @@ bool Engine::refresh() noexcept {
     Sample sample;
     const auto command = ref.plane == ReadPlane::Command ? signals::effectiveCommand(*snapshot) : std::nullopt;
     if (command) {
-      sample = Sample{command->value, command->timestampNs, signals::Quality::Valid, true};
+      sample = Sample{command->value, command->timestampNs, signals::Quality::Valid, true, 0};
     } else if (snapshot->bus.updates > 0) {
-      sample = Sample{snapshot->bus.value, snapshot->bus.timestampNs, snapshot->bus.quality, true};
+      sample = Sample{snapshot->bus.value, snapshot->bus.timestampNs, snapshot->bus.quality, true, 0};
     } else if (ref.initial) {
-      sample = Sample{*ref.initial, 0, signals::Quality::Valid, true};
+      sample = Sample{*ref.initial, 0, signals::Quality::Valid, true, 0};
     }
+    sample.written = snapshot->bus.updates;
+    if (ref.plane == ReadPlane::Command) sample.written += snapshot->command.updates + snapshot->override.updates;
     Sample& current = m_samples[s];
+    // Update counters go back only when the table lost its values (issue 18); whoever
+    // notices first starts the grace window, restoreTable() or this.
+    if (sample.written < current.written) m_graceUntilNs = std::max(m_graceUntilNs, monoNs + DAMAGE_GRACE_NS);
+    if (sample.written == 0 && current.present && monoNs < m_graceUntilNs) {
+      current.written = 0;  // wiped and not written again yet: keep the previous sample
+      continue;
+    }
+    current.written = sample.written;
     const bool changed = sample.present != current.present || sample.quality != current.quality ||
                          (sample.present && sample.value != current.value) ||
                          sample.timestampNs != current.timestampNs;
@@ -191,7 +263,9 @@ bool Engine::refresh() noexcept {
 
 bool Engine::step(std::int64_t monoNs, std::int64_t realNs, bool force) {
   ++m_counters.steps;
-  refresh();
+  if (m_graceUntilNs > 0 && monoNs >= m_graceUntilNs) m_graceUntilNs = 0;  // over: inputs read as they are
+  trackCommands();
+  refresh(monoNs);
   bool relevant = force || monoNs >= m_deadline;
   if (!relevant) {
     for (const std::uint32_t signal : m_machine.states[m_state].signals) {
@@ -270,7 +344,7 @@ void Engine::evaluate(std::int64_t monoNs, std::int64_t realNs) {
     }
     m_outputs.transitions.push_back(
         ipc::FsmTransition{0, m_machine.states[from].name, stateName(), cause(transition)});
-    refresh();  // our own writes may feed the next round
+    refresh(monoNs);  // our own writes may feed the next round
   }
 }
 
@@ -322,6 +396,7 @@ bool Engine::runActions(const std::vector<Action>& actions, std::int64_t monoNs)
         double value = action.value;
         if (action.copy && !copiedValue(action, value)) break;  // the source has no value yet
         const auto snapshot = m_access.read(action.signal);
+        remember(action.signal, value, true);
         if (snapshot && snapshot->command.updates > 0 && snapshot->command.value == value &&
             snapshot->command.writer == FSM_WRITER) {
           break;  // already commanded: no write, no change to wake anyone

@@ -14,6 +14,7 @@
 // and after a transition evaluates again until nothing more fires (at most MAX_FIRINGS).
 // Commands are written before anything is formatted or published.
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -36,6 +37,10 @@ inline constexpr signals::WriterId FSM_WRITER = 3;
 /// costs at most MAX_FIRINGS transitions per input change, never a spinning core.
 inline constexpr std::uint32_t MAX_FIRINGS = 32;
 inline constexpr std::int64_t NO_DEADLINE = std::numeric_limits<std::int64_t>::max();
+/// After the table lost its values (issue 18: truncated or overwritten), how long an input
+/// that reads as never written keeps its previous sample: long enough for the slowest
+/// input (1 s cycle) to be written again, so the wipe is not taken for a sensor dropout.
+inline constexpr std::int64_t DAMAGE_GRACE_NS = 1'500'000'000;
 
 /// How the engine reads and writes signals: the shared table in the service, plain memory
 /// in `vcu fsm replay` and in tests.
@@ -132,10 +137,22 @@ class Engine {
   /// Switches to `machine` keeping the current state (by name) and its entry time; `for`
   /// timers restart. Refused, with the old machine kept, when the state does not exist in it.
   Status replace(Machine machine, std::int64_t monoNs, std::int64_t realNs);
+  /// After the table lost its values (docs/design/signal-table.md, "Damage"): writes back
+  /// everything the FSM keeps there (machine hash, state, entry time, `for` timers) and the
+  /// last command of every signal the FSM (its actions, or commands answered by vcu-fsm)
+  /// commanded and nobody else commanded since, and starts the DAMAGE_GRACE_NS window in
+  /// which an input that reads as never written keeps its previous sample. Returns the
+  /// number of commands written back.
+  /// @note noexcept, allocation-free.
+  std::size_t restoreTable(std::int64_t monoNs, std::int64_t realNs) noexcept;
 
-  /// The earliest CLOCK_MONOTONIC time a timer (`for`, `after`, `ageGt`) can change an
-  /// evaluation; NO_DEADLINE when none runs.
-  [[nodiscard]] std::int64_t nextDeadlineNs() const noexcept { return m_deadline; }
+  /// The earliest CLOCK_MONOTONIC time a timer (`for`, `after`, `ageGt`) or the end of a
+  /// damage grace window can change an evaluation; NO_DEADLINE when none runs.
+  [[nodiscard]] std::int64_t nextDeadlineNs() const noexcept {
+    return m_graceUntilNs > 0 ? std::min(m_deadline, m_graceUntilNs) : m_deadline;
+  }
+  /// true while inputs that read as never written keep their previous samples.
+  [[nodiscard]] bool inDamageGrace(std::int64_t monoNs) const noexcept { return monoNs < m_graceUntilNs; }
   [[nodiscard]] std::uint32_t state() const noexcept { return m_state; }
   [[nodiscard]] const std::string& stateName() const noexcept { return m_machine.states[m_state].name; }
   [[nodiscard]] std::int64_t enteredNs() const noexcept { return m_enteredNs; }
@@ -150,10 +167,22 @@ class Engine {
     std::int64_t timestampNs{};
     signals::Quality quality{signals::Quality::NeverReceived};
     bool present{};
+    /// The update counters of the planes read (bus; + command + override for ReadPlane::
+    /// Command): they only grow, unless the table lost its values.
+    std::uint64_t written{};
+  };
+  /// The last command of a signal the FSM commands or reads on the command plane.
+  struct OwnedCommand {
+    signals::SignalIndex index{};
+    double value{};
+    bool ours{};  ///< the newest command seen was the FSM's (FSM_WRITER)
   };
 
   void resize();
-  bool refresh() noexcept;
+  bool refresh(std::int64_t monoNs) noexcept;
+  /// Notes, per owned signal, whether its newest command is the FSM's (one read each).
+  void trackCommands() noexcept;
+  void remember(signals::SignalIndex index, double value, bool ours) noexcept;
   void evaluate(std::int64_t monoNs, std::int64_t realNs);
   bool evalNode(std::uint32_t node, std::int64_t monoNs) noexcept;
   bool evalRaw(const ConditionNode& node, std::int64_t monoNs) noexcept;
@@ -176,10 +205,13 @@ class Engine {
   std::vector<std::int64_t> m_timers;      ///< per `for` timer: CLOCK_MONOTONIC start, 0 idle
   std::vector<std::uint8_t> m_held;        ///< per transition of the current state: true at the last evaluation
   std::vector<std::uint8_t> m_conditions;  ///< scratch: this evaluation's results
+  std::vector<OwnedCommand> m_owned;       ///< action targets and command-plane inputs, once each
+  std::vector<std::uint32_t> m_ownedOf;    ///< per catalog index: its entry in m_owned, or NONE
   std::uint32_t m_state{};
   std::int64_t m_enteredNs{};
   std::int64_t m_deadline{NO_DEADLINE};
   std::int64_t m_pendingDeadline{NO_DEADLINE};
+  std::int64_t m_graceUntilNs{};  ///< CLOCK_MONOTONIC end of the damage grace window; 0: none
   bool m_looping{};  ///< the last evaluation was stopped by the loop guard (fsm_loop raised)
   Outputs m_outputs;
   EngineCounters m_counters;

@@ -159,8 +159,11 @@ struct FsmAppImpl {
   }
 
   void runEngine() {
+    signals::SignalTable& table = runtime.table();
+    std::uint64_t seenDamage = table.damageCount();
     signals::SignalWatch watch = watchMachine();
     while (!stopping.load(std::memory_order_relaxed)) {
+      restoreAfterDamage(seenDamage, watch);
       const std::uint32_t epoch = watch.epoch();
       if (takeReload()) {
         watch = watchMachine();  // the new machine reads other signals
@@ -169,12 +172,29 @@ struct FsmAppImpl {
       engine->step(signals::monotonicNowNs(), realtimeNs());
       publishOutputs();
       mirrorCounters();
+      // Damage met during the step is repaired before sleeping, not after the next wake-up.
+      if (table.damageCount() != seenDamage) continue;
       const std::int64_t now = signals::monotonicNowNs();
       const std::int64_t deadline = engine->nextDeadlineNs();
       std::chrono::nanoseconds timeout = LONGEST_SLEEP;
       if (deadline != NO_DEADLINE) timeout = std::min(timeout, std::chrono::nanoseconds(std::max<std::int64_t>(deadline - now, 0)));
       if (timeout.count() > 0) (void)watch.wait(epoch, timeout);
     }
+  }
+
+  /// The table lost its values since `seenDamage` (docs/design/signal-table.md, "Damage"):
+  /// the watch's entry and bits went with the header, so it is made again; the engine
+  /// writes back its state, timers and commands and keeps its input samples for a while.
+  void restoreAfterDamage(std::uint64_t& seenDamage, signals::SignalWatch& watch) {
+    const std::uint64_t damage = runtime.table().damageCount();
+    if (damage == seenDamage) return;
+    seenDamage = damage;
+    watch = {};  // leaves the entry untouched: it may be another process's by now
+    watch = watchMachine();
+    const std::size_t restored = engine->restoreTable(signals::monotonicNowNs(), realtimeNs());
+    runtime.log().warning("the signal table lost its values: state '" + engine->stateName() + "' and " +
+                          std::to_string(restored) + " commands written back; inputs not received since keep " +
+                          "their last value for " + formatDuration(DAMAGE_GRACE_NS));
   }
 
   /// true when a new machine was taken (switched, refused or past its deadline) for a
