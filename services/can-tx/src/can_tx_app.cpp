@@ -14,6 +14,7 @@
 #include "openvcu/service/timer.hpp"
 #include "scheduler.hpp"
 #include "tx_thread.hpp"
+#include "writer_watch.hpp"
 
 namespace openvcu::cantx {
 namespace {
@@ -39,10 +40,6 @@ struct BusIo {
   std::atomic<std::uint64_t> framesSent{};
 };
 
-struct WriterState {
-  bool lost{};
-};
-
 struct CanTxAppImpl final : TxPort, Clock {
   service::Service& runtime;
   const config::VehicleConfig& vehicle;
@@ -52,9 +49,10 @@ struct CanTxAppImpl final : TxPort, Clock {
   std::unique_ptr<Scheduler> scheduler;
   std::optional<TxThread> thread;
   std::optional<service::PeriodicTimer> watchTimer;
-  std::vector<WriterState> writers;
+  std::vector<WriterWatch> writers;  ///< per schedule.writers entry
   std::int64_t startNs{};
   std::uint64_t writersLost{};
+  std::uint64_t seenDamage{};  ///< the table's damageCount() when can-tx last wrote its values
 
   explicit CanTxAppImpl(service::Service& service) : runtime(service), vehicle(service.config()) {}
   ~CanTxAppImpl() override {
@@ -173,7 +171,9 @@ struct CanTxAppImpl final : TxPort, Clock {
     }
     if (Status answering = runtime.answerCommands(commandPolicy()); !answering) return answering.error();
 
-    writers.assign(schedule.writers.size(), WriterState{});
+    seenDamage = runtime.table().damageCount();
+    writers.clear();
+    for (const WatchedWriter& writer : schedule.writers) writers.emplace_back(writer.timeoutNs, startNs, seenDamage);
     auto timerResult = service::PeriodicTimer::create(WATCH_PERIOD);
     if (!timerResult) return timerResult.error();
     watchTimer.emplace(std::move(*timerResult));
@@ -361,34 +361,55 @@ struct CanTxAppImpl final : TxPort, Clock {
 
   void watchWriters() {
     const std::int64_t now = signals::monotonicNowNs();
+    signals::SignalTable& table = runtime.table();
     for (std::size_t w = 0; w < schedule.writers.size(); ++w) {
       const WatchedWriter& writer = schedule.writers[w];
-      std::int64_t since = startNs;
-      if (const auto beat = runtime.table().readBus(writer.heartbeat);
-          beat && beat->quality != signals::Quality::NeverReceived) {
-        since = std::max(since, beat->timestampNs);
-      }
-      const bool lost = now - since > writer.timeoutNs;
-      if (lost && !writers[w].lost) {
-        writers[w].lost = true;
+      const auto beat = table.readBus(writer.heartbeat);
+      // The damage count after the read: a read that met the damage counts it.
+      const WriterChange change = writers[w].update(beat, table.damageCount(), now);
+      if (change == WriterChange::Lost) {
         ++writersLost;
-        for (const SafeValue& safe : schedule.safeValues) {
-          runtime.table().writeCommand(safe.signal, safe.value, now, CAN_TX_WRITER);
-        }
+        writeSafeValues(now);
         fault("writer_lost." + writer.service, ipc::FaultSeverity::Critical, true,
               "no heartbeat from " + writer.service + " for " + std::to_string(writer.timeoutNs / NS_PER_MS) +
                   " ms: " + std::to_string(schedule.safeValues.size()) +
                   " safe values commanded; keep-alive and safety messages continue");
         runtime.setStatus("writer " + writer.service + " lost: safe values commanded");
-      } else if (!lost && writers[w].lost) {
-        writers[w].lost = false;
+      } else if (change == WriterChange::Back) {
         fault("writer_lost." + writer.service, ipc::FaultSeverity::Critical, false,
               writer.service + " is back; the safe values stay until it commands otherwise");
-        if (std::none_of(writers.begin(), writers.end(), [](const WriterState& state) { return state.lost; })) {
+        if (std::none_of(writers.begin(), writers.end(), [](const WriterWatch& watch) { return watch.lost(); })) {
           runtime.setStatus("ready");
         }
       }
     }
+    if (const std::uint64_t damage = table.damageCount(); damage != seenDamage) {
+      seenDamage = damage;
+      restoreAfterDamage(now);
+    }
+  }
+
+  void writeSafeValues(std::int64_t now) {
+    for (const SafeValue& safe : schedule.safeValues) {
+      runtime.table().writeCommand(safe.signal, safe.value, now, CAN_TX_WRITER);
+    }
+  }
+
+  /// The table lost its values (docs/design/signal-table.md, "Damage"): writes again what
+  /// only can-tx writes and nobody re-writes by itself: the overlay's overrides (every
+  /// override can-tx answered is in it) and, while a writer is lost, the safe values. The
+  /// bus plane of what it sends comes back with each message's next frame, its heartbeat
+  /// with the next tick.
+  void restoreAfterDamage(std::int64_t now) {
+    for (const auto& [key, value] : overlay.overrides) {
+      if (const auto index = runtime.catalog().indexOf(key)) runtime.table().setOverride(*index, value, now, CAN_TX_WRITER);
+    }
+    const bool anyLost = std::any_of(writers.begin(), writers.end(), [](const WriterWatch& watch) { return watch.lost(); });
+    if (anyLost) writeSafeValues(now);
+    if (overlay.overrides.empty() && !anyLost) return;
+    runtime.log().warning("the signal table lost its values: " + std::to_string(overlay.overrides.size()) +
+                          " overrides" + (anyLost ? " and " + std::to_string(schedule.safeValues.size()) + " safe values" : "") +
+                          " written again");
   }
 
   // ---- heartbeat ----------------------------------------------------------------------------
