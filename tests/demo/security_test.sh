@@ -2,7 +2,7 @@
 # Issue 18, tried as an attacker and a careless user would, on the supervised HHEA stack
 # inside tests/harness/run_isolated.sh (docs/design/security.md):
 #   1. user nobody: `vcu signal set`, a direct connect to the command sockets, a socket of its
-#      own in the command folder: all refused, the FSM stays in Standby;
+#      own in the command folder, `vcu send` of a frame: all refused, the FSM stays in Standby;
 #   2. a member of the command group (nobody with group openvcu) may command (skipped, and
 #      said so, when the group does not exist: scripts/install-deps.sh creates it);
 #   3. a flood of 3,000 requests on one connection: every one answered (most "rate limit"),
@@ -49,6 +49,14 @@ except OSError as e:
 " 2>&1)
 echo "$NAME: nobody, raw sockets: $(echo $out)"
 echo "$out" | grep -q "CONNECTED\|BOUND" && fail "nobody reached or planted a command socket: $out"
+# frames to the bus go through iceoryx (RouDi's socket and memory: root and group openvcu only)
+out=$(runuser -u nobody -- "$vcu" send vehicle 18EF2100#0102030405060708 --config "$config" 2>&1)
+[ $? -ne 0 ] || fail "nobody's vcu send was sent: $out"
+echo "$out" | grep -q "may not use it" || fail "nobody's vcu send refusal does not say why: $out"
+echo "$NAME: nobody, vcu send: $out"
+out=$(runuser -u nobody -- "$vcu" send --direct vehicle 18EF2100#0102030405060708 --config "$config" 2>&1)
+[ $? -ne 0 ] || fail "nobody's vcu send --direct was sent: $out"
+echo "$NAME: nobody, vcu send --direct: $out"
 
 # 2. a member of the command group
 if gid=$(getent group openvcu | cut -d: -f3) && [ -n "$gid" ]; then

@@ -73,15 +73,14 @@ int probeRoudi() noexcept {
 }
 
 std::string roudiError(int error) {
-  std::string message = "iox-roudi is not running";
-  if (error == EACCES || error == EPERM) {
-    message = "iox-roudi is running but not reachable by this user";
-  }
+  const bool denied = error == EACCES || error == EPERM;
+  std::string message = denied ? "iox-roudi is running but this user may not use it" : "iox-roudi is not running";
   message += " (";
   message += ROUDI_SOCKET_PATH;
   message += ": ";
   message += std::strerror(error);
-  message += "); start it first, e.g. `iox-roudi -c config/iceoryx/roudi.toml`";
+  message += denied ? "): frame streams need root or membership of group 'openvcu' (docs/design/security.md)"
+                    : "); start it first, e.g. `config/iceoryx/iox-roudi.sh`";
   return message;
 }
 
