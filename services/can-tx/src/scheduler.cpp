@@ -107,6 +107,8 @@ struct ScheduledEntry {
   std::uint32_t length{};
   std::uint8_t sourceAddress{};
   std::vector<FieldState> fields;
+  /// Per DBC signal: the effective command it was last sent with (kept through table damage).
+  std::vector<std::optional<double>> commanded;
   std::optional<j1939::SafetyPairBuilder> pair;
   std::optional<std::size_t> headerMessage;  ///< the DBC message describing the SHM, if any
   std::vector<std::optional<signals::SignalIndex>> headerKeys;
@@ -131,6 +133,9 @@ struct Scheduler::Impl {
   Clock& clock;
   dbc::DatabaseCodec codecs;
   std::vector<SendGroup> groups;
+  std::vector<std::optional<double>> groupCommanded;  ///< per group: its signal's last effective command
+  std::uint64_t seenDamage{};   ///< table.damageCount() when the last grace window started
+  std::int64_t graceUntilNs{};  ///< CLOCK_MONOTONIC end of that window
   std::size_t room{};  ///< entries' reserved capacity: add() never reallocates
   std::vector<PreparedMessage> entries;  // pointers: atomics are not movable; reserved at create()
   SchedulerCounters counters;
@@ -161,6 +166,7 @@ struct Scheduler::Impl {
                    "not supported)"};
     }
     entry->sourceAddress = config.extended ? j1939::Id::fromCanId(config.canId).sourceAddress : 0;
+    entry->commanded.assign(config.keys.size(), std::nullopt);
     for (const ComputedField& field : config.computed) {
       FieldState state;
       state.config = field;
@@ -188,14 +194,39 @@ struct Scheduler::Impl {
     return entry;
   }
 
-  bool groupOn(const ScheduledEntry& entry) const noexcept {
-    if (!entry.config.group) return true;
-    const SendGroup& group = groups[*entry.config.group];
-    double value = group.initial;
-    if (const auto snapshot = table.read(group.signal)) {
-      if (const auto effective = signals::effectiveCommand(*snapshot)) value = effective->value;
+  /// A command that was seen and now reads as never written: the table lost its values
+  /// (update counters go back only then). True while it is kept (TABLE_DAMAGE_GRACE_NS from
+  /// when this process learnt of the damage); after that it is forgotten and the default
+  /// applies. Called only on that rare path, so the damage check costs nothing per frame.
+  bool keepAfterWipe(std::optional<double>& last) noexcept {
+    if (!last) return false;
+    const std::int64_t now = clock.monotonicNs();
+    if (const std::uint64_t damage = table.damageCount(); damage != seenDamage) {
+      seenDamage = damage;
+      graceUntilNs = now + TABLE_DAMAGE_GRACE_NS;
     }
-    return value != 0.0;
+    if (now < graceUntilNs) return true;
+    last.reset();
+    return false;
+  }
+
+  /// The effective command of `key` (override, else command), remembered in `last`; while
+  /// the table's values are lost, `last`.
+  std::optional<double> commandOf(signals::SignalIndex key, std::optional<double>& last) noexcept {
+    const auto snapshot = table.read(key);
+    if (!snapshot) return last;  // a write in progress: the previous command
+    if (const auto effective = signals::effectiveCommand(*snapshot)) {
+      last = effective->value;
+      return last;
+    }
+    if (keepAfterWipe(last)) return last;
+    return std::nullopt;
+  }
+
+  bool groupOn(const ScheduledEntry& entry) noexcept {
+    if (!entry.config.group) return true;
+    const std::size_t g = *entry.config.group;
+    return commandOf(groups[g].signal, groupCommanded[g]).value_or(groups[g].initial) != 0.0;
   }
 
   void build(ScheduledEntry& entry, Payload& payload) noexcept {
@@ -207,9 +238,7 @@ struct Scheduler::Impl {
       if (message.signals[s].muxRole == dbc::MuxRole::Multiplexed) continue;  // docs/design/can-tx.md
       std::optional<double> value = entry.config.defaults[s];
       if (const auto key = entry.config.keys[s]) {
-        if (const auto snapshot = table.read(*key)) {
-          if (const auto effective = signals::effectiveCommand(*snapshot)) value = effective->value;
-        }
+        if (const auto command = commandOf(*key, entry.commanded[s])) value = command;
       }
       if (!value) continue;
       if (entry.codec->encode(s, *value, buffer) != dbc::EncodeStatus::Ok) {
@@ -458,6 +487,8 @@ Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig
                                                      TxPort& port, Clock& clock, std::int64_t startNs) {
   auto impl = std::make_unique<Impl>(vehicle, catalog, table, port, clock);
   impl->groups = schedule.groups;
+  impl->groupCommanded.assign(impl->groups.size(), std::nullopt);
+  impl->seenDamage = table.damageCount();
   impl->localHourOffset = schedule.localHourOffset;
   impl->localMinuteOffset = schedule.localMinuteOffset;
   for (const dbc::Node& node : vehicle.database.nodes) {

@@ -20,7 +20,11 @@
 //     default, else the DBC initial payload's bits; computed fields after that;
 //   - a message whose send group's signal is 0, or that is disabled, keeps its phase but
 //     sends nothing (not counted as missed);
-//   - every sent frame's values go to the table's bus plane (source = its J1939 SA).
+//   - every sent frame's values go to the table's bus plane (source = its J1939 SA);
+//   - after the table lost its values (a truncated segment, issue 18) a signal or send group
+//     whose command was seen and now reads as never written keeps that command for
+//     TABLE_DAMAGE_GRACE_NS, so frames do not fall back to their defaults before the FSM
+//     has written its commands again.
 
 #include <array>
 #include <atomic>
@@ -41,6 +45,10 @@
 namespace openvcu::cantx {
 
 inline constexpr signals::WriterId CAN_TX_WRITER = 2;
+/// After the table lost its values (issue 18), how long a signal or send group whose command
+/// reads as never written keeps the command it last had: until the FSM (which notices within
+/// its 250 ms sleep) has written its commands again, with margin; then the defaults apply.
+inline constexpr std::int64_t TABLE_DAMAGE_GRACE_NS = 1'500'000'000;
 
 /// Where frames go (the links and the "tx" stream in the service; a recorder in tests).
 class TxPort {

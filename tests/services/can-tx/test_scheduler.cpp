@@ -505,3 +505,53 @@ TEST_CASE("issue 18: the checker of these tests counts PropA_C4 sent between the
   CHECK(ambiguousFrames(oldOrder, declared) == 1);
   CHECK(ambiguousFrames(newOrder, declared) == 0);
 }
+
+// Issue 18: the table truncated under can-tx (docs/design/signal-table.md, "Damage").
+TEST_CASE("after the table lost its values commands and send groups keep their last command for the grace window") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.command("Vehicle_Control_Unit.S1_ES_PGN61427.Control_Es_Relay", 3);
+  f.start();
+  f.runUntil(START + 100 * MS);
+  const auto before = f.port.withId(S1_ES);
+  REQUIRE_FALSE(before.empty());
+  const std::vector<std::uint8_t> commanded = bytes(before.back().frame);
+
+  REQUIRE(::truncate(signals::SignalTable::segmentPath(f.instance).c_str(), 0) == 0);
+  const std::int64_t wipedNs = f.clock.now;
+  f.port.sent.clear();
+  f.runUntil(wipedNs + cantx::TABLE_DAMAGE_GRACE_NS - MS);
+  const auto during = f.port.withId(S1_ES);
+  REQUIRE(during.size() >= 70);  // every 20 ms: the keep-alive group stayed on
+  for (const Sent& item : during) CHECK(bytes(item.frame) == commanded);
+  const auto relay = f.table->readCommand(f.key("Vehicle_Control_Unit.S1_ES_PGN61427.Control_Es_Relay"));
+  REQUIRE(relay);
+  CHECK(relay->updates == 0);  // the table really lost it: the frames carry the kept command
+
+  // The window counts from the first read that met the damage (within one 20 ms cycle).
+  f.runUntil(wipedNs + cantx::TABLE_DAMAGE_GRACE_NS + 20 * MS);
+  f.port.sent.clear();
+  f.runUntil(wipedNs + cantx::TABLE_DAMAGE_GRACE_NS + 200 * MS);
+  CHECK(f.port.withId(S1_ES).empty());  // never commanded again: the group's initial value (off)
+}
+
+TEST_CASE("a command written again during the grace window is sent at once") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.command("Vehicle_Control_Unit.S1_ES_PGN61427.Control_Es_Relay", 3);
+  f.start();
+  f.runUntil(START + 100 * MS);
+  const std::vector<std::uint8_t> relayClosed = bytes(f.port.withId(S1_ES).back().frame);
+  REQUIRE(::truncate(signals::SignalTable::segmentPath(f.instance).c_str(), 0) == 0);
+  f.runUntil(f.clock.now + 100 * MS);
+
+  f.command("internal.tx.keepAlive", 1);  // the FSM writes its commands back
+  f.command("Vehicle_Control_Unit.S1_ES_PGN61427.Control_Es_Relay", 0);
+  f.port.sent.clear();
+  f.runUntil(f.clock.now + 100 * MS);
+  const auto after = f.port.withId(S1_ES);
+  REQUIRE_FALSE(after.empty());
+  CHECK(bytes(after.back().frame) != relayClosed);
+  f.runUntil(f.clock.now + cantx::TABLE_DAMAGE_GRACE_NS);
+  CHECK_FALSE(f.port.withId(S1_ES).empty());  // commanded again: the group stays on after the window
+}
