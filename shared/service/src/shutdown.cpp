@@ -1,6 +1,7 @@
 #include "openvcu/service/shutdown.hpp"
 
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
 
@@ -10,6 +11,8 @@
 namespace openvcu::service {
 
 Result<ShutdownSignals> ShutdownSignals::install() {
+  // The parent before anything else: compared once the death signal is armed (below).
+  const pid_t parent = ::getppid();
   sigset_t set;
   sigemptyset(&set);
   sigaddset(&set, SIGTERM);
@@ -19,6 +22,19 @@ Result<ShutdownSignals> ShutdownSignals::install() {
   }
   const int fd = ::signalfd(-1, &set, SFD_NONBLOCK | SFD_CLOEXEC);
   if (fd < 0) return Error{std::string("signalfd failed: ") + std::strerror(errno)};
+  // A service ends with its supervisor (issue 19): when the parent (supervisord, the test
+  // harness, a shell) dies, even by SIGKILL, the kernel sends this process SIGTERM, which
+  // now arrives through the signalfd like any orderly stop. Armed after the mask, so the
+  // signal is never taken with its default action. A parent that died before prctl() took
+  // effect sends nothing: the process has been re-parented, getppid() differs from the
+  // parent read above, and the SIGTERM is queued here by hand. (A service whose parent is
+  // PID 1, e.g. under systemd, gets no signal from this: PID 1 does not die.)
+  if (::prctl(PR_SET_PDEATHSIG, SIGTERM) != 0) {
+    const int error = errno;
+    ::close(fd);
+    return Error{std::string("prctl(PR_SET_PDEATHSIG) failed: ") + std::strerror(error)};
+  }
+  if (::getppid() != parent) ::kill(::getpid(), SIGTERM);
   return ShutdownSignals(fd);
 }
 

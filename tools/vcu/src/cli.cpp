@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "bus_commands.hpp"
+#include "check_commands.hpp"
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
 #include "fsm_commands.hpp"
@@ -77,6 +78,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerSimCommands(app, context);
     registerRecordCommands(app, context);
     registerTopCommands(app, context);
+    registerCheckCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

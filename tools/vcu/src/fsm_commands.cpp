@@ -8,6 +8,7 @@
 #include <memory>
 #include <sstream>
 
+#include "check_commands.hpp"
 #include "diagnostics.hpp"
 #include "engine.hpp"
 #include "machine.hpp"
@@ -36,7 +37,8 @@ constexpr const char* CHECK_FOOTER =
     "status signals; values outside the DBC range or not in its value table; bad durations.\n"
     "Warnings: empty conditions (always true) and empty actions, repeated conditions,\n"
     "unreachable states, transitions that can never be taken, self-transitions that do\n"
-    "nothing. Then a summary line.\n"
+    "nothing. Diagnostics go to stderr, then a summary line to stdout. A schedule file that\n"
+    "does not parse is reported as its own error (the machine's send groups come from it).\n"
     "\n"
     "Example:\n"
     "  vcu fsm check config/hhea/fsm.json --config config/hhea/vehicle.json\n"
@@ -324,15 +326,9 @@ ExitCode runFsmCheck(const FsmFileOptions& options, Streams streams) {
   ExitCode exitCode = ExitCode::Ok;
   const auto maybeStack = loadStack(options.stack, streams.err, &exitCode);
   if (!maybeStack) return exitCode;
-  const std::vector<Error> diagnostics = fsm::checkMachine(options.file, maybeStack->config, maybeStack->catalog);
-  std::size_t errors = 0;
-  std::size_t warnings = 0;
-  for (const Error& diagnostic : diagnostics) {
-    const bool error = diagnostic.severity == Severity::Error;
-    errors += error ? 1 : 0;
-    warnings += error ? 0 : 1;
-    if (error || !options.quiet) report(streams.out, diagnostic);
-  }
+  const FileCounts counts = checkFsmFile(options.file, *maybeStack, options.quiet, streams.err);
+  const std::size_t errors = counts.errors;
+  const std::size_t warnings = counts.warnings;
   std::string summary = options.file + ": " + plural(errors, "error") + ", " + plural(warnings, "warning");
   if (errors == 0) {
     if (auto machine = fsm::loadMachine(options.file, maybeStack->config, maybeStack->catalog)) {

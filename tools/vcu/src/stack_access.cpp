@@ -1,38 +1,199 @@
 #include "stack_access.hpp"
 
+#include <dirent.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "diagnostics.hpp"
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/signals/table.hpp"
 
 namespace openvcu::cli {
 
+namespace {
+
+/// The NUL-separated strings of a /proc file (cmdline, environ); empty when unreadable.
+std::vector<std::string> readProcStrings(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  std::vector<std::string> strings;
+  std::size_t begin = 0;
+  while (begin < text.size()) {
+    std::size_t end = text.find('\0', begin);
+    if (end == std::string::npos) end = text.size();
+    strings.push_back(text.substr(begin, end - begin));
+    begin = end + 1;
+  }
+  return strings;
+}
+
+/// The value of -c/--config in a service's arguments (CLI11's forms: "--config F",
+/// "--config=F", "-c F", "-cF"), or empty.
+std::string configArgument(const std::vector<std::string>& argv) {
+  for (std::size_t i = 1; i < argv.size(); ++i) {
+    const std::string& argument = argv[i];
+    if ((argument == "--config" || argument == "-c") && i + 1 < argv.size()) return argv[i + 1];
+    if (argument.rfind("--config=", 0) == 0) return argument.substr(9);
+    if (argument.size() > 2 && argument.rfind("-c", 0) == 0 && argument[2] != '-') return argument.substr(2);
+  }
+  return {};
+}
+
+/// The pid serving a Unix seqpacket socket, or empty when nobody answers (a socket left by
+/// a crashed service) or we may not connect.
+std::optional<pid_t> socketServer(const std::string& path) {
+  sockaddr_un address{};
+  if (path.size() >= sizeof(address.sun_path)) return std::nullopt;
+  const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
+  if (fd < 0) return std::nullopt;
+  address.sun_family = AF_UNIX;
+  std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+  std::optional<pid_t> pid;
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) == 0) {
+    ucred credentials{};
+    socklen_t size = sizeof(credentials);
+    if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &credentials, &size) == 0 && credentials.pid > 0) {
+      pid = credentials.pid;
+    }
+  }
+  ::close(fd);
+  return pid;
+}
+
+/// The configuration the process `pid` runs with: --config (relative to its working
+/// folder) or its $OPENVCU_CONFIG. Empty with *problem set when it cannot be told.
+std::string processConfig(pid_t pid, const std::string& who, std::string* problem) {
+  const std::string proc = "/proc/" + std::to_string(pid);
+  std::string path = configArgument(readProcStrings(proc + "/cmdline"));
+  if (path.empty()) {
+    const std::string prefix = std::string(CONFIG_ENVIRONMENT_VARIABLE) + "=";
+    for (const std::string& variable : readProcStrings(proc + "/environ")) {
+      if (variable.rfind(prefix, 0) == 0) path = variable.substr(prefix.size());
+    }
+  }
+  if (path.empty()) {
+    *problem = who + " has no --config and its environment cannot be read";
+    return {};
+  }
+  if (path.front() != '/') {
+    std::error_code error;
+    const std::filesystem::path cwd = std::filesystem::read_symlink(proc + "/cwd", error);
+    if (error) {
+      *problem = who + " was given the relative path '" + path + "' and its working folder cannot be read";
+      return {};
+    }
+    path = (cwd / path).lexically_normal().string();
+  }
+  return path;
+}
+
+}  // namespace
+
+std::vector<RunningStack> findRunningStacks(std::vector<std::string>* problems) {
+  const std::string root = ipc::commandRoot();
+  std::vector<RunningStack> stacks;
+  DIR* rootDir = ::opendir(root.c_str());
+  if (rootDir == nullptr) return stacks;
+  std::vector<std::string> instances;
+  while (const dirent* entry = ::readdir(rootDir)) {
+    if (config::validInstanceName(entry->d_name)) instances.emplace_back(entry->d_name);
+  }
+  ::closedir(rootDir);
+  std::sort(instances.begin(), instances.end());
+  for (const std::string& instance : instances) {
+    const std::string folder = root + "/" + instance;
+    struct stat info {};
+    if (::stat(folder.c_str(), &info) != 0 || !S_ISDIR(info.st_mode)) continue;
+    if ((info.st_mode & S_IWOTH) != 0) {  // the rule of ipc::CommandClient: not to be trusted
+      if (problems) problems->push_back(folder + " is writable by others: ignored");
+      continue;
+    }
+    DIR* dir = ::opendir(folder.c_str());
+    if (dir == nullptr) {
+      if (problems) problems->push_back("cannot read " + folder + ": " + std::strerror(errno));
+      continue;
+    }
+    std::vector<std::string> sockets;
+    while (const dirent* entry = ::readdir(dir)) {
+      const std::string name = entry->d_name;
+      if (name.size() > 5 && name.compare(name.size() - 5, 5, ".sock") == 0) sockets.push_back(name);
+    }
+    ::closedir(dir);
+    std::sort(sockets.begin(), sockets.end());
+    std::string problem;
+    for (const std::string& socket : sockets) {
+      const auto pid = socketServer(folder + "/" + socket);
+      if (!pid) continue;
+      const std::string who = socket.substr(0, socket.size() - 5) + " (pid " + std::to_string(*pid) + ")";
+      std::string path = processConfig(*pid, who, &problem);
+      if (path.empty()) continue;
+      stacks.push_back(RunningStack{instance, std::move(path), who});
+      problem.clear();
+      break;
+    }
+    if (!problem.empty() && problems) problems->push_back("instance '" + instance + "': " + problem);
+  }
+  return stacks;
+}
+
+std::optional<std::string> resolveConfigPath(const StackOptions& options, Sink& err, ExitCode* exitCode,
+                                             std::string* foundInstance) {
+  if (!options.configPath.empty()) return options.configPath;
+  if (const char* fromEnvironment = std::getenv(std::string(CONFIG_ENVIRONMENT_VARIABLE).c_str())) {
+    if (fromEnvironment[0] != '\0') return std::string(fromEnvironment);
+  }
+  std::vector<std::string> problems;
+  const std::vector<RunningStack> stacks = findRunningStacks(&problems);
+  *exitCode = ExitCode::Usage;
+  const std::string advice = "give --config FILE or set " + std::string(CONFIG_ENVIRONMENT_VARIABLE);
+  if (stacks.size() == 1) {
+    if (foundInstance) *foundInstance = stacks.front().instance;
+    return stacks.front().configPath;
+  }
+  if (stacks.empty()) {
+    std::string message = "no configuration: " + advice + " (no running stack found in " + ipc::commandRoot();
+    for (const std::string& problem : problems) message += "; " + problem;
+    reportError(err, message + ")");
+    return std::nullopt;
+  }
+  std::string message = std::to_string(stacks.size()) + " stacks are running (";
+  for (std::size_t i = 0; i < stacks.size(); ++i) {
+    message += (i > 0 ? ", " : "") + stacks[i].instance + ": " + stacks[i].configPath;
+  }
+  reportError(err, message + "): " + advice);
+  return std::nullopt;
+}
+
 void addStackOptions(CLI::App& command, StackOptions& options) {
-  command.add_option("-c,--config", options.configPath, "the vehicle configuration (default: $OPENVCU_CONFIG)")
+  command
+      .add_option("-c,--config", options.configPath,
+                  "the vehicle configuration (default: $OPENVCU_CONFIG, else the one running stack's)")
       ->option_text("FILE");
   command.add_option("--instance", options.instance, "stack instance; overrides the configuration's")
       ->option_text("NAME");
 }
 
 std::optional<Stack> loadStack(const StackOptions& options, Sink& err, ExitCode* exitCode) {
-  std::string path = options.configPath;
-  if (path.empty()) {
-    if (const char* fromEnvironment = std::getenv(std::string(CONFIG_ENVIRONMENT_VARIABLE).c_str()))
-      path = fromEnvironment;
-  }
-  if (path.empty()) {
-    reportError(err, "no configuration: give --config FILE or set " + std::string(CONFIG_ENVIRONMENT_VARIABLE));
-    *exitCode = ExitCode::Usage;
-    return std::nullopt;
-  }
+  std::string foundInstance;
+  const auto maybePath = resolveConfigPath(options, err, exitCode, &foundInstance);
+  if (!maybePath) return std::nullopt;
+  const std::string& path = *maybePath;
   *exitCode = ExitCode::Failure;
   auto configResult = config::loadVehicleConfig(path);
   if (!configResult) {
@@ -48,6 +209,8 @@ std::optional<Stack> loadStack(const StackOptions& options, Sink& err, ExitCode*
       return std::nullopt;
     }
     stack.config.instance = options.instance;
+  } else if (!foundInstance.empty()) {
+    stack.config.instance = foundInstance;  // started with --instance: its sockets' folder says so
   }
   auto catalogResult = config::buildCatalog(stack.config);
   if (!catalogResult) {

@@ -3,16 +3,26 @@
 // `vcu spy`): finding the configuration, the catalog, and turning table values and
 // timestamps into text.
 //
-// The configuration: --config FILE, else the file named by $OPENVCU_CONFIG; neither is a
-// usage error (exit 2). There is deliberately no built-in default: an installed `vcu` has
-// no repository to be relative to, and guessing another vehicle's file would show or
-// command the wrong signals. --instance overrides the configuration's instance, exactly
-// as it does for the services.
+// The configuration: --config FILE, else the file named by $OPENVCU_CONFIG, else the
+// configuration of the one stack running on this machine (issue 19): its services'
+// command sockets (<root>/<instance>/<program>.sock, root $OPENVCU_RUN_DIR or
+// /run/openvcu) are connected to, SO_PEERCRED names the process behind each, and
+// /proc/<pid>/cmdline gives the `--config FILE` it was started with (a relative FILE
+// resolved against /proc/<pid>/cwd; without --config its $OPENVCU_CONFIG from
+// /proc/<pid>/environ). Nothing is written for this: what a service was started with is
+// the truth, whoever started it (run.sh, supervisord, systemd, a shell), and a crashed
+// stack leaves a socket nobody answers, which is skipped. Two stacks running, or none, is
+// a usage error (exit 2) naming them. There is deliberately no built-in default: an
+// installed `vcu` has no repository to be relative to, and guessing another vehicle's
+// file would show or command the wrong signals. --instance overrides the configuration's
+// instance, exactly as it does for the services; a stack found running keeps the
+// instance of its socket folder.
 
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "cli.hpp"
 #include "openvcu/config/vehicle.hpp"
@@ -29,7 +39,7 @@ inline constexpr std::string_view CONFIG_ENVIRONMENT_VARIABLE = "OPENVCU_CONFIG"
 
 /// Where the stack is.
 struct StackOptions {
-  std::string configPath;  ///< --config; empty: $OPENVCU_CONFIG
+  std::string configPath;  ///< --config; empty: $OPENVCU_CONFIG, else the running stack's
   std::string instance;    ///< --instance; empty: the configuration's
 };
 
@@ -38,6 +48,24 @@ struct Stack {
   config::VehicleConfig config;
   signals::Catalog catalog;
 };
+
+/// A stack found through its command sockets.
+struct RunningStack {
+  std::string instance;    ///< the socket folder's name
+  std::string configPath;  ///< absolute
+  std::string foundBy;     ///< "vcu-fsm (pid 812)"
+};
+
+/// The stacks whose command sockets answer under ipc::commandRoot(), one per instance.
+/// Instances with answering sockets whose configuration cannot be told (another user's
+/// process without --config, an absent /proc) are not listed; why goes to *problems.
+std::vector<RunningStack> findRunningStacks(std::vector<std::string>* problems);
+
+/// Which configuration a command uses: --config, else $OPENVCU_CONFIG, else the single
+/// running stack's (then *foundInstance is its instance). Empty with the reason reported
+/// on err and *exitCode = Usage when there is none or more than one stack runs.
+std::optional<std::string> resolveConfigPath(const StackOptions& options, Sink& err, ExitCode* exitCode,
+                                             std::string* foundInstance = nullptr);
 
 /// Adds -c/--config and --instance to a command.
 void addStackOptions(CLI::App& command, StackOptions& options);

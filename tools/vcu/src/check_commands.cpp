@@ -1,0 +1,303 @@
+// `vcu check`: every file of a vehicle (check_commands.hpp says which loader checks what).
+#include "check_commands.hpp"
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "diagnostics.hpp"
+#include "machine.hpp"
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/config/json.hpp"
+#include "openvcu/config/vehicle.hpp"
+
+namespace openvcu::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* DESCRIPTION = "Check every file of a vehicle configuration, as the services load them";
+constexpr const char* FOOTER =
+    "Checks vehicle.json and through it the DBC files, the GPIO map and the FSM file with\n"
+    "the loaders the services use; the schedule, simulation and receive files and the HMI\n"
+    "dashboard (dashboard.json beside vehicle.json, if present) for JSON syntax: their\n"
+    "content is checked by vcu-can-tx, vcu-ecu-sim, vcu-can-rx and vcu-hmi when they start\n"
+    "(a note says so for each). Diagnostics on stderr, one per line with file:line:column\n"
+    "or the JSON path; then one summary line per file and a total on stdout.\n"
+    "The configuration: --config FILE, else $OPENVCU_CONFIG, else the running stack's.\n"
+    "\n"
+    "Example:\n"
+    "  vcu check --config config/hhea/vehicle.json\n"
+    "Exit: 0 no errors (warnings allowed), 1 errors, 2 usage error.\n";
+
+/// The service that checks a file kind's content, and where its loader lives.
+struct ContentOwner {
+  std::string_view key;      ///< the vehicle.json key ("schedule"); "dashboard" for the HMI's
+  std::string_view service;  ///< "vcu-can-tx"
+  std::string_view loader;   ///< "services/can-tx/src/schedule_config.cpp"
+};
+
+constexpr ContentOwner CONTENT_OWNERS[] = {
+    {"schedule", "vcu-can-tx", "services/can-tx/src/schedule_config.cpp"},
+    {"simulation", "vcu-ecu-sim", "services/ecu-sim/src/sim_config.cpp"},
+    {"receive", "vcu-can-rx", "services/can-rx/src/receive_config.cpp"},
+    {"dashboard", "vcu-hmi", "services/hmi/src/display_logic.cpp"},
+};
+
+std::string plural(std::size_t count, const std::string& word) {
+  return std::to_string(count) + " " + word + (count == 1 ? "" : "s");
+}
+
+std::string normal(const std::string& path) { return fs::path(path).lexically_normal().string(); }
+
+/// The files of the vehicle in report order, with their counts.
+class FileTally {
+ public:
+  void add(const std::string& path) {
+    if (find(path) == nullptr) m_files.push_back({path, normal(path), {}});
+  }
+
+  /// Reports `diagnostic` (warnings unless quiet) and counts it for its file (vehicle.json,
+  /// the first file, when it names none of them).
+  void report(const Error& diagnostic, bool quiet, Sink& err) {
+    Entry* entry = find(diagnostic.location.file);
+    if (entry == nullptr) entry = &m_files.front();
+    if (diagnostic.severity == Severity::Error) {
+      ++entry->counts.errors;
+    } else if (diagnostic.severity == Severity::Warning) {
+      ++entry->counts.warnings;
+    }
+    if (diagnostic.severity == Severity::Error || !quiet) cli::report(err, diagnostic);
+  }
+
+  void count(const std::string& path, const FileCounts& counts) {
+    Entry* entry = find(path);
+    if (entry == nullptr) entry = &m_files.front();
+    entry->counts.errors += counts.errors;
+    entry->counts.warnings += counts.warnings;
+  }
+
+  [[nodiscard]] FileCounts total() const {
+    FileCounts sum;
+    for (const Entry& entry : m_files) {
+      sum.errors += entry.counts.errors;
+      sum.warnings += entry.counts.warnings;
+    }
+    return sum;
+  }
+
+  void writeSummary(const std::string& vehicle, Sink& out) const {
+    std::string text;
+    for (const Entry& entry : m_files) {
+      text += entry.path + ": " + plural(entry.counts.errors, "error") + ", " +
+              plural(entry.counts.warnings, "warning") + "\n";
+    }
+    const FileCounts sum = total();
+    text += vehicle + ": " + plural(m_files.size(), "file") + ", " + plural(sum.errors, "error") + ", " +
+            plural(sum.warnings, "warning") + "\n";
+    out.write(text);
+  }
+
+ private:
+  struct Entry {
+    std::string path;
+    std::string normalPath;
+    FileCounts counts;
+  };
+
+  Entry* find(const std::string& path) {
+    if (path.empty()) return nullptr;
+    const std::string wanted = normal(path);
+    for (Entry& entry : m_files) {
+      if (entry.normalPath == wanted) return &entry;
+    }
+    return nullptr;
+  }
+
+  std::vector<Entry> m_files;
+};
+
+/// A file read as JSON: its syntax error (line:column), or an error when the top level is
+/// not an object.
+std::optional<Error> jsonObjectError(const std::string& path) {
+  auto json = config::readJsonFile(path);
+  if (!json) return json.error();
+  if (!json->is_object()) return Error{"the top level must be a JSON object", Location::json(path, "")};
+  return std::nullopt;
+}
+
+/// JSON check of a file whose content a service checks, and the note that says so.
+void checkJsonOnly(const std::string& path, const ContentOwner& owner, FileTally& tally, bool quiet, Sink& err) {
+  if (const auto error = jsonObjectError(path)) {
+    tally.report(*error, quiet, err);
+    return;
+  }
+  if (!quiet) {
+    report(err, Error{"JSON syntax checked; its content is checked by " + std::string(owner.service) +
+                          " when it starts (its loader, " + std::string(owner.loader) + ", is not linked into vcu)",
+                      Location{path, 0, 0, {}}, Severity::Note});
+  }
+}
+
+/// dashboard.json beside vehicle.json, where vcu-hmi looks for it; empty when absent.
+std::string dashboardBeside(const std::string& vehiclePath) {
+  const fs::path beside = fs::path(vehiclePath).parent_path() / "dashboard.json";
+  std::error_code error;
+  return fs::exists(beside, error) ? beside.string() : std::string();
+}
+
+/// The files vehicle.json names, read from its JSON alone (used when it does not load).
+std::vector<std::pair<std::string, std::string>> namedFiles(const std::string& vehiclePath) {
+  std::vector<std::pair<std::string, std::string>> files;  // key, resolved path
+  auto json = config::readJsonFile(vehiclePath);
+  if (!json || !json->is_object()) return files;
+  const fs::path directory = fs::path(vehiclePath).parent_path();
+  for (const char* key : {"fsm", "schedule", "simulation", "receive"}) {
+    const auto it = json->find(key);
+    if (it == json->end() || !it->is_string()) continue;
+    const fs::path file(it->get<std::string>());
+    files.emplace_back(key, (file.is_absolute() ? file : directory / file).lexically_normal().string());
+  }
+  return files;
+}
+
+const ContentOwner* ownerOf(std::string_view key) {
+  for (const ContentOwner& owner : CONTENT_OWNERS) {
+    if (owner.key == key) return &owner;
+  }
+  return nullptr;
+}
+
+bool isSendGroupDiagnostic(const Error& diagnostic) {
+  constexpr std::string_view SUFFIX = "/sendGroup";
+  const std::string& path = diagnostic.location.jsonPath;
+  return path.size() >= SUFFIX.size() && path.compare(path.size() - SUFFIX.size(), SUFFIX.size(), SUFFIX) == 0;
+}
+
+}  // namespace
+
+FileCounts checkFsmFile(const std::string& file, const Stack& stack, bool quiet, Sink& err) {
+  FileCounts counts;
+  std::optional<Error> scheduleError;
+  if (!stack.config.scheduleFile.empty()) {
+    if (auto schedule = config::readJsonFile(stack.config.scheduleFile); !schedule) scheduleError = schedule.error();
+  }
+  if (scheduleError) {
+    // The machine's send groups come from the schedule: with the schedule unreadable every
+    // sendGroup action would be reported as an unknown group of the FSM file.
+    report(err, *scheduleError);
+    ++counts.errors;
+  }
+  std::size_t uncheckedGroups = 0;
+  for (const Error& diagnostic : fsm::checkMachine(file, stack.config, stack.catalog)) {
+    if (scheduleError && isSendGroupDiagnostic(diagnostic)) {
+      ++uncheckedGroups;
+      continue;
+    }
+    const bool error = diagnostic.severity == Severity::Error;
+    counts.errors += error ? 1 : 0;
+    counts.warnings += error ? 0 : 1;
+    if (error || !quiet) report(err, diagnostic);
+  }
+  if (uncheckedGroups > 0) {
+    report(err, Error{plural(uncheckedGroups, "send-group action") + " not checked: the schedule " +
+                          stack.config.scheduleFile + " does not parse",
+                      Location{file, 0, 0, {}}, Severity::Note});
+  }
+  return counts;
+}
+
+ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
+  ExitCode exitCode = ExitCode::Ok;
+  const auto maybePath = resolveConfigPath(options.stack, streams.err, &exitCode);
+  if (!maybePath) return exitCode;
+  const std::string& vehiclePath = *maybePath;
+  FileTally tally;
+  tally.add(vehiclePath);
+
+  const std::vector<Error> vehicleDiagnostics = config::checkVehicleConfig(vehiclePath);
+  auto loaded = config::loadVehicleConfig(vehiclePath);
+  std::optional<Stack> stack;
+  std::string vehicleName = vehiclePath;
+  if (loaded) {
+    for (const std::string& dbc : loaded->dbcFiles) tally.add(dbc);
+    if (!loaded->gpioFile.empty()) tally.add(loaded->gpioFile);
+    vehicleName = "vehicle '" + loaded->instance + "'";
+  }
+  for (const Error& diagnostic : vehicleDiagnostics) {
+    tally.add(diagnostic.location.file.empty() ? vehiclePath : diagnostic.location.file);
+    tally.report(diagnostic, options.quiet, streams.err);
+  }
+  if (loaded) {
+    auto catalog = config::buildCatalog(*loaded);
+    if (!catalog) {
+      tally.report(Error{catalog.error().message, Location{vehiclePath, 0, 0, {}}}, options.quiet, streams.err);
+    } else {
+      stack = Stack{std::move(*loaded), std::move(*catalog)};
+    }
+  }
+
+  const std::string dashboard = dashboardBeside(vehiclePath);
+  if (stack) {
+    const config::VehicleConfig& vehicle = stack->config;
+    if (!vehicle.fsmFile.empty()) tally.add(vehicle.fsmFile);
+    if (!vehicle.scheduleFile.empty()) tally.add(vehicle.scheduleFile);
+    const bool scheduleBroken = !vehicle.scheduleFile.empty() && !config::readJsonFile(vehicle.scheduleFile);
+    if (!vehicle.fsmFile.empty()) {
+      // checkFsmFile reports a schedule that does not parse itself: counted for the schedule
+      FileCounts fsmCounts = checkFsmFile(vehicle.fsmFile, *stack, options.quiet, streams.err);
+      if (scheduleBroken) {
+        --fsmCounts.errors;
+        tally.count(vehicle.scheduleFile, FileCounts{1, 0});
+      }
+      tally.count(vehicle.fsmFile, fsmCounts);
+    }
+    if (!vehicle.scheduleFile.empty() && !(scheduleBroken && !vehicle.fsmFile.empty())) {
+      checkJsonOnly(vehicle.scheduleFile, *ownerOf("schedule"), tally, options.quiet, streams.err);
+    }
+    for (const auto& [key, path] : {std::pair<std::string_view, const std::string*>{"simulation", &vehicle.simulationFile},
+                                    {"receive", &vehicle.receiveFile}}) {
+      if (path->empty()) continue;
+      tally.add(*path);
+      checkJsonOnly(*path, *ownerOf(key), tally, options.quiet, streams.err);
+    }
+  } else {
+    if (!options.quiet) {
+      report(streams.err, Error{"the files it names get the JSON check only until it loads",
+                                Location{vehiclePath, 0, 0, {}}, Severity::Note});
+    }
+    for (const auto& [key, path] : namedFiles(vehiclePath)) {
+      std::error_code error;
+      if (!fs::exists(path, error)) continue;  // vehicle.json's own error says so
+      tally.add(path);
+      if (const ContentOwner* owner = ownerOf(key)) {
+        checkJsonOnly(path, *owner, tally, options.quiet, streams.err);
+      } else if (const auto syntax = jsonObjectError(path)) {
+        tally.report(*syntax, options.quiet, streams.err);
+      }
+    }
+  }
+  if (!dashboard.empty()) {
+    tally.add(dashboard);
+    checkJsonOnly(dashboard, *ownerOf("dashboard"), tally, options.quiet, streams.err);
+  }
+
+  tally.writeSummary(vehicleName, streams.out);
+  return tally.total().errors == 0 ? ExitCode::Ok : ExitCode::Failure;
+}
+
+void registerCheckCommands(CLI::App& app, CommandContext& context) {
+  auto options = std::make_shared<VehicleCheckOptions>();
+  CLI::App* command = app.add_subcommand("check", DESCRIPTION);
+  command->footer(FOOTER);
+  command->add_option("-c,--config", options->stack.configPath,
+                      "the vehicle configuration (default: $OPENVCU_CONFIG, else the running stack's)")
+      ->option_text("FILE");
+  command->add_flag("-q,--quiet", options->quiet, "errors only, no warnings or notes");
+  command->callback([options, &context] { context.exitCode = runCheck(*options, context.streams); });
+}
+
+}  // namespace openvcu::cli
