@@ -127,6 +127,19 @@ TEST_CASE("vcu signal set says at once that no running service answers for a key
   CHECK(std::chrono::steady_clock::now() - started < 4s);  // every service said "not mine": no wait for the timeout
 }
 
+TEST_CASE("vcu signal set of a received signal says it is received from the bus and how to send it from the bench") {
+  SKIP_UNLESS_ISOLATED();
+  harness::Harness sut;
+  startStack(sut);
+
+  const auto set = vcu(sut, {"signal", "set", "BMS.Status.SOC", "50"});
+
+  CHECK_MESSAGE(set.exitCode() == 1, set.describe());
+  CHECK_MESSAGE(contains(set.err, "'BMS.Status.SOC' is received from the bus (sent by BMS in Status): only signals of "
+                                  "messages this VCU sends can be commanded (`vcu schedule add Status MS`"),
+                set.err);
+}
+
 TEST_CASE("vcu signal set takes a value text or a number, and refuses other text before sending") {
   SKIP_UNLESS_ISOLATED();
   harness::Harness sut;

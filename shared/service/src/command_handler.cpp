@@ -40,6 +40,21 @@ bool isDeferred(const CommandPolicy& policy, ipc::CommandKind kind) noexcept {
   return std::find(policy.deferredKinds.begin(), policy.deferredKinds.end(), kind) != policy.deferredKinds.end();
 }
 
+/// A signal whose value table names every whole number of its range (a switch, a state):
+/// only those values mean anything. A table that names a few special values of a
+/// continuous signal (J1939's 254 "Error", 255 "Not available") is not an enumeration.
+bool enumeration(const signals::SignalInfo& info) {
+  if (info.valueTexts.empty() || !(info.minimum < info.maximum)) return false;
+  const double span = std::floor(info.maximum) - std::ceil(info.minimum) + 1;
+  if (span > static_cast<double>(info.valueTexts.size())) return false;
+  std::int64_t named = 0;
+  for (const auto& entry : info.valueTexts) {
+    const auto value = static_cast<double>(entry.first);
+    if (value >= info.minimum && value <= info.maximum) ++named;
+  }
+  return static_cast<double>(named) >= span;
+}
+
 /// Operator intent first: a flood of other commands never delays Start/Stop or a fault reset.
 int priority(ipc::CommandKind kind) noexcept {
   return kind == ipc::CommandKind::OperatorSwitch || kind == ipc::CommandKind::FaultReset ? 0 : 1;
@@ -149,6 +164,20 @@ CommandVerdict checkCommand(const ipc::CommandRequest& request, const signals::C
       return refuse("value " + number(request.value) + " is outside the range [" + number(info.minimum) + ", " +
                         number(info.maximum) + "]" + (info.unit.empty() ? "" : " " + info.unit) + " of '" +
                         request.key + "'",
+                    index);
+    }
+  }
+  if (carriesValue(request.kind) && enumeration(info)) {
+    const bool named = std::any_of(info.valueTexts.begin(), info.valueTexts.end(), [&](const auto& entry) {
+      return static_cast<double>(entry.first) == request.value;
+    });
+    if (!named) {
+      std::string table;
+      for (const auto& [value, text] : info.valueTexts) {
+        table += (table.empty() ? "" : ", ") + std::to_string(value) + " " + text;
+      }
+      return refuse("value " + number(request.value) + " is not one of the values of '" + request.key + "' (" +
+                        table + ")",
                     index);
     }
   }

@@ -150,3 +150,27 @@ TEST_CASE("command kinds have readable names") {
   CHECK(service::commandKindName(ipc::CommandKind::ScheduleAdd) == "ScheduleAdd");
   CHECK(service::commandKindName(static_cast<ipc::CommandKind>(12)) == "kind 12");
 }
+
+TEST_CASE("a switch (its value table names every value of its range) takes table values only") {
+  const auto catalog = service::testing::makeCatalog();
+  const auto sut = service::CommandPolicy::byPrefix("internal.");
+
+  const auto half = service::checkCommand(request("internal.operator.Start", 0.5), catalog, sut);
+  const auto start = service::checkCommand(request("internal.operator.Start", 1), catalog, sut);
+
+  CHECK(half.decision == CommandDecision::Refused);
+  CHECK(half.reason == "value 0.5 is not one of the values of 'internal.operator.Start' (0 Stop, 1 Start)");
+  CHECK(start.decision == CommandDecision::Accepted);
+}
+
+TEST_CASE("a value table that names only special values of a continuous signal does not restrict it") {
+  std::vector<openvcu::signals::SignalInfo> infos;
+  infos.push_back(service::testing::signal("internal.test.pressure", 0, 255, "kPa"));
+  infos.back().valueTexts = {{254, "Error"}, {255, "Not available"}};
+  auto catalog = openvcu::signals::Catalog::create(std::move(infos));
+  REQUIRE(catalog.ok());
+  const auto sut = service::CommandPolicy::byPrefix("internal.");
+
+  CHECK(service::checkCommand(request("internal.test.pressure", 101.5), *catalog, sut).decision ==
+        CommandDecision::Accepted);
+}

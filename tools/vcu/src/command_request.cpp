@@ -12,7 +12,7 @@
 namespace openvcu::cli {
 
 ExitCode sendCommandRequest(const config::VehicleConfig& config, ipc::CommandRequest request, double timeoutSeconds,
-                            Streams streams) {
+                            Streams streams, const std::string& notOwnedHint) {
   auto clientResult = ipc::CommandClient::connect(config.instance);
   if (!clientResult) {
     reportError(streams.err, clientResult.error().message);
@@ -23,7 +23,9 @@ ExitCode sendCommandRequest(const config::VehicleConfig& config, ipc::CommandReq
   const auto timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(timeoutSeconds));
   auto answer = clientResult->send(std::move(request), timeout);
   if (!answer) {
-    reportError(streams.err, answer.error().message);
+    const std::string& message = answer.error().message;
+    const bool notOwned = message.starts_with("no running service answers");
+    reportError(streams.err, notOwned && !notOwnedHint.empty() ? message + "; " + notOwnedHint : message);
     return ExitCode::Failure;
   }
   if (answer->accepted) {

@@ -14,6 +14,7 @@
 // Local checks (the key exists, the value parses) belong to the caller, before this is
 // called: whatever reaches here is sent.
 
+#include <string>
 #include <string_view>
 
 #include "cli.hpp"
@@ -34,7 +35,9 @@ inline constexpr double DEFAULT_ACK_TIMEOUT_SECONDS = 2.0;
 /// never applied later. Prints "accepted" or "refused: REASON" on out; no access to the
 /// stack, no owner or no answer in time is reported on err.
 /// @note blocks up to timeoutSeconds; connects to the command sockets for the call.
+/// `notOwnedHint`, when given, is added to the error when no running service owns the key
+/// (e.g. why a received signal cannot be commanded).
 ExitCode sendCommandRequest(const config::VehicleConfig& config, ipc::CommandRequest request, double timeoutSeconds,
-                            Streams streams);
+                            Streams streams, const std::string& notOwnedHint = {});
 
 }  // namespace openvcu::cli

@@ -346,6 +346,22 @@ ExitCode runSignalGet(const SignalGetOptions& options, Streams streams) {
   return ExitCode::Ok;
 }
 
+namespace {
+
+/// Why nobody answers for a bus signal of a message this VCU does not send; empty otherwise.
+std::string receivedSignalHint(const config::VehicleConfig& config, const signals::SignalInfo& signal) {
+  if (signal.kind != signals::SignalKind::Bus) return {};
+  for (const dbc::Message& message : config.database.messages) {
+    if (message.name != signal.message || message.transmitter == config.node) continue;
+    return "'" + signal.key + "' is received from the bus (sent by " + message.transmitter + " in " + message.name +
+           "): only signals of messages this VCU sends can be commanded (`vcu schedule add " + message.name +
+           " MS` makes this bench send it)";
+  }
+  return {};
+}
+
+}  // namespace
+
 ExitCode runSignalSet(const SignalSetOptions& options, Streams streams) {
   if (options.mode == SetMode::ClearOverride && !options.value.empty()) {
     reportError(streams.err, "--clear-override takes no VALUE (see --help)");
@@ -381,7 +397,8 @@ ExitCode runSignalSet(const SignalSetOptions& options, Streams streams) {
   request.key = options.key;
   request.value = value;
   request.text = options.note;
-  return sendCommandRequest(stack.config, std::move(request), options.timeoutSeconds, streams);
+  return sendCommandRequest(stack.config, std::move(request), options.timeoutSeconds, streams,
+                            receivedSignalHint(stack.config, stack.catalog[*found]));
 }
 
 ExitCode runSignalWatch(const SignalWatchOptions& options, Streams streams) {

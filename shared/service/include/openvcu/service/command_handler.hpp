@@ -14,7 +14,8 @@
 //   2. the key exists in the catalog ("unknown signal 'X' (did you mean 'Y'?)");
 //   3. the kind is one this service accepts (policy.kinds; unknown kind numbers are refused);
 //   4. the value is finite and inside the signal's [min, max] when min < max
-//      (ClearOverride carries no value);
+//      (ClearOverride carries no value); for a signal whose value table names every whole
+//      number of its range (a switch), only those values;
 //   5. the service's own veto (policy.veto), e.g. "overrides are forbidden in state Drive".
 // Then SetSignal and OperatorSwitch write the COMMAND plane, SetOverride sets and
 // ClearOverride clears the OVERRIDE plane, stamped with the service's writer id.
