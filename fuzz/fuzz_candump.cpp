@@ -7,49 +7,19 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <istream>
-#include <streambuf>
 #include <string>
 
-#include "openvcu/can/log_reader.hpp"
+#include "log_checks.hpp"
 #include "openvcu/can/log_writer.hpp"
 
 namespace {
 
 using namespace openvcu::can;
 
-/// Reads the fuzzer's bytes in place, without copying them into a string.
-class ByteStreamBuf : public std::streambuf {
- public:
-  ByteStreamBuf(const std::uint8_t* data, std::size_t size) {
-    char* begin = const_cast<char*>(reinterpret_cast<const char*>(data));  // read-only use
-    setg(begin, begin, begin + size);
-  }
-};
-
-bool isValidFdLength(std::size_t length) {
-  return length <= 8 || length == 12 || length == 16 || length == 20 || length == 24 || length == 32 || length == 48 ||
-         length == 64;
-}
-
-void require(bool condition) {
-  if (!condition) std::abort();
-}
-
-/// Frame invariants the reader promises for every record.
-void checkInvariants(const LogRecord& record) {
-  const Frame& frame = record.frame;
-  require(frame.length <= MAX_DATA_LENGTH);
-  require(frame.fd() ? isValidFdLength(frame.length) : frame.length <= CLASSIC_DATA_LENGTH);
-  require(frame.extended() || (frame.flags & FLAG_ERROR) != 0 ? frame.id <= EXTENDED_ID_MASK
-                                                              : frame.id <= STANDARD_ID_MASK);
-  require(frame.fd() || (frame.flags & (FLAG_BRS | FLAG_ESI)) == 0);
-  require(!(frame.fd() && (frame.flags & (FLAG_RTR | FLAG_ERROR)) != 0));
-  require(record.line > 0);
-  require(record.direction == 0 || record.direction == 'R' || record.direction == 'T');
-  for (std::size_t i = frame.length; i < MAX_DATA_LENGTH; ++i) require(frame.data[i] == 0);
-}
+using openvcu::fuzz::ByteStreamBuf;
+using openvcu::fuzz::checkInvariants;
+using openvcu::fuzz::require;
 
 /// Microseconds rounded towards minus infinity: what a candump -L line keeps.
 std::int64_t floorMicros(std::int64_t ns) {
