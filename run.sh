@@ -4,16 +4,19 @@
 #   ./run.sh                      the stack + the simulated vehicle, a live status view, and
 #                                 the Qt HMI when a display is available (DISPLAY/WAYLAND_DISPLAY)
 #   ./run.sh --scenario drive     also drive it: Start -> Connect Driving -> AC charging -> Stop
-#   ./run.sh --headless           no HMI, no status view: a status line every 5 s
+#   ./run.sh --headless           no HMI, no status view: a status line every 3 s
 #   ./run.sh --for SECONDS        stop after SECONDS
-#   ./run.sh --isolated           in private mount and network namespaces (LCM multicast stays
-#                                 on loopback; needed where multicast must not reach the network)
+#   ./run.sh --isolated           in private mount, network and PID namespaces (LCM multicast
+#                                 stays on loopback); logs and --record land in folders of this
+#                                 machine that outlive the sandbox (printed at start and end)
 #   ./run.sh --record DIR         record the session: every bus as candump -L, the LCM events
 #   ./run.sh --bus socketcan:can0 the vehicle bus on real hardware (no simulated vehicle)
 #   ./run.sh --config FILE        another vehicle (default config/hhea/vehicle.json)
-#   ./run.sh --check              only check the configuration (DBC, FSM) and exit
+#   ./run.sh --check              only `vcu check` every file of the vehicle and exit with its
+#                                 code (0 clean, 1 errors); installs and builds nothing
 # Ctrl-C (or the end of --for) stops every process cleanly and removes the stack's shared
-# memory. Logs: the folder printed at start (one file per service).
+# memory, also when the output is piped (`./run.sh | tee run.log`). Logs: the folder printed
+# at start (one file per service); it is kept.
 set -euo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
 root=$PWD
@@ -31,7 +34,7 @@ while [ $# -gt 0 ]; do
     --record) record=$(readlink -f "${2:?--record needs a folder}"); shift ;;
     --config) config=${2:?--config needs a file}; shift ;;
     --check) check=1 ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
   esac
   shift
@@ -39,6 +42,22 @@ done
 case "$scenario" in ""|drive) ;; *) echo "run.sh: unknown scenario '$scenario' (known: drive)" >&2; exit 2 ;; esac
 case "$bus" in ""|socketcan:*) ;; *) echo "run.sh: --bus takes socketcan:IFACE" >&2; exit 2 ;; esac
 if [ -n "$seconds" ] && ! [[ "$seconds" =~ ^[0-9]+$ ]]; then echo "run.sh: --for takes whole seconds" >&2; exit 2; fi
+
+bin=${OPENVCU_BIN:-$root/build/bin}  # the tests point it at their build tree
+vcu=$bin/vcu
+
+# --check: the configuration alone, with the vcu that is built; nothing installed or built
+if [ $check -eq 1 ]; then
+  if [ ! -x "$vcu" ]; then
+    echo "run.sh: $vcu is not built: ./run.sh builds it, or: cmake --build build --target vcu" >&2
+    exit 2
+  fi
+  exec "$vcu" check --config "$config"
+fi
+
+if [ -n "$record" ] && ! mkdir -p "$record"; then
+  echo "run.sh: cannot create the recording folder $record" >&2; exit 1
+fi
 
 if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   scripts/install-deps.sh --quiet
@@ -48,6 +67,13 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   if [ $isolated -eq 1 ]; then
     # the same sandbox as the tests: fresh /dev/shm and /tmp, lo only, PID namespace
     keep=(--keep "$root")
+    # The sandbox's /tmp is private and goes with it: the logs and the recording live in
+    # folders of this machine, bound into the sandbox at the same paths, so they are there
+    # to read afterwards.
+    OPENVCU_LOG_DIR=$(mktemp -d "${TMPDIR:-/tmp}/openvcu-run.XXXXXX")
+    export OPENVCU_LOG_DIR
+    keep+=(--keep "$OPENVCU_LOG_DIR")
+    [ -n "$record" ] && keep+=(--keep "$record")
     # the X server's socket folder, so that the HMI reaches the display from the sandbox
     [ -n "${DISPLAY:-}" ] && [ -d /tmp/.X11-unix ] && keep+=(--keep /tmp/.X11-unix)
     case "${XAUTHORITY:-}" in /tmp/*) keep+=(--keep "$(dirname "$XAUTHORITY")") ;; esac
@@ -55,14 +81,13 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   fi
 fi
 
-bin=${OPENVCU_BIN:-$root/build/bin}  # the tests point it at their build tree
-vcu=$bin/vcu
 config=$(readlink -f "$config")
 echo "== configuration $config"
-"$vcu" fsm check "$(python3 -c 'import json,os,sys; p=sys.argv[1]; print(os.path.join(os.path.dirname(p), json.load(open(p))["fsm"]))' "$config")" --config "$config" -q
-[ $check -eq 1 ] && exit 0
+# Every file checked before anything starts; errors (on stderr) refuse the run.
+"$vcu" check -q --config "$config" >/dev/null || { echo "run.sh: the configuration has errors (above)" >&2; exit 1; }
 
-run=$(mktemp -d "${TMPDIR:-/tmp}/openvcu-run.XXXXXX")
+run=${OPENVCU_LOG_DIR:-$(mktemp -d "${TMPDIR:-/tmp}/openvcu-run.XXXXXX")}
+# vcu check passed: the file is valid JSON with a valid instance (this cannot raise)
 instance=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["instance"])' "$config")
 if [ -n "$bus" ]; then
   # a copy of the configuration next to the original (relative paths keep working) with the
@@ -88,34 +113,71 @@ if [ $headless -eq 0 ] && [ -x "$bin/vcu-hmi" ] && { [ -n "${DISPLAY:-}" ] || [ 
   sed -i -e '/^\[program:hmi\]/,/^$/s/^autostart=false/autostart=true/' "$run/openvcu.conf"
 fi
 echo "== starting the stack under supervisord (logs: $run)$( [ $hmi -eq 1 ] && echo ', with the HMI')"
-supervisord -n -c "$run/openvcu.conf" &
+
+# Stopping. Ctrl-C sends SIGINT to the whole foreground process group: this script, the
+# command it waits for, and whatever its output is piped to (`| tee run.log`), which then
+# dies. So: SIGPIPE is ignored here (a write to the dead pipe fails instead of killing this
+# script before it has stopped anything), supervisord writes to its own file and never to
+# that pipe, and the stop ignores further signals until supervisord has stopped every
+# program and exited. Services whose supervisor dies anyway end by themselves (the service
+# runtime's PR_SET_PDEATHSIG).
+trap '' PIPE
+say() { echo "$@" 2>/dev/null || true; }
+supervisord -n -c "$run/openvcu.conf" >"$run/supervisord.out" 2>&1 &
 supervisor=$!
+recorder=""; driver=""; roudi=""; helper=""
 
 stopped=0
 stop() {
   [ $stopped -eq 1 ] && return
   stopped=1
-  echo "== stopping"
-  if [ -n "${recorder:-}" ]; then kill -INT "$recorder" 2>/dev/null; wait "$recorder" 2>/dev/null; fi
+  trap '' INT TERM
+  set +e  # a wait on a process ended by a signal returns >128: the stop goes on regardless
+  say "== stopping"
+  if [ -n "$helper" ]; then kill -TERM "$helper" 2>/dev/null; wait "$helper" 2>/dev/null; fi
+  if [ -n "$driver" ]; then pkill -TERM -P "$driver" 2>/dev/null; kill -TERM "$driver" 2>/dev/null; wait "$driver" 2>/dev/null; fi
+  if [ -n "$recorder" ]; then kill -INT "$recorder" 2>/dev/null; wait "$recorder" 2>/dev/null; fi
   supervisorctl -c "$run/openvcu.conf" shutdown >/dev/null 2>&1 || kill -TERM "$supervisor" 2>/dev/null || true
   wait "$supervisor" 2>/dev/null || true
+  # A supervisord that died (SIGKILL) stopped nothing: its services end by themselves,
+  # iox-roudi (started through iox-roudi.sh, not the service runtime) is stopped here.
+  if [ -n "$roudi" ] && kill -0 "$roudi" 2>/dev/null; then
+    kill -TERM "$roudi" 2>/dev/null
+    for _ in $(seq 1 50); do kill -0 "$roudi" 2>/dev/null || break; sleep 0.1; done
+  fi
   # every service has ended: the signal table and its lock go (iox-roudi removed its own)
   rm -f "/dev/shm/openvcu-$instance" "/dev/shm/openvcu-$instance.lock"
   [ -n "$bus" ] && rm -f "$config"
-  echo "== stopped; logs in $run"
+  say "== stopped; logs in $run"
 }
 trap stop EXIT
-trap 'exit 130' INT TERM
+trap 'exit 130' INT
+trap 'exit 143' TERM
+
+# Waits for a command run in the background. A SIGINT that arrives meanwhile ends the
+# wait at once and runs the trap. A command in the foreground would get the SIGINT too,
+# and when it handles it and exits 0 (vcu top and vcu status do) bash runs no trap at all:
+# this script would carry on with its output going nowhere.
+waitfor() {
+  "$@" &
+  helper=$!
+  local status=0
+  wait "$helper" || status=$?
+  helper=""
+  return $status
+}
 
 # up when every service beats (vcu status lists one line per service heard)
 expected=5; [ -n "$bus" ] && expected=4
 for _ in $(seq 1 30); do
-  beating=$("$vcu" status --config "$config" --wait 1 2>/dev/null | grep -c '^vcu-' || true)
+  waitfor "$vcu" status --config "$config" --wait 1 >"$run/status.txt" 2>/dev/null || true
+  beating=$(grep -c '^vcu-' "$run/status.txt" || true)
   [ "$beating" -ge "$expected" ] && break
 done
-"$vcu" top --once --config "$config" || true
+waitfor "$vcu" top --once --config "$config" || true
+roudi=$(supervisorctl -c "$run/openvcu.conf" pid roudi 2>/dev/null || true)
+[[ "$roudi" =~ ^[1-9][0-9]*$ ]] || roudi=""
 
-recorder=""
 if [ -n "$record" ]; then
   "$vcu" record "$record" --force --config "$config" &
   recorder=$!
@@ -130,7 +192,7 @@ drive() {
   echo "== scenario drive: stop charging, Stop"; "${set[@]}" internal.operator.ACCharging 0; sleep 3
   "${set[@]}" internal.operator.StartStop Stop
 }
-[ "$scenario" = drive ] && drive &
+if [ "$scenario" = drive ]; then drive & driver=$!; fi
 
 deadline=""
 [ -n "$seconds" ] && deadline=$(( $(date +%s) + seconds ))
@@ -143,6 +205,7 @@ while kill -0 "$supervisor" 2>/dev/null; do
     $view $left || true
     break
   fi
-  echo "$(date +%T) $("$vcu" top --once --config "$config" 2>/dev/null | grep -E '^(FSM|BATTERY) ' | tr -s ' ' | paste -sd'|' -)"
-  sleep 3
+  waitfor "$vcu" top --once --config "$config" >"$run/top.txt" 2>/dev/null || true
+  say "$(date +%T) $(grep -E '^(FSM|BATTERY) ' "$run/top.txt" | tr -s ' ' | paste -sd'|' -)"
+  waitfor sleep 3 || true
 done
