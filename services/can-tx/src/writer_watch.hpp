@@ -11,8 +11,8 @@
 // longer than the timeout. The wait starts at can-tx's start, at each heartbeat, and at each
 // change of the table's damage count (issue 18) while the writer is not lost: the table
 // lost its values then, so the heartbeat reads as never written until its writer's next
-// beat (up to 1 s) and gets its full timeout to arrive again. A heartbeat that reads as never written after one was seen
-// keeps the last one's time (update counters fall back only when the table lost its values).
+// beat (up to 1 s) and gets its full timeout to arrive again. A heartbeat that reads as never written after one was
+// seen keeps the last one's time (update counters fall back only when the table lost its values).
 
 #include <cstdint>
 #include <optional>

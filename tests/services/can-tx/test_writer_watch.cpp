@@ -24,7 +24,9 @@ std::optional<signals::BusValue> beatAt(std::int64_t timestampNs, std::uint64_t 
 }
 
 /// What a wiped slot reads as.
-std::optional<signals::BusValue> neverWritten() { return signals::BusValue{}; }
+std::optional<signals::BusValue> neverWritten() {
+  return signals::BusValue{};
+}
 
 }  // namespace
 

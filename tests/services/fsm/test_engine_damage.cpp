@@ -33,12 +33,16 @@ constexpr double LOW_SOC = 10;
 const std::string DRIVING = std::string(R"({"initialState": "Standby", "states": [
   {"name": "Standby", "entry": [{"sendGroup": "keepAlive", "on": false}],
    "transitions": [{"condition": {"key": "internal.operator.StartStop", "eq": "Start"},
-                    "actions": [{"signal": ")") + fsmtest::BMS_CONTROL + R"(", "value": 1}],
+                    "actions": [{"signal": ")") +
+                            fsmtest::BMS_CONTROL + R"(", "value": 1}],
                     "nextState": "Driving"}]},
   {"name": "Driving", "entry": [{"sendGroup": "keepAlive", "on": true},
-                                {"signal": ")" + fsmtest::CONTACTOR_A + R"(", "value": 1}],
-   "transitions": [{"condition": {"key": ")" + fsmtest::SOC + R"(", "lt": 20, "for": "1s"}, "nextState": "Standby"},
-                   {"condition": {"any": [{"key": ")" + fsmtest::CONNECTION + R"(", "ne": 1},
+                                {"signal": ")" +
+                            fsmtest::CONTACTOR_A + R"(", "value": 1}],
+   "transitions": [{"condition": {"key": ")" +
+                            fsmtest::SOC + R"(", "lt": 20, "for": "1s"}, "nextState": "Standby"},
+                   {"condition": {"any": [{"key": ")" +
+                            fsmtest::CONNECTION + R"(", "ne": 1},
                                           {"key": "internal.operator.StartStop", "eq": "Stop"}]},
                     "nextState": "Dropout"}]},
   {"name": "Dropout", "transitions": [{"after": "10s", "nextState": "Standby"}]}]})";
@@ -101,7 +105,7 @@ TEST_CASE("restoreTable writes back the state, entry time, machine hash, for tim
   REQUIRE(bench.status("internal.fsm.state").updates == 0);
   const std::size_t restored = bench.engine->restoreTable(bench.now, REALTIME + bench.now);
 
-  CHECK(restored == 3);  // keepAlive, BMS_Control, the operator's StartStop
+  CHECK(restored == 3);                                    // keepAlive, BMS_Control, the operator's StartStop
   CHECK(bench.status("internal.fsm.state").value == 1.0);  // Driving
   CHECK(bench.status("internal.fsm.stateEntered").value == doctest::Approx(static_cast<double>(enteredNs) / 1e9));
   CHECK(bench.status("internal.fsm.stateSince").value ==
@@ -223,7 +227,7 @@ TEST_CASE("a truncated signal table gets the FSM's state and commands back from 
   REQUIRE(sut.stateName() == "Driving");
   const std::uint64_t damageBefore = table.damageCount();
 
-  REQUIRE(::truncate(scoped.path().c_str(), 0) == 0);  // what `truncate -s 0 /dev/shm/openvcu-...` does
+  REQUIRE(::truncate(scoped.path().c_str(), 0) == 0);               // what `truncate -s 0 /dev/shm/openvcu-...` does
   const auto lost = table.readBus(hhea.key("internal.fsm.state"));  // was SIGBUS
   REQUIRE(lost);
   CHECK(lost->updates == 0);
