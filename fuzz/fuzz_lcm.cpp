@@ -8,11 +8,13 @@
 // KNOWN finding (docs/testing.md, "Fuzzing"): heartbeat_t and signal_snapshot_t resize
 // their arrays to the count field before reading them, so a 40-byte message makes every
 // subscriber allocate count x 32 bytes (up to 64 GiB). The regression input is in
-// tests/data/fuzz/fuzz_lcm/pending/; while OPENVCU_FUZZ_LCM_SKIP_KNOWN is defined (the
-// default, until shared/ipc bounds the counts) such messages are skipped here so that the
-// fuzzer can look past it.
+// tests/data/fuzz/fuzz_lcm/pending/. Such messages are skipped here (until shared/ipc
+// bounds the counts) so that the fuzzer can look past it; OPENVCU_FUZZ_LCM_UNGUARDED=1 in
+// the environment lets them through:
+//   OPENVCU_FUZZ_LCM_UNGUARDED=1 build-fuzz/fuzz/fuzz_lcm tests/data/fuzz/fuzz_lcm/pending/*
 #include "fuzz_require.hpp"
 
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <optional>
@@ -28,10 +30,6 @@
 using namespace openvcu;
 
 namespace {
-
-#ifndef OPENVCU_FUZZ_LCM_SKIP_KNOWN
-#define OPENVCU_FUZZ_LCM_SKIP_KNOWN 1
-#endif
 
 /// Reads LCM's big-endian fields from the front of a message.
 struct Cursor {
@@ -111,7 +109,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::uint8_t type = data[0] % 7;
   const std::uint8_t* message = data + 1;
   const std::size_t messageSize = size - 1;
-  if (OPENVCU_FUZZ_LCM_SKIP_KNOWN && (type == 5 || type == 6) && !plausibleCount(type, message, messageSize)) return 0;
+  static const bool skipKnown = std::getenv("OPENVCU_FUZZ_LCM_UNGUARDED") == nullptr;
+  if (skipKnown && (type == 5 || type == 6) && !plausibleCount(type, message, messageSize)) return 0;
   switch (type) {
     case 0: checkRequest(message, messageSize); break;
     case 1: checkAck(message, messageSize); break;

@@ -51,7 +51,8 @@ run_one() {
   # libFuzzer takes folders only: seed files are copied into the work corpus.
   local seed
   for seed in $(seedsOf "$name"); do
-    if [ -d "$seed" ]; then cp -rn "$seed"/. "$work"/ 2>/dev/null || true; else cp -n "$seed" "$work"/ 2>/dev/null || true; fi
+    if [ -d "$seed" ]; then cp -rn "$seed"/. "$work"/ 2>/dev/null || true
+    else cp -n "$seed" "$work/seed_$(echo "$seed" | tr / _)" 2>/dev/null || true; fi  # same names in two folders
   done
   local extra=()
   [ -d "tests/data/fuzz/$name" ] && extra+=("tests/data/fuzz/$name/corpus" "tests/data/fuzz/$name/regressions")
@@ -64,8 +65,8 @@ run_one() {
   nice -n 19 "build-fuzz/fuzz/$name" "$work" "${existing[@]}" -max_total_time="$seconds" \
     -artifact_prefix="$findings/" -max_len="${MAX_LEN:-65536}" -timeout=10 -rss_limit_mb=2048 \
     -print_final_stats=1 ${FUZZ_ARGS:-} >"$log" 2>&1 || status=$?
-  grep -E '^(Done|stat::number_of_executed_units|stat::average_exec_per_sec|stat::peak_rss_mb)|^#[0-9]+.*DONE' "$log" || true
-  tail -n 1 "$log" | grep -q . && grep -E '^#[0-9]+' "$log" | tail -n 1 || true
+  grep -E '^#[0-9]+' "$log" | tail -n 1 || true  # executions, coverage, corpus
+  grep -E '^(Done |stat::(number_of_executed_units|average_exec_per_sec|peak_rss_mb))' "$log" || true
   if [ $status -ne 0 ]; then
     echo "fuzz.sh: $name stopped with a finding (exit $status): $(ls "$findings" | tail -n 3 | tr '\n' ' ')" >&2
     grep -m1 -E 'ERROR: |SUMMARY: |deadly signal' "$log" >&2 || true
