@@ -26,12 +26,12 @@ constexpr const char* CONNECTION_MACHINE = R"({"initialState": "Wait", "states":
 TEST_CASE("vcu fsm check reports the thesis' listing and exits 1") {
   const RunResult result = runVcu({"fsm", "check", THESIS, "--config", HHEA});
   CHECK(result.exitCode == 1);
-  CHECK(contains(result.out, "thesis_listing_c2.json: /initialState: error: initial state 'On Boot' is not defined"));
-  CHECK(contains(result.out, "did you mean 'VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts'"));
-  CHECK(contains(result.out, "warning: empty condition {}: always true"));
+  CHECK(contains(result.err, "thesis_listing_c2.json: /initialState: error: initial state 'On Boot' is not defined"));
+  CHECK(contains(result.err, "did you mean 'VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts'"));
+  CHECK(contains(result.err, "warning: empty condition {}: always true"));
   CHECK(contains(result.out, "thesis_listing_c2.json: 12 errors, 24 warnings\n"));
   const RunResult quiet = runVcu({"fsm", "check", "--quiet", THESIS, "--config", HHEA});
-  CHECK_FALSE(contains(quiet.out, "warning:"));
+  CHECK_FALSE(contains(quiet.err, "warning:"));  // diagnostics on stderr (#19)
   CHECK(contains(quiet.out, "12 errors, 24 warnings"));
 }
 

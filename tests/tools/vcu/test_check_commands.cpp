@@ -1,0 +1,219 @@
+// Issue 19: `vcu check` over every file of a vehicle, `vcu fsm check` on stderr and blaming
+// the schedule for its own syntax error, and `vcu` finding the running stack's
+// configuration through its command sockets. Broken vehicles are copies of config/hhea
+// made by the test, each with one file damaged.
+
+#include <doctest/doctest.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include "stack_access.hpp"
+#include "vcu_test_support.hpp"
+
+using namespace openvcu::cli::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path HHEA_FOLDER = fs::path(OPENVCU_SOURCE_DIR) / "config/hhea";
+
+/// A copy of config/hhea in the scratch folder under `name`, with `file` replaced by
+/// `content` when given; returns the copy's vehicle.json.
+std::string hheaCopy(const std::string& name, const std::string& file = {}, const std::string& content = {}) {
+  const fs::path folder = fs::path(VCU_TEST_WORK_DIR) / name;
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  for (const auto& entry : fs::directory_iterator(HHEA_FOLDER)) {
+    if (entry.is_regular_file()) fs::copy_file(entry.path(), folder / entry.path().filename());
+  }
+  if (!file.empty()) writeScratchFile(name + "/" + file, content);
+  return (folder / "vehicle.json").string();
+}
+
+/// Sets an environment variable for one scope.
+class ScopedEnvironment {
+ public:
+  ScopedEnvironment(const char* name, const std::string& value) : m_name(name) {
+    if (const char* old = ::getenv(name)) m_old = old;
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnvironment() {
+    if (m_old) {
+      ::setenv(m_name, m_old->c_str(), 1);
+    } else {
+      ::unsetenv(m_name);
+    }
+  }
+  ScopedEnvironment(const ScopedEnvironment&) = delete;
+  ScopedEnvironment& operator=(const ScopedEnvironment&) = delete;
+
+ private:
+  const char* m_name;
+  std::optional<std::string> m_old;
+};
+
+/// A stand-in service: a child process listening on <root>/<instance>/<program>.sock whose
+/// command line carries `arguments` (it is /bin/sh running a script that waits).
+class FakeService {
+ public:
+  FakeService(const fs::path& root, const std::string& instance, const std::vector<std::string>& arguments,
+              const fs::path& workingFolder = fs::current_path()) {
+    const fs::path folder = root / instance;
+    fs::create_directories(folder);
+    fs::permissions(folder, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec);
+    const std::string script = writeScratchFile("fake_service.sh", "sleep 60\n");
+    const std::string socketPath = (folder / "vcu-fake.sock").string();
+    m_pid = ::fork();
+    REQUIRE(m_pid >= 0);
+    if (m_pid == 0) {
+      const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET, 0);
+      sockaddr_un address{};
+      address.sun_family = AF_UNIX;
+      std::strncpy(address.sun_path, socketPath.c_str(), sizeof(address.sun_path) - 1);
+      ::unlink(socketPath.c_str());
+      if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) != 0 || ::listen(fd, 8) != 0) {
+        ::_exit(3);
+      }
+      if (::chdir(workingFolder.c_str()) != 0) ::_exit(4);
+      std::vector<const char*> argv{"/bin/sh", script.c_str()};
+      for (const std::string& argument : arguments) argv.push_back(argument.c_str());
+      argv.push_back(nullptr);
+      ::execv("/bin/sh", const_cast<char* const*>(argv.data()));
+      ::_exit(5);
+    }
+    // listening once the socket accepts a connection
+    for (int attempt = 0; attempt < 200; ++attempt) {
+      const int probe = ::socket(AF_UNIX, SOCK_SEQPACKET, 0);
+      sockaddr_un address{};
+      address.sun_family = AF_UNIX;
+      std::strncpy(address.sun_path, socketPath.c_str(), sizeof(address.sun_path) - 1);
+      const bool up = ::connect(probe, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0;
+      ::close(probe);
+      if (up) return;
+      ::usleep(10'000);
+    }
+    FAIL("the stand-in service did not listen");
+  }
+  ~FakeService() {
+    ::kill(m_pid, SIGKILL);
+    ::waitpid(m_pid, nullptr, 0);
+  }
+  FakeService(const FakeService&) = delete;
+  FakeService& operator=(const FakeService&) = delete;
+
+ private:
+  pid_t m_pid{};
+};
+
+}  // namespace
+
+TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it checked") {
+  const RunResult result = runVcu({"check", "--config", (HHEA_FOLDER / "vehicle.json").string()});
+  CHECK_MESSAGE(result.exitCode == EXIT_OK, result.err);
+  for (const char* file : {"vehicle.json: 0 errors", "hhea.dbc: 0 errors", "gpio.json: 0 errors", "fsm.json: 0 errors",
+                           "schedule.json: 0 errors", "simulation.json: 0 errors", "dashboard.json: 0 errors"}) {
+    CHECK_MESSAGE(contains(result.out, file), file);
+  }
+  CHECK(contains(result.out, "vehicle 'hhea': 7 files, 0 errors, 0 warnings\n"));
+  CHECK_FALSE(contains(result.err, "error:"));
+}
+
+TEST_CASE("vcu check reports a broken simulation, dashboard and schedule together with their locations (#19)") {
+  const std::string vehicle = hheaCopy("check_broken", "simulation.json", "{\"vehicle\": {\"x\": 1,}}");
+  writeScratchFile("check_broken/dashboard.json", "[1, 2]");
+  writeScratchFile("check_broken/schedule.json", "{\"messages\": {\n  \"a\": 1\n  \"b\": 2}}");
+  const RunResult result = runVcu({"check", "--config", vehicle});
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(result.err, "check_broken/simulation.json:1:"));
+  CHECK(contains(result.err, "check_broken/dashboard.json: error: the top level must be a JSON object"));
+  CHECK(contains(result.err, "check_broken/schedule.json:3:"));
+  // the schedule's syntax error is not turned into unknown send groups of fsm.json
+  CHECK_FALSE(contains(result.err, "fsm.json: /"));
+  CHECK(contains(result.out, "schedule.json: 1 error"));
+  CHECK(contains(result.out, "fsm.json: 0 errors"));
+  CHECK(contains(result.out, "7 files, 3 errors"));
+  CHECK(result.out.find("error:") == std::string::npos);  // diagnostics on stderr only
+}
+
+TEST_CASE("vcu check still checks the other files when vehicle.json itself has an error") {
+  const std::string vehicle = hheaCopy("check_vehicle_error");
+  std::string text;
+  {
+    std::ifstream in(vehicle);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  text.replace(text.find("\"Vehicle_Control_Unit\""), 22, "\"Vehicle_Control_Unix\"");
+  writeScratchFile("check_vehicle_error/vehicle.json", text);
+  writeScratchFile("check_vehicle_error/simulation.json", "{");
+  const RunResult result = runVcu({"check", "--config", vehicle});
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(result.err, "vehicle.json: /node: error: node 'Vehicle_Control_Unix'"));
+  CHECK(contains(result.err, "check_vehicle_error/simulation.json:1:"));
+}
+
+TEST_CASE("vcu check without any configuration or running stack is a usage error") {
+  ScopedEnvironment root("OPENVCU_RUN_DIR", (fs::path(VCU_TEST_WORK_DIR) / "no_stacks").string());
+  ::unsetenv("OPENVCU_CONFIG");
+  const RunResult result = runVcu({"check"});
+  CHECK(result.exitCode == EXIT_USAGE);
+  CHECK(contains(result.err, "no configuration: give --config FILE or set OPENVCU_CONFIG (no running stack found in"));
+}
+
+TEST_CASE("vcu fsm check writes diagnostics to stderr and blames a broken schedule, not fsm.json (#19)") {
+  const std::string vehicle = hheaCopy("fsm_schedule_broken", "schedule.json", "{ \"broken");
+  const std::string fsm = (fs::path(vehicle).parent_path() / "fsm.json").string();
+  const RunResult result = runVcu({"fsm", "check", fsm, "--config", vehicle});
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(result.err, "fsm_schedule_broken/schedule.json:1:"));
+  CHECK_FALSE(contains(result.err, "unknown send group"));
+  CHECK(contains(result.err, "fsm.json: note: 2 send-group actions not checked"));
+  CHECK_FALSE(contains(result.out, "error:"));
+  CHECK(contains(result.out, "fsm.json: 1 error, 0 warnings"));
+}
+
+TEST_CASE("vcu finds the configuration of the one running stack through its command socket (#19)") {
+  const fs::path root = fs::path(VCU_TEST_WORK_DIR) / "run_one";
+  fs::remove_all(root);
+  ScopedEnvironment rootVariable("OPENVCU_RUN_DIR", root.string());
+  ::unsetenv("OPENVCU_CONFIG");
+  const std::string vehicle = (HHEA_FOLDER / "vehicle.json").string();
+  // a relative --config resolves against the service's working folder
+  const FakeService service(root, "hhea2", {"--config", "vehicle.json"}, HHEA_FOLDER);
+
+  std::vector<std::string> problems;
+  const auto stacks = openvcu::cli::findRunningStacks(&problems);
+  REQUIRE_MESSAGE(stacks.size() == 1, (problems.empty() ? std::string() : problems.front()));
+  CHECK(stacks[0].instance == "hhea2");
+  CHECK(stacks[0].configPath == vehicle);
+  CHECK(contains(stacks[0].foundBy, "vcu-fake (pid "));
+
+  const RunResult check = runVcu({"check"});
+  CHECK_MESSAGE(check.exitCode == EXIT_OK, check.err);
+  CHECK(contains(check.out, vehicle + ": 0 errors"));
+}
+
+TEST_CASE("vcu refuses to guess between two running stacks and ignores a socket nobody serves") {
+  const fs::path root = fs::path(VCU_TEST_WORK_DIR) / "run_two";
+  fs::remove_all(root);
+  ScopedEnvironment rootVariable("OPENVCU_RUN_DIR", root.string());
+  ::unsetenv("OPENVCU_CONFIG");
+  const std::string vehicle = (HHEA_FOLDER / "vehicle.json").string();
+  {
+    const FakeService crashed(root, "crashed", {"--config=" + vehicle});
+  }  // killed: its socket file stays, nobody answers
+  REQUIRE(fs::exists(root / "crashed" / "vcu-fake.sock"));
+  CHECK(openvcu::cli::findRunningStacks(nullptr).empty());
+
+  const FakeService first(root, "first", {"--config", vehicle});
+  const FakeService second(root, "second", {"-c", vehicle});
+  const RunResult result = runVcu({"check"});
+  CHECK(result.exitCode == EXIT_USAGE);
+  CHECK(contains(result.err, "2 stacks are running (first: " + vehicle + ", second: " + vehicle + ")"));
+}
