@@ -1,10 +1,11 @@
 #include "openvcu/core/text.hpp"
 
+#include "openvcu/core/input_file.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
-#include <sstream>
+#include <utility>
 
 namespace openvcu::text {
 
@@ -115,18 +116,12 @@ std::string cp1252ToUtf8(std::string_view bytes) {
 }
 
 std::optional<std::string> readFile(const std::string& path, std::string* errorMessage) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    if (errorMessage) *errorMessage = std::string("cannot open: ") + std::strerror(errno);
+  Result<std::string> readResult = input::readWholeFile(path, input::TEXT_FILE);
+  if (!readResult) {
+    if (errorMessage) *errorMessage = readResult.error().message;
     return std::nullopt;
   }
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) {
-    if (errorMessage) *errorMessage = "read error";
-    return std::nullopt;
-  }
-  return buffer.str();
+  return std::move(*readResult);
 }
 
 bool globMatch(std::string_view pattern, std::string_view text) noexcept {

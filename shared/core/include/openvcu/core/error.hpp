@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace openvcu {
 
@@ -22,7 +23,8 @@ struct Location {
   static Location json(std::string file, std::string path) {
     return Location{std::move(file), 0, 0, std::move(path)};
   }
-  /// "file:line:col", "file:line", "file: /json/path" or "" depending on what is known.
+  /// "file:line:col", "file:line", "file: /json/path" or "" depending on what is known;
+  /// control characters escaped as in escapeControlCharacters().
   [[nodiscard]] std::string toString() const;
 };
 
@@ -33,8 +35,18 @@ struct Error {
   Location location{};
   Severity severity{Severity::Error};
 
-  /// "file:line:col: message" (warnings: "file:line:col: warning: message").
+  /// "file:line:col: message" (warnings: "file:line:col: warning: message"), always one
+  /// line: control characters in the file name and message are escaped (issue 19), so a
+  /// NUL or newline quoted from the input never reaches a terminal or log raw.
   [[nodiscard]] std::string toString() const;
 };
+
+/// `text` with control characters escaped: NUL -> "\0", LF -> "\n", CR -> "\r", other
+/// C0 bytes and DEL -> "\xHH"; TAB and bytes from 0x80 (UTF-8) kept.
+/// "bad\nname" (a real newline) -> "bad\\nname" (a backslash and an n).
+/// Escaping never changes text without control characters, so it may be applied twice.
+std::string escapeControlCharacters(std::string_view text);
+/// The same, appended to `out` (allocation-free when `out` has the capacity).
+void appendEscapedControlCharacters(std::string& out, std::string_view text);
 
 }  // namespace openvcu

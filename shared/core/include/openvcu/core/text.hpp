@@ -24,7 +24,9 @@ bool isValidUtf8(std::string_view bytes) noexcept;
 /// Converts Windows-1252 (a superset of printable Latin-1) text to UTF-8.
 std::string cp1252ToUtf8(std::string_view bytes);
 
-/// Reads a whole file; on failure returns nullopt and the OS reason in *errorMessage.
+/// Reads a whole file under the input-file rule (input_file.hpp: regular files only, at
+/// most input::TEXT_FILE's 64 MiB, a pending SIGTERM ends the read); on failure returns
+/// nullopt and the reason in *errorMessage ("not a regular file (directory)").
 std::optional<std::string> readFile(const std::string& path, std::string* errorMessage);
 
 /// Glob-style match with `*` and `?` (used for signal patterns like "VIC.*SOC*").
