@@ -1,6 +1,7 @@
 // DBC statement parser: text -> Database (+ pending references resolved in resolve.cpp).
 #include "openvcu/dbc/parser.hpp"
 
+#include "openvcu/core/input_file.hpp"
 #include "openvcu/core/text.hpp"
 #include "parser_state.hpp"
 #include "scanner.hpp"
@@ -20,19 +21,7 @@ using detail::Where;
 
 constexpr std::size_t MAX_DIAGNOSTICS = 1000;
 
-/// Every keyword that may start a statement (the ones only listed inside NS_ too).
-constexpr std::array<std::string_view, 35> KEYWORDS = {
-    "VERSION",        "NS_",          "BS_",           "BU_",          "VAL_TABLE_",
-    "BO_",            "SG_",          "BO_TX_BU_",     "CM_",          "BA_DEF_",
-    "BA_DEF_DEF_",    "BA_",          "BA_DEF_REL_",   "BA_DEF_DEF_REL_", "BA_REL_",
-    "VAL_",           "SIG_VALTYPE_", "SIG_GROUP_",    "EV_",          "ENVVAR_DATA_",
-    "SG_MUL_VAL_",    "NS_DESC_",     "CAT_DEF_",      "CAT_",         "FILTER",
-    "EV_DATA_",       "SGTYPE_",      "SGTYPE_VAL_",   "SIG_TYPE_REF_", "SIGTYPE_VALTYPE_",
-    "BA_DEF_SGTYPE_", "BA_SGTYPE_",   "BU_SG_REL_",    "BU_EV_REL_",   "BU_BO_REL_"};
-
-bool isKeyword(std::string_view word) {
-  return std::find(KEYWORDS.begin(), KEYWORDS.end(), word) != KEYWORDS.end();
-}
+bool isKeyword(std::string_view word) noexcept { return detail::isStatementKeyword(word); }
 
 class Parser {
  public:
@@ -65,20 +54,30 @@ class Parser {
         }
         resync();
       }
+      reportScannerProblems();
     }
+    reportScannerProblems();
     applyDefaults();
     detail::resolve(m_out.database, m_pending, m_file, m_out.diagnostics);
   }
 
  private:
   // ------------------------------------------------------------ diagnostics
+  /// Unterminated strings and comments are errors even inside a CM_ (whose own problems
+  /// are warnings): they would have swallowed the statements after them.
+  void reportScannerProblems() {
+    for (Scanner::Problem& problem : m_scan.takeProblems()) error(problem.position, std::move(problem.message));
+  }
   Where where(std::size_t position) const {
     const auto [line, column] = m_scan.lineColumn(position);
     return Where{line, column};
   }
   void report(std::size_t position, std::string message, Severity severity) {
     const Where at = where(position);
-    m_out.diagnostics.push_back(Error{std::move(message), Location{std::string(m_file), at.line, at.column, {}}, severity});
+    // Quoted names (attribute names, strings) may hold any byte: escaped so that a
+    // diagnostic stays one printable line whoever prints it.
+    m_out.diagnostics.push_back(
+        Error{escapeControlCharacters(message), Location{std::string(m_file), at.line, at.column, {}}, severity});
   }
   void error(std::size_t position, std::string message) { report(position, std::move(message), Severity::Error); }
   void warning(std::size_t position, std::string message) { report(position, std::move(message), Severity::Warning); }
@@ -175,14 +174,9 @@ class Parser {
   }
   bool quoted(std::string& out, std::string_view what) {
     m_scan.skipSpace();
-    const std::size_t at = m_scan.position();
     bool unterminated = false;
     auto value = m_scan.quoted(&unterminated);
-    if (unterminated) {
-      error(at, "string never closed");
-      m_scan.setPosition(m_scan.position());
-      return false;
-    }
+    if (unterminated) return false;  // the scanner keeps the problem, reported as an error
     if (!value) return expected(what);
     out = std::move(*value);
     return true;
@@ -835,6 +829,21 @@ ParseOutput parse(std::string_view text, std::string_view fileName) {
     text = converted;
     out.database.sourceEncoding = "cp1252";
   }
+  // Any line-end convention: CRLF (Windows) and CR alone (classic Mac OS) become LF, so
+  // lines, columns and multi-line comments read alike. Columns do not move: only the CR
+  // before an LF is dropped, a lone CR is replaced in place.
+  std::string normalized;
+  if (text.find('\r') != std::string_view::npos) {
+    normalized.reserve(text.size());
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      if (text[i] != '\r') {
+        normalized += text[i];
+      } else if (i + 1 >= text.size() || text[i + 1] != '\n') {
+        normalized += '\n';
+      }
+    }
+    text = normalized;
+  }
   Parser parser(text, fileName, out);
   parser.run();
   std::stable_sort(out.diagnostics.begin(), out.diagnostics.end(), [](const Error& a, const Error& b) {
@@ -844,9 +853,8 @@ ParseOutput parse(std::string_view text, std::string_view fileName) {
 }
 
 Result<Database> loadFile(const std::string& path, std::vector<Error>* warnings) {
-  std::string reason;
-  const auto content = text::readFile(path, &reason);
-  if (!content) return Error{reason, Location{path, 0, 0, {}}};
+  Result<std::string> content = input::readWholeFile(path, input::DBC_FILE);
+  if (!content) return content.error();
   ParseOutput out = parse(*content, path);
   for (const Error& diagnostic : out.diagnostics) {
     if (diagnostic.severity == Severity::Error) return diagnostic;

@@ -1,11 +1,13 @@
 // Applies the references collected while parsing (CM_, BA_, VAL_, SIG_VALTYPE_,
 // SG_MUL_VAL_, BO_TX_BU_), classifies IDs and resolves multiplexing.
+#include "openvcu/dbc/codec.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "parser_state.hpp"
 
 #include <algorithm>
 #include <cstdio>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace openvcu::dbc::detail {
 namespace {
@@ -24,6 +26,7 @@ class Resolver {
   void run() {
     classifyIds();
     indexMessages();
+    checkAttributeDefinitions();
     for (auto& item : m_pending.transmitters) applyTransmitters(item);
     for (auto& item : m_pending.comments) applyComment(item);
     for (auto& item : m_pending.values) applyValues(item);
@@ -31,13 +34,19 @@ class Resolver {
     for (auto& item : m_pending.attributes) applyAttribute(item);
     for (auto& item : m_pending.muxes) applyMux(item);
     for (std::size_t i = 0; i < m_db.messages.size(); ++i) resolveMultiplexing(i);
-    for (std::size_t i = 0; i < m_db.messages.size(); ++i) checkLayout(i);
+    for (std::size_t i = 0; i < m_db.messages.size(); ++i) {
+      checkLayout(i);
+      checkMultiplexorCount(i);
+      checkOverlaps(i);
+    }
     m_db.reindex();
   }
 
  private:
   void report(Where where, std::string message, Severity severity) {
-    m_diagnostics.push_back(Error{std::move(message), Location{std::string(m_file), where.line, where.column, {}}, severity});
+    // Names quoted from the file may hold any byte: escaped, one printable line.
+    m_diagnostics.push_back(
+        Error{escapeControlCharacters(message), Location{std::string(m_file), where.line, where.column, {}}, severity});
   }
   void error(Where where, std::string message) { report(where, std::move(message), Severity::Error); }
   void warning(Where where, std::string message) { report(where, std::move(message), Severity::Warning); }
@@ -66,8 +75,17 @@ class Resolver {
   }
 
   void indexMessages() {
+    std::unordered_map<std::string_view, std::size_t> messageNames;
     for (std::size_t i = 0; i < m_db.messages.size(); ++i) {
       const Message& msg = m_db.messages[i];
+      // Names are how configuration, tools and the signal catalog ("Message.Signal") refer
+      // to messages: a second message of one name would make them ambiguous.
+      if (const auto [first, inserted] = messageNames.emplace(msg.name, i); !inserted) {
+        error(m_pending.messageLines[i], "message name '" + msg.name + "' is used twice (ID " + hexId(msg.declaredId) +
+                                             " here, ID " + hexId(m_db.messages[first->second].declaredId) +
+                                             " at line " + std::to_string(m_pending.messageLines[first->second].line) +
+                                             ")");
+      }
       const auto [it, inserted] = m_byDeclared.emplace(msg.declaredId, i);
       if (!inserted) {
         warning(m_pending.messageLines[i], "message '" + msg.name + "' repeats ID " + hexId(msg.declaredId) +
@@ -84,6 +102,26 @@ class Resolver {
                                                    "'; references by name (CM_, BA_, VAL_) resolve to the first");
         }
       }
+    }
+  }
+
+  /// BA_DEF_ given twice for one name and object type: the first definition holds (it is
+  /// what values are checked against and defaults come from), so a second one with another
+  /// type or ENUM list is an error, as it is when merging files.
+  void checkAttributeDefinitions() {
+    const auto& definitions = m_db.attributeDefinitions;
+    std::unordered_map<std::string, std::size_t> firstOf;
+    for (std::size_t i = 0; i < definitions.size(); ++i) {
+      const AttributeDefinition& def = definitions[i];
+      const std::string key = std::string(toString(def.object)) + '\n' + def.name;
+      const auto [it, inserted] = firstOf.emplace(key, i);
+      if (inserted) continue;
+      const AttributeDefinition& first = definitions[it->second];
+      if (first.type == def.type && (def.type != AttributeType::Enum || first.enumValues == def.enumValues)) continue;
+      error(Where{def.source.line, 0}, "attribute '" + def.name + "' (" + std::string(toString(def.object)) +
+                                            ") defined again with another " +
+                                            (first.type == def.type ? "ENUM list" : "type") + " (first at line " +
+                                            std::to_string(first.source.line) + ")");
     }
   }
 
@@ -313,6 +351,141 @@ class Resolver {
                            "'; decoded only from longer frames");
       }
       if (sig.factor == 0.0) warning(where, "signal '" + sig.name + "' has factor 0");
+    }
+  }
+
+  /// The codec decodes the signals of at most MessageCodec::MAX_MUX_SLOTS multiplexors per
+  /// message; the signals of any further multiplexor would be skipped without a word.
+  void checkMultiplexorCount(std::size_t messageIndex) {
+    const Message& msg = m_db.messages[messageIndex];
+    if (msg.pseudo) return;
+    std::unordered_set<std::string_view> switches;
+    for (const Signal& sig : msg.signals) {
+      if (!sig.muxSwitch.empty()) switches.insert(sig.muxSwitch);
+    }
+    if (switches.size() <= MessageCodec::MAX_MUX_SLOTS) return;
+    warning(m_pending.messageLines[messageIndex],
+            "message '" + msg.name + "' has " + std::to_string(switches.size()) + " multiplexors; only the signals of " +
+                std::to_string(MessageCodec::MAX_MUX_SLOTS) +
+                " of them can be decoded (the codec's limit per message), the others are not decodable");
+  }
+
+  /// The bits a signal occupies, as a mask over its byte window (at most 9 bytes for a
+  /// signal of up to 64 bits), LSB0 numbering: bit k of the mask = frame bit base*8 + k.
+  struct BitWindow {
+    std::uint64_t lowByte{};
+    std::uint64_t highByte{};
+    unsigned __int128 mask{};
+  };
+  static BitWindow bitWindow(const Signal& sig) {
+    BitWindow window;
+    window.lowByte = sig.startBit / 8;
+    const std::uint64_t base = window.lowByte * 8;
+    if (sig.byteOrder == ByteOrder::LittleEndian) {
+      for (std::uint64_t k = 0; k < sig.size; ++k) window.mask |= static_cast<unsigned __int128>(1) << (sig.startBit + k - base);
+      window.highByte = (std::uint64_t{sig.startBit} + sig.size - 1) / 8;
+    } else {
+      // Motorola: MSB at the start bit, then towards lower bits and on into the next byte.
+      const std::uint64_t msbLinear = base + (7 - sig.startBit % 8);
+      for (std::uint64_t k = 0; k < sig.size; ++k) {
+        const std::uint64_t linear = msbLinear + k;
+        const std::uint64_t position = (linear / 8) * 8 + (7 - linear % 8);
+        window.mask |= static_cast<unsigned __int128>(1) << (position - base);
+      }
+      window.highByte = (msbLinear + sig.size - 1) / 8;
+    }
+    return window;
+  }
+
+  /// The conditions under which a signal is present: (multiplexor index, ranges) from its
+  /// own selector up the chain. Empty for a signal that is always present.
+  struct Condition {
+    std::size_t switchIndex{};
+    std::vector<MuxRange> ranges;
+  };
+  static std::vector<Condition> presence(const Message& msg, std::size_t signalIndex) {
+    std::vector<Condition> conditions;
+    const Signal* cursor = &msg.signals[signalIndex];
+    while (!cursor->muxSwitch.empty() && conditions.size() <= msg.signals.size()) {
+      const Signal* sw = msg.findSignal(cursor->muxSwitch);
+      if (!sw) break;
+      Condition condition;
+      condition.switchIndex = static_cast<std::size_t>(sw - msg.signals.data());
+      condition.ranges = cursor->muxRanges.empty() ? std::vector<MuxRange>{MuxRange{cursor->muxValue, cursor->muxValue}}
+                                                   : cursor->muxRanges;
+      conditions.push_back(std::move(condition));
+      cursor = sw;
+    }
+    return conditions;
+  }
+  /// Can both be present in one frame: no multiplexor both depend on selects them with
+  /// values that exclude each other.
+  static bool canCoexist(const std::vector<Condition>& a, const std::vector<Condition>& b) {
+    for (const Condition& ca : a) {
+      for (const Condition& cb : b) {
+        if (ca.switchIndex != cb.switchIndex) continue;
+        bool shared = false;
+        for (const MuxRange& ra : ca.ranges) {
+          for (const MuxRange& rb : cb.ranges) shared = shared || (ra.low <= rb.high && rb.low <= ra.high);
+        }
+        if (!shared) return false;
+      }
+    }
+    return true;
+  }
+
+  /// Signals that share a bit and can be present in the same frame (multiplexing
+  /// respected): a warning at the later one. Both still decode as written; encoding one
+  /// changes the other. Up to MAX_OVERLAPS_SHOWN pairs per message are named.
+  void checkOverlaps(std::size_t messageIndex) {
+    static constexpr std::size_t MAX_OVERLAPS_SHOWN = 16;
+    const Message& msg = m_db.messages[messageIndex];
+    if (msg.pseudo) return;
+    std::vector<std::size_t> order;
+    std::vector<BitWindow> windows(msg.signals.size());
+    for (std::size_t s = 0; s < msg.signals.size(); ++s) {
+      const Signal& sig = msg.signals[s];
+      if (sig.size == 0 || sig.size > 64) continue;  // reported by checkLayout
+      windows[s] = bitWindow(sig);
+      order.push_back(s);
+    }
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return windows[a].lowByte < windows[b].lowByte || (windows[a].lowByte == windows[b].lowByte && a < b);
+    });
+    std::vector<std::vector<Condition>> conditions(msg.signals.size());
+    std::vector<bool> known(msg.signals.size(), false);
+    auto conditionsOf = [&](std::size_t s) -> const std::vector<Condition>& {
+      if (!known[s]) {
+        conditions[s] = presence(msg, s);
+        known[s] = true;
+      }
+      return conditions[s];
+    };
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const std::size_t a = order[i];
+      for (std::size_t j = i + 1; j < order.size() && windows[order[j]].lowByte <= windows[a].highByte; ++j) {
+        const std::size_t b = order[j];
+        const unsigned shift = static_cast<unsigned>((windows[b].lowByte - windows[a].lowByte) * 8);
+        const unsigned __int128 common = windows[a].mask & (windows[b].mask << shift);
+        if (common == 0 || !canCoexist(conditionsOf(a), conditionsOf(b))) continue;
+        ++found;
+        if (found > MAX_OVERLAPS_SHOWN) continue;
+        unsigned lowest = 0;
+        while (((common >> lowest) & 1) == 0) ++lowest;
+        const std::uint64_t bit = windows[a].lowByte * 8 + lowest;
+        const std::size_t first = std::min(a, b);
+        const std::size_t later = std::max(a, b);
+        warning(m_pending.signalWhere[messageIndex][later],
+                "signals '" + msg.signals[first].name + "' and '" + msg.signals[later].name + "' of message '" +
+                    msg.name + "' overlap (bit " + std::to_string(bit) +
+                    ") and can be present together; encoding one changes the other");
+      }
+    }
+    if (found > MAX_OVERLAPS_SHOWN) {
+      warning(m_pending.messageLines[messageIndex], "message '" + msg.name + "' has " +
+                                                        std::to_string(found - MAX_OVERLAPS_SHOWN) +
+                                                        " more overlapping signal pairs");
     }
   }
 

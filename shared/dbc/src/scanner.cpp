@@ -1,6 +1,7 @@
 #include "scanner.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -13,7 +14,34 @@ bool isWordChar(char c) noexcept {
   return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
 }
 bool isDigit(char c) noexcept { return c >= '0' && c <= '9'; }
+
+/// Every keyword that may start a statement (the ones only listed inside NS_ too).
+constexpr std::array<std::string_view, 35> KEYWORDS = {
+    "VERSION",        "NS_",          "BS_",           "BU_",          "VAL_TABLE_",
+    "BO_",            "SG_",          "BO_TX_BU_",     "CM_",          "BA_DEF_",
+    "BA_DEF_DEF_",    "BA_",          "BA_DEF_REL_",   "BA_DEF_DEF_REL_", "BA_REL_",
+    "VAL_",           "SIG_VALTYPE_", "SIG_GROUP_",    "EV_",          "ENVVAR_DATA_",
+    "SG_MUL_VAL_",    "NS_DESC_",     "CAT_DEF_",      "CAT_",         "FILTER",
+    "EV_DATA_",       "SGTYPE_",      "SGTYPE_VAL_",   "SIG_TYPE_REF_", "SIGTYPE_VALTYPE_",
+    "BA_DEF_SGTYPE_", "BA_SGTYPE_",   "BU_SG_REL_",    "BU_EV_REL_",   "BU_BO_REL_"};
 }  // namespace
+
+bool isStatementKeyword(std::string_view word) noexcept {
+  return std::find(KEYWORDS.begin(), KEYWORDS.end(), word) != KEYWORDS.end();
+}
+
+void Scanner::addProblem(std::size_t position, std::string message) {
+  const auto it = std::lower_bound(m_reported.begin(), m_reported.end(), position);
+  if (it != m_reported.end() && *it == position) return;  // the parser looked at it twice
+  m_reported.insert(it, position);
+  m_problems.push_back(Problem{position, std::move(message)});
+}
+
+std::vector<Scanner::Problem> Scanner::takeProblems() {
+  std::vector<Problem> out;
+  out.swap(m_problems);
+  return out;
+}
 
 Scanner::Scanner(std::string_view text) : m_text(text) {
   m_lineStarts.push_back(0);
@@ -22,7 +50,7 @@ Scanner::Scanner(std::string_view text) : m_text(text) {
   }
 }
 
-bool Scanner::skipComment() noexcept {
+bool Scanner::skipComment() {
   if (m_pos + 1 >= m_text.size() || m_text[m_pos] != '/') return false;
   if (m_text[m_pos + 1] == '/') {
     while (m_pos < m_text.size() && m_text[m_pos] != '\n') ++m_pos;
@@ -30,13 +58,20 @@ bool Scanner::skipComment() noexcept {
   }
   if (m_text[m_pos + 1] == '*') {
     const std::size_t close = m_text.find("*/", m_pos + 2);
-    m_pos = close == std::string_view::npos ? m_text.size() : close + 2;
+    if (close != std::string_view::npos) {
+      m_pos = close + 2;
+      return true;
+    }
+    // Never closed: reported, and taken to end with its line so that the statements after
+    // it are still read (and checked) instead of vanishing.
+    addProblem(m_pos, "comment '/*' never closed");
+    while (m_pos < m_text.size() && m_text[m_pos] != '\n') ++m_pos;
     return true;
   }
   return false;
 }
 
-void Scanner::skipBlanks() noexcept {
+void Scanner::skipBlanks() {
   while (m_pos < m_text.size()) {
     if (isBlank(m_text[m_pos])) {
       ++m_pos;
@@ -46,7 +81,7 @@ void Scanner::skipBlanks() noexcept {
   }
 }
 
-void Scanner::skipSpace() noexcept {
+void Scanner::skipSpace() {
   while (m_pos < m_text.size()) {
     if (isBlank(m_text[m_pos]) || m_text[m_pos] == '\n') {
       ++m_pos;
@@ -56,12 +91,12 @@ void Scanner::skipSpace() noexcept {
   }
 }
 
-bool Scanner::atLineEnd() noexcept {
+bool Scanner::atLineEnd() {
   skipBlanks();
   return atEnd() || m_text[m_pos] == '\n';
 }
 
-bool Scanner::accept(char c, bool acrossLines) noexcept {
+bool Scanner::accept(char c, bool acrossLines) {
   const std::size_t saved = m_pos;
   acrossLines ? skipSpace() : skipBlanks();
   if (m_pos < m_text.size() && m_text[m_pos] == c) {
@@ -78,7 +113,7 @@ std::string_view Scanner::word() noexcept {
   return m_text.substr(begin, m_pos - begin);
 }
 
-std::string_view Scanner::peekWord() noexcept {
+std::string_view Scanner::peekWord() {
   const std::size_t saved = m_pos;
   skipSpace();
   const std::string_view result = word();
@@ -176,13 +211,35 @@ std::optional<std::string> Scanner::quoted(bool* unterminated) {
     } else if (c == '"') {
       m_pos = i + 1;
       return out;
+    } else if (c == '\n' && startsStatement(i + 1)) {
+      // A comment may span lines, but a line starting with a statement keyword means the
+      // closing quote is missing: reading on would swallow statements (issue 19).
+      const std::size_t keywordAt = m_text.find_first_not_of(" \t", i + 1);
+      std::size_t keywordEnd = keywordAt;
+      while (keywordEnd < m_text.size() && isWordChar(m_text[keywordEnd])) ++keywordEnd;
+      const auto line = lineColumn(i + 1).first;
+      addProblem(m_pos, "string not closed before line " + std::to_string(line) + ", which starts a " +
+                            std::string(m_text.substr(keywordAt, keywordEnd - keywordAt)) + " statement");
+      if (unterminated) *unterminated = true;
+      return std::nullopt;
     } else {
-      if (c != '\r') out += c;  // CRLF inside multi-line comments becomes LF
+      out += c;
       ++i;
     }
   }
+  addProblem(m_pos, "string never closed");
   if (unterminated) *unterminated = true;
   return std::nullopt;
+}
+
+bool Scanner::startsStatement(std::size_t lineStart) const noexcept {
+  std::size_t i = lineStart;
+  while (i < m_text.size() && (m_text[i] == ' ' || m_text[i] == '\t')) ++i;
+  const std::size_t begin = i;
+  while (i < m_text.size() && isWordChar(m_text[i])) ++i;
+  if (i == begin || !isStatementKeyword(m_text.substr(begin, i - begin))) return false;
+  // "BO_ 100 ...", "BU_: A B", "NS_ :" -- a keyword followed by a blank, ':' or the line end.
+  return i == m_text.size() || m_text[i] == ' ' || m_text[i] == '\t' || m_text[i] == ':' || m_text[i] == '\n';
 }
 
 void Scanner::skipLine() noexcept {

@@ -12,13 +12,14 @@ using namespace openvcu::dbc;
 using namespace openvcu::dbc::test;
 
 namespace {
-/// One node, one message, one signal, one environment variable: what the statements refer to.
+/// One node, one message, its signals side by side, one environment variable: what the
+/// statements refer to.
 const std::string BASE =
     "BU_: Vcu Dash\n"
-    "BO_ 100 Status: 8 Vcu\n"
+    "BO_ 100 Status: 16 Vcu\n"
     " SG_ Gear : 0|8@1- (1,0) [-1|1] \"\" Dash\n"
     " SG_ Ratio : 8|32@1+ (1,0) [0|0] \"\" Dash\n"
-    " SG_ Energy : 0|64@1+ (1,0) [0|0] \"\" Dash\n"
+    " SG_ Energy : 64|64@1+ (1,0) [0|0] \"\" Dash\n"
     "EV_ Counter: 0 [0|100] \"\" 5 7 DUMMY_NODE_VECTOR0 Vcu;\n";
 
 const Signal* gearOf(const ParseOutput& output) {

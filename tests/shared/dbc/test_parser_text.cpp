@@ -61,11 +61,13 @@ TEST_CASE("parser keeps comment markers inside strings") {
   CHECK(sut.database.messages[0].comment == "see http://example.org /* not a comment */");
 }
 
-TEST_CASE("parser reads an unterminated block comment to the end of the file") {
+TEST_CASE("parser reports an unterminated block comment at its line and reads on after it (#19)") {
   const ParseOutput sut = parseText("BU_: Vcu\n/* never closed\nBO_ 1 M: 8 Vcu\n");
 
-  CHECK_FALSE(sut.hasErrors());
-  CHECK(sut.database.messages.empty());
+  const std::vector<Error> errors = diagnosticsWith(sut, Severity::Error, "never closed");
+  REQUIRE(errors.size() == 1);
+  CHECK(errors[0].toString() == "test.dbc:2:1: comment '/*' never closed");
+  CHECK(sut.database.messages.size() == 1);
 }
 
 // ------------------------------------------------------------------ line endings

@@ -32,7 +32,9 @@ struct ParseOutput {
 /// @note thread-safe (no shared state); never throws.
 ParseOutput parse(std::string_view text, std::string_view fileName = "<dbc>");
 
-/// Reads and parses a file; refuses it (first error) if anything is malformed.
+/// Reads and parses a file; refuses it (first error) if anything is malformed. The file
+/// is read under the input-file rule (openvcu/core/input_file.hpp): a regular file of at
+/// most 64 MiB ("/dev/zero: not a regular file (character device)").
 /// Warnings are appended to *warnings when given.
 Result<Database> loadFile(const std::string& path, std::vector<Error>* warnings = nullptr);
 
