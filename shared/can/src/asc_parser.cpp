@@ -86,6 +86,21 @@ bool parseAscId(std::string_view token, unsigned base, Frame& frame) noexcept {
   return true;
 }
 
+/// The error for an identifier token parseAscId() refused: out of range or not a number.
+LineResult invalidId(LineError& error, std::uint32_t column, std::string_view token, unsigned base) noexcept {
+  const bool extended = !token.empty() && (token.back() == 'x' || token.back() == 'X');
+  std::string_view digits = token;
+  if (extended) digits.remove_suffix(1);
+  std::uint64_t id = 0;
+  const Excerpt text = excerpt(token);
+  if (parseUnsigned(digits, base, UINT64_MAX, id)) {
+    return extended ? fail(error, column, "extended identifier '%.*s' exceeds 0x1FFFFFFF", text.length, text.data)
+                    : fail(error, column, "standard identifier '%.*s' exceeds 0x7FF (a 29-bit one ends in 'x')",
+                           text.length, text.data);
+  }
+  return fail(error, column, "invalid CAN identifier '%.*s'", text.length, text.data);
+}
+
 LineResult errorFrame(LogRecord& record) noexcept {
   record.frame.flags = FLAG_ERROR;  // ASC does not log the SocketCAN error class: id 0, no data
   record.frame.id = 0;
@@ -151,9 +166,19 @@ LineResult AscParser::parseHeader(Scanner& s, LineError& error) noexcept {
 LineResult AscParser::parseClassic(Scanner& s, std::string_view channel, LogRecord& record, LineError& error) noexcept {
   Frame& frame = record.frame;
   record.channel = channel;
+  s.skipSpaces();
+  const std::uint32_t idColumn = s.column();
   const std::string_view idToken = s.token();
   if (equalsIgnoreCase(idToken, "ErrorFrame")) return errorFrame(record);
-  if (!parseAscId(idToken, m_base, frame)) return LineResult::Skip;  // Statistic:, J1939TP, ...
+  if (!parseAscId(idToken, m_base, frame)) {
+    // Other events (Statistic:, J1939TP ...) are skipped; a line shaped like a frame
+    // ("<id> Rx|Tx d|r ...") whose identifier cannot be read is an error, as in candump.
+    Scanner lookahead = s;
+    const std::string_view next = lookahead.token();
+    const std::string_view type = lookahead.token();
+    const bool frameShape = (next == "Rx" || next == "Tx") && (type == "d" || type == "D" || type == "r" || type == "R");
+    return frameShape ? invalidId(error, idColumn, idToken, m_base) : LineResult::Skip;
+  }
   const std::string_view direction = s.token();
   if (direction != "Rx" && direction != "Tx") return LineResult::Skip;  // TxRq and other events
   record.direction = direction[0] == 'R' ? 'R' : 'T';
@@ -189,13 +214,11 @@ LineResult AscParser::parseCanFd(Scanner& s, LogRecord& record, LineError& error
   const std::string_view direction = s.token();
   if (direction != "Rx" && direction != "Tx") return LineResult::Skip;  // TxRq
   record.direction = direction[0] == 'R' ? 'R' : 'T';
-  const std::uint32_t idColumn = s.column() + 1;
+  s.skipSpaces();
+  const std::uint32_t idColumn = s.column();
   const std::string_view idToken = s.token();
   if (equalsIgnoreCase(idToken, "ErrorFrame")) return errorFrame(record);
-  if (!parseAscId(idToken, m_base, frame)) {
-    const Excerpt text = excerpt(idToken);
-    return fail(error, idColumn, "invalid CAN identifier '%.*s'", text.length, text.data);
-  }
+  if (!parseAscId(idToken, m_base, frame)) return invalidId(error, idColumn, idToken, m_base);
   std::string_view brs = s.token();
   if (brs != "0" && brs != "1") brs = s.token();  // skip the symbolic message name
   const std::string_view esi = s.token();

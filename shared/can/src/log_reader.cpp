@@ -1,10 +1,11 @@
 #include "openvcu/can/log_reader.hpp"
 
-#include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <istream>
 #include <limits>
+#include <span>
+
+#include "openvcu/core/input_file.hpp"
 
 #include "asc_parser.hpp"
 #include "candump_parser.hpp"
@@ -37,8 +38,8 @@ bool isAscHeader(std::string_view trimmed) noexcept {
 }  // namespace
 
 struct LogReader::Impl {
-  std::unique_ptr<std::istream> ownedInput;  // set by open(); the caller owns it otherwise
-  std::istream* input{};
+  std::optional<input::InputFile> file;  // set by open()
+  std::istream* input{};                 // the constructor's stream (the caller owns it)
   std::string sourceName;
   LogFormat format{LogFormat::Auto};
   detail::AscParser asc;
@@ -59,7 +60,8 @@ struct LogReader::Impl {
   void report(std::uint32_t column, std::string_view message) {
     ++errorCount;
     if (!lastError) lastError.emplace();
-    lastError->message.assign(message);  // assign() reuses the capacity of the previous error
+    lastError->message.clear();  // keeps the capacity of the previous error
+    appendEscapedControlCharacters(lastError->message, message);  // a CR quoted from the line stays printable
     lastError->location.file.assign(sourceName);
     constexpr auto MAX_LINE = std::numeric_limits<std::uint32_t>::max();
     lastError->location.line = lineNumber > MAX_LINE ? MAX_LINE : static_cast<std::uint32_t>(lineNumber);
@@ -67,9 +69,22 @@ struct LogReader::Impl {
     if (errorHandler) errorHandler(*lastError);
   }
 
+  /// Moves up to `space` bytes from the input into `destination`; 0 at the end. A file
+  /// opened by open() is read under the input-file rule: a pending SIGTERM/SIGINT, growth
+  /// beyond input::CAN_LOG's limit or a read error ends the input and is reported.
+  std::size_t fill(char* destination, std::size_t space) {
+    if (file) {
+      const input::InputFile::ReadOutcome outcome = file->read(std::span<char>(destination, space));
+      if (outcome.status == input::InputFile::ReadStatus::Data) return outcome.count;
+      if (outcome.status != input::InputFile::ReadStatus::End) report(0, file->describe(outcome).message);
+      return 0;
+    }
+    return fillFromStream(destination, space);
+  }
+
   /// Moves up to `space` bytes from the stream into `destination` without waiting for
   /// more than is already available once one byte has arrived (keeps `candump | tool` live).
-  std::size_t fill(char* destination, std::size_t space) {
+  std::size_t fillFromStream(char* destination, std::size_t space) {
     try {
       std::streambuf* source = input->rdbuf();
       if (source == nullptr) return 0;
@@ -189,17 +204,17 @@ LogReader::LogReader(std::istream& input, std::string sourceName, LogFormat form
 }
 
 Result<LogReader> LogReader::open(const std::string& path, LogFormat format) {
-  auto file = std::make_unique<std::ifstream>();
-  errno = 0;
-  file->open(path, std::ios::binary);
-  if (!file->is_open()) {
-    const int reason = errno;
-    return Error{std::string("cannot open log: ") + (reason != 0 ? std::strerror(reason) : "unknown error"),
-                 Location{path, 0, 0, {}}};
+  Result<input::InputFile> openResult = input::InputFile::open(path, input::CAN_LOG);
+  if (!openResult) {
+    Error error = openResult.error();
+    constexpr std::string_view CANNOT_OPEN = "cannot open: ";
+    if (error.message.compare(0, CANNOT_OPEN.size(), CANNOT_OPEN) == 0) {
+      error.message.replace(0, CANNOT_OPEN.size(), "cannot open log: ");
+    }
+    return error;
   }
   auto impl = std::make_unique<Impl>();
-  impl->input = file.get();
-  impl->ownedInput = std::move(file);
+  impl->file.emplace(std::move(*openResult));
   impl->sourceName = path;
   impl->format = (format == LogFormat::Auto && endsWithAsc(path)) ? LogFormat::VectorAsc : format;
   return LogReader(std::move(impl));

@@ -61,7 +61,11 @@ class LogReader {
   using ErrorHandler = std::function<void(const Error&)>;
 
   /// Opens a log file. Auto picks ASC for a ".asc" name or ASC header lines.
-  /// Fails (Error with the file name and the OS reason) when the file cannot be opened.
+  /// The file is opened and read under the input-file rule (openvcu/core/input_file.hpp):
+  /// a regular file of at most 64 GiB (input::CAN_LOG), so a directory, FIFO or device
+  /// fails here ("/dev/zero: not a regular file (character device)"); a SIGTERM/SIGINT
+  /// pending while reading ends the input (reported like a read error).
+  /// Fails (Error with the file name and the reason) when the file cannot be opened.
   [[nodiscard]] static Result<LogReader> open(const std::string& path, LogFormat format = LogFormat::Auto);
 
   /// Reads from `input`, which must outlive the reader; `sourceName` names it in errors.
