@@ -49,11 +49,18 @@ TEST_CASE("check exits 1 with the OS reason when a file is missing") {
   CHECK(result.err == path + ": error: cannot open: No such file or directory\n");
 }
 
-TEST_CASE("check reports a directory given as a DBC file as unreadable") {
+TEST_CASE("check reports a directory given as a DBC file as not a regular file") {
   const RunResult result = runVcu({"dbc", "check", std::string(VCU_TEST_DATA)});
 
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
-  CHECK(contains(result.err, ": error: cannot read: Is a directory"));
+  CHECK(result.err == std::string(VCU_TEST_DATA) + ": error: not a regular file (directory)\n");
+}
+
+TEST_CASE("check of /dev/zero is refused at once naming the file, not an internal error (#19)") {
+  const RunResult result = runVcu({"dbc", "check", "/dev/zero"});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK(result.err == "/dev/zero: error: not a regular file (character device)\n");
 }
 
 TEST_CASE("check of files that agree prints a summary of the merged database") {

@@ -209,6 +209,16 @@ TEST_CASE("decode reports a missing log with the OS reason") {
   CHECK(result.err == log + ": error: cannot open log: No such file or directory\n");
 }
 
+TEST_CASE("decode refuses a directory given as the log as not a regular file, no 'read error' (#19)") {
+  const std::string folder = std::string(VCU_TEST_DATA);
+
+  const RunResult result = runVcu({"dbc", "decode", dataPath("vehicle.dbc"), folder});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK(result.err == folder + ": error: not a regular file (directory)\n");
+  CHECK(result.out.empty());
+}
+
 TEST_CASE("decode needs at least a DBC and a log, and known option values") {
   CHECK(runVcu({"dbc", "decode", dataPath("vehicle.dbc")}).exitCode == EXIT_USAGE);
   CHECK(runVcu({"dbc", "decode", "--format", "xml", dataPath("vehicle.dbc"), dataPath("drive.log")}).exitCode ==

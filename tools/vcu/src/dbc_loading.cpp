@@ -1,45 +1,11 @@
 #include "dbc_loading.hpp"
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
-#include <memory>
-
 #include "diagnostics.hpp"
 
 namespace openvcu::cli {
-namespace {
 
-Error fileError(const std::string& path, std::string_view what, int reason) {
-  std::string message(what);
-  message += ": ";
-  message += reason != 0 ? std::strerror(reason) : "unknown error";
-  return Error{std::move(message), Location{path, 0, 0, {}}};
-}
-
-struct FileCloser {
-  void operator()(std::FILE* file) const noexcept { std::fclose(file); }
-};
-
-}  // namespace
-
-Result<std::string> readFileBytes(const std::string& path) {
-  errno = 0;
-  std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
-  if (!file) return fileError(path, "cannot open", errno);
-  std::string bytes;
-  constexpr std::size_t CHUNK = 64 * 1024;
-  for (;;) {
-    const std::size_t used = bytes.size();
-    bytes.resize(used + CHUNK);
-    errno = 0;
-    const std::size_t count = std::fread(bytes.data() + used, 1, CHUNK, file.get());
-    bytes.resize(used + count);
-    if (count < CHUNK) {
-      if (std::ferror(file.get())) return fileError(path, "cannot read", errno);  // e.g. a directory
-      return bytes;
-    }
-  }
+Result<std::string> readFileBytes(const std::string& path, input::FileKind kind) {
+  return input::readWholeFile(path, kind);
 }
 
 Result<dbc::ParseOutput> parseFile(const std::string& path) {

@@ -8,15 +8,17 @@
 #include <string>
 #include <vector>
 
+#include "openvcu/core/input_file.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/parser.hpp"
 #include "sink.hpp"
 
 namespace openvcu::cli {
 
-/// The whole file, or an Error located at the file carrying the OS reason
-/// ("cannot open: No such file or directory", "cannot read: Is a directory").
-Result<std::string> readFileBytes(const std::string& path);
+/// The whole file under the input-file rule (openvcu/core/input_file.hpp: a regular file
+/// within the kind's size limit), or an Error located at the file ("cannot open: No such
+/// file or directory", "not a regular file (directory)").
+Result<std::string> readFileBytes(const std::string& path, input::FileKind kind = input::DBC_FILE);
 
 /// Reads and parses one DBC file; diagnostics are named after `path` as given.
 Result<dbc::ParseOutput> parseFile(const std::string& path);
