@@ -20,7 +20,10 @@ std::optional<double> cycleMs(const config::VehicleConfig& vehicle, const dbc::M
 
 /// "0x18FF5071", "419385457" or a number.
 std::optional<std::uint32_t> parseId(const config::Json& value) {
-  if (value.is_number_unsigned()) return value.get<std::uint32_t>();
+  if (value.is_number_unsigned()) {
+    const auto number = value.get<std::uint64_t>();  // not get<uint32_t>: 0x100000123 would become 0x123
+    return number <= 0x1FFFFFFFu ? std::optional<std::uint32_t>(static_cast<std::uint32_t>(number)) : std::nullopt;
+  }
   if (!value.is_string()) return std::nullopt;
   const std::string text = value.get<std::string>();
   if (text.empty()) return std::nullopt;

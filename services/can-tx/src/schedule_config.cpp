@@ -11,6 +11,7 @@
 #include "openvcu/can/frame.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
+#include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/j1939/safety.hpp"
@@ -19,7 +20,7 @@ namespace openvcu::cantx {
 namespace {
 
 constexpr std::int64_t NS_PER_MS = 1'000'000;
-constexpr double MAX_CYCLE_MS = 3'600'000.0;
+constexpr double MAX_OFFSET_MS = config::MAX_CYCLE_MS;
 constexpr std::string_view GROUP_PREFIX = "internal.";
 
 using config::Json;
@@ -288,14 +289,16 @@ class Loader {
 
   void timing(const Json& settings, const std::string& path, ScheduledMessage& entry) {
     if (auto cycle = m_check.number(settings, path, "cycleMs", false)) {
-      if (!(*cycle >= 0 && *cycle <= MAX_CYCLE_MS)) {
-        m_check.error(path + "/cycleMs", "must be from 0 (not cyclic) to 3600000 ms");
+      if (*cycle == 0) {
+        entry.cycleNs = 0;  // not cyclic
+      } else if (auto problem = config::checkCycleMs(*cycle)) {
+        m_check.error(path + "/cycleMs", *problem + " (0: not cyclic)");
       } else {
-        entry.cycleNs = static_cast<std::int64_t>(std::llround(*cycle * NS_PER_MS));
+        entry.cycleNs = static_cast<std::int64_t>(*cycle) * NS_PER_MS;
       }
     }
     if (auto offset = m_check.number(settings, path, "offsetMs", false)) {
-      if (!(*offset >= 0 && *offset <= MAX_CYCLE_MS)) {
+      if (!(*offset >= 0 && *offset <= MAX_OFFSET_MS)) {
         m_check.error(path + "/offsetMs", "must be from 0 to 3600000 ms");
       } else {
         entry.offsetNs = static_cast<std::int64_t>(std::llround(*offset * NS_PER_MS));
@@ -585,7 +588,51 @@ Result<Schedule> loadSchedule(const config::VehicleConfig& vehicle, const signal
   Loader loader(vehicle, catalog, check);
   Schedule schedule = loader.run(document ? &*document : nullptr);
   if (!check.ok()) return check.firstError();
+  if (auto problem = checkBusLoad(schedule, vehicle)) return Error{*problem, Location::json(fileName, "/")};
   return schedule;
+}
+
+std::optional<std::string> checkBusLoad(const Schedule& schedule, const config::VehicleConfig& vehicle) {
+  struct Share {
+    std::size_t message{};
+    double load{};
+  };
+  for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
+    const config::BusConfig& bus = vehicle.buses[b];
+    std::vector<config::CyclicFrame> frames;
+    std::vector<Share> shares;
+    for (const ScheduledMessage& entry : schedule.messages) {
+      if (entry.bus != b || entry.cycleNs <= 0) continue;
+      const dbc::Message& message = vehicle.database.messages[entry.message];
+      const auto length = static_cast<std::uint8_t>(std::min<std::size_t>(message.length, can::MAX_DATA_LENGTH));
+      const std::size_t first = frames.size();
+      frames.push_back(config::CyclicFrame{entry.canId, entry.extended, length, entry.cycleNs});
+      if (entry.safetyDeltaNs) {  // the SHM goes out before every SDM
+        frames.push_back(config::CyclicFrame{j1939::safetyHeaderCanId(entry.canId), true,
+                                             static_cast<std::uint8_t>(j1939::SAFETY_MESSAGE_LENGTH), entry.cycleNs});
+      }
+      shares.push_back(Share{entry.message, config::cyclicBusLoad(std::span(frames).subspan(first), bus)});
+    }
+    const double load = config::cyclicBusLoad(frames, bus);
+    if (load <= config::MAX_CYCLIC_BUS_LOAD) continue;
+    std::sort(shares.begin(), shares.end(), [](const Share& a, const Share& b) { return a.load > b.load; });
+    const auto percent = [](double share) {
+      std::ostringstream text;
+      text << std::fixed << std::setprecision(1) << share * 100 << " %";
+      return text.str();
+    };
+    std::string heaviest;
+    for (std::size_t i = 0; i < std::min<std::size_t>(3, shares.size()); ++i) {
+      const ScheduledMessage& entry = *schedule.find(shares[i].message);
+      heaviest += std::string(i == 0 ? "" : ", ") + vehicle.database.messages[shares[i].message].name + " every " +
+                  config::formatNumber(static_cast<double>(entry.cycleNs) / NS_PER_MS) + " ms: " +
+                  percent(shares[i].load);
+    }
+    return "the cyclic frames on bus '" + bus.name + "' would take " + percent(load) + " of its " +
+           std::to_string(bus.bitrate) + " bit/s, more than the " + percent(config::MAX_CYCLIC_BUS_LOAD) +
+           " the VCU may use (largest: " + heaviest + "); lengthen those cycles";
+  }
+  return std::nullopt;
 }
 
 std::vector<std::string> safetyIdentityWarnings(const Schedule& schedule, const config::VehicleConfig& vehicle,
@@ -621,9 +668,7 @@ std::vector<std::string> safetyIdentityWarnings(const Schedule& schedule, const 
 }
 
 std::optional<std::string> checkCycle(const ScheduledMessage& message, double cycleMs) {
-  if (!std::isfinite(cycleMs) || !(cycleMs >= 1 && cycleMs <= MAX_CYCLE_MS)) {
-    return "the cycle must be from 1 to 3600000 ms";
-  }
+  if (auto problem = config::checkCycleMs(cycleMs)) return problem;
   if (message.safetyDeltaNs && static_cast<double>(*message.safetyDeltaNs) >= cycleMs * NS_PER_MS) {
     return "the cycle must be longer than the SHM-to-SDM delta (" + std::to_string(*message.safetyDeltaNs / 1000) +
            " us)";

@@ -98,8 +98,16 @@ struct Overlay {
 };
 
 /// The schedule of `vehicle` (its "schedule" file, or the defaults). Errors name the file
-/// and the JSON path; nothing is partially applied.
+/// and the JSON path; nothing is partially applied. A schedule whose cyclic frames exceed
+/// config::MAX_CYCLIC_BUS_LOAD on a bus is refused (checkBusLoad).
 Result<Schedule> loadSchedule(const config::VehicleConfig& vehicle, const signals::Catalog& catalog);
+
+/// Empty when on every bus the schedule's cyclic messages (enabled or not, group-switched
+/// or not: all may be on at once; a J1939-76 SDM with its SHM) take at most
+/// config::MAX_CYCLIC_BUS_LOAD of the bus' time (config::cyclicBusLoad), else the reason,
+/// naming the bus, the load and the three heaviest messages. Frames sent on change or on
+/// request are not counted (their rate depends on the signals and the requesters).
+std::optional<std::string> checkBusLoad(const Schedule& schedule, const config::VehicleConfig& vehicle);
 
 /// Pairs of scheduled messages a J1939-76 receiver cannot tell apart: on the same bus, with
 /// equal PGN, SA and DA (j1939::sameSafetyIdentity; priority not compared), at least one an
@@ -124,7 +132,8 @@ Status saveOverlay(const std::string& path, const Overlay& overlay);
 std::optional<std::string> checkSignalValue(const dbc::Signal& signal, double value);
 
 /// Check of one runtime change, shared by commands and overlay loading: empty when fine,
-/// else the reason. `cycleMs` must be 1..3600000 and longer than the safety delta.
+/// else the reason. `cycleMs` must pass config::checkCycleMs (a whole number of ms,
+/// 1..3600000) and be longer than the safety delta.
 std::optional<std::string> checkCycle(const ScheduledMessage& message, double cycleMs);
 
 /// The entry for DBC message `name` added at run time with cycle `cycleMs` (ScheduleAdd): its

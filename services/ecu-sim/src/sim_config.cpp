@@ -97,8 +97,9 @@ class Loader {
     const auto value = m_check.number(object, path, key, false);
     if (!value) return;
     if (*value < minimum || *value > maximum) {
-      m_check.error(JsonChecker::join(path, key), "must be within [" + std::to_string(minimum) + ", " +
-                                                      std::to_string(maximum) + "]");
+      m_check.error(JsonChecker::join(path, key), "must be within [" + config::formatNumber(minimum) + ", " +
+                                                      config::formatNumber(maximum) + "], not " +
+                                                      config::formatNumber(*value));
       return;
     }
     target = *value;

@@ -6,11 +6,26 @@
 
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
+#include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/j1939/safety.hpp"
 
 namespace openvcu::hmi {
 namespace {
+
+/// The cycle typed on the keypad, checked as can-tx checks it (config::checkCycleMs: whole
+/// ms from MIN_CYCLE_MS to MAX_CYCLE_MS); empty and *refusal set when it is not.
+std::optional<int> typedCycle(const QString& milliseconds, QString* refusal) {
+  bool ok = false;
+  const int cycle = milliseconds.trimmed().toInt(&ok);
+  if (!ok || config::checkCycleMs(cycle)) {
+    *refusal = QStringLiteral("cycle must be a whole number of ms in %1..%2")
+                   .arg(config::MIN_CYCLE_MS)
+                   .arg(config::MAX_CYCLE_MS);
+    return std::nullopt;
+  }
+  return cycle;
+}
 
 /// A J1939-76 safety header (PGN 3584): can-tx sends it with its SDM, never on its own.
 bool isSafetyHeader(const dbc::Message& message) {
@@ -186,9 +201,10 @@ QString ScheduleModel::addMessage(const QString& name, const QString& millisecon
   if (rowOfMessage(toQ(message->name)) >= 0) {
     return QStringLiteral("%1 is already in the schedule").arg(toQ(message->name));
   }
-  bool ok = false;
-  const int cycle = milliseconds.trimmed().toInt(&ok);
-  if (!ok || cycle < 1 || cycle > 60000) return QStringLiteral("cycle must be a whole number of ms in 1..60000");
+  QString refusal;
+  const std::optional<int> maybeCycle = typedCycle(milliseconds, &refusal);
+  if (!maybeCycle) return refusal;
+  const int cycle = *maybeCycle;
   ipc::CommandRequest request;
   request.kind = ipc::CommandKind::ScheduleAdd;
   request.key = message->name;
@@ -312,9 +328,10 @@ QString ScheduleModel::send(ipc::CommandRequest request, const QString& what) {
 
 QString ScheduleModel::setCycle(int row, const QString& milliseconds) {
   if (row < 0 || row >= static_cast<int>(m_rows.size())) return QStringLiteral("no such row");
-  bool ok = false;
-  const int cycle = milliseconds.trimmed().toInt(&ok);
-  if (!ok || cycle < 1 || cycle > 60000) return QStringLiteral("cycle must be a whole number of ms in 1..60000");
+  QString refusal;
+  const std::optional<int> maybeCycle = typedCycle(milliseconds, &refusal);
+  if (!maybeCycle) return refusal;
+  const int cycle = *maybeCycle;
   ipc::CommandRequest request;
   request.kind = ipc::CommandKind::ScheduleCycle;
   request.key = m_rows[static_cast<std::size_t>(row)].message.toStdString();

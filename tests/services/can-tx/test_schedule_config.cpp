@@ -181,12 +181,13 @@ TEST_CASE("the overlay: applied over the schedule all or nothing, saved atomical
   CHECK(unknownKey.error().toString().find("/messages/CCVS1_PGN65265") != std::string::npos);
 }
 
-TEST_CASE("checkCycle: 1..3600000 ms and longer than the safety delta") {
+TEST_CASE("checkCycle: whole ms 1..3600000 and longer than the safety delta") {
   cantx::ScheduledMessage message;
   message.safetyDeltaNs = 2'000'000;
   CHECK(cantx::checkCycle(message, 0.5));
   CHECK(cantx::checkCycle(message, 2.0));
-  CHECK(!cantx::checkCycle(message, 2.5));
+  CHECK(cantx::checkCycle(message, 2.5));  // #19: whole milliseconds only
+  CHECK(!cantx::checkCycle(message, 3.0));
   CHECK(cantx::checkCycle(message, 4e6));
 }
 
@@ -209,7 +210,7 @@ TEST_CASE("runtimeMessage: any DBC message on a bus joins at a checked cycle, an
   CHECK(refusal("HVESSD2_PGN61586", 100).find("did you mean 'HVESSD2_PGN61585'") != std::string::npos);
   CHECK(refusal("CCVS1_PGN65265", 100).find("already in the transmit schedule") != std::string::npos);
   CHECK(refusal("SHM_VCU_to_VIC", 100).find("safety header") != std::string::npos);
-  CHECK(refusal("HVESSD2_PGN61585", 0).find("1 to 3600000 ms") != std::string::npos);
+  CHECK(refusal("HVESSD2_PGN61585", 0).find("whole number of ms from 1 to 3600000") != std::string::npos);
 
   cantx::Overlay overlay;
   overlay.messages.push_back({"HVESSD2_PGN61585", 100.0, std::nullopt, true});

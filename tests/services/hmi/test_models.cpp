@@ -210,8 +210,8 @@ TEST_CASE("a schedule change is checked here, sent as ScheduleCycle and shown on
   ScheduleModel sut;
   REQUIRE(sut.rowCount() > 0);
   const QString message = sut.data(sut.index(0), ScheduleModel::MessageRole).toString();
-  CHECK(sut.setCycle(0, "abc") == "cycle must be a whole number of ms in 1..60000");
-  CHECK(sut.setCycle(0, "0") == "cycle must be a whole number of ms in 1..60000");
+  CHECK(sut.setCycle(0, "abc") == "cycle must be a whole number of ms in 1..3600000");
+  CHECK(sut.setCycle(0, "0") == "cycle must be a whole number of ms in 1..3600000");
   CHECK(sut.setOverride(0, "1e9").contains("outside the range"));
   CHECK(sut.setDefault(0, "1e9").contains("outside the range"));
   CHECK(sut.setDefault(0, "abc").contains("is not a number"));
@@ -243,7 +243,7 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   CHECK_FALSE(sut.candidates("").contains("SHM_VCU_to_VIC"));
   CHECK(sut.addMessage("HVESSD2_PGN61586", "100").contains("unknown message"));
   CHECK(sut.addMessage("CCVS1_PGN65265", "100").contains("already in the schedule"));
-  CHECK(sut.addMessage("HVESSD2_PGN61585", "0").contains("1..60000"));
+  CHECK(sut.addMessage("HVESSD2_PGN61585", "0").contains("1..3600000"));
   FakeCommandService canTx(*stack, "vcu-can-tx");
   CHECK(sut.addMessage("HVESSD2_PGN61585", "40").isEmpty());
   REQUIRE(deliverUntil([&] { return canTx.requests().size() == 1; }));

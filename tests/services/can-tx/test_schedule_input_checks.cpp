@@ -1,0 +1,117 @@
+// Issue #19, "every bad input refused", for the transmit schedule: an entry given twice,
+// fractional or too short cycles (file, overlay-style runtime changes, added messages) and a
+// schedule whose cyclic frames would take more than config::MAX_CYCLIC_BUS_LOAD of a bus.
+
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/config/transmit_limits.hpp"
+#include "schedule_config.hpp"
+
+using namespace openvcu;
+
+namespace {
+
+const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
+constexpr std::int64_t NS_PER_MS = 1'000'000;
+
+struct Fixture {
+  config::VehicleConfig vehicle;
+  signals::Catalog catalog;
+  std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / ("openvcu-txinput-" + std::to_string(::getpid()));
+
+  Fixture() {
+    auto vehicleResult = config::loadVehicleConfig(HHEA);
+    REQUIRE(vehicleResult);
+    vehicle = std::move(*vehicleResult);
+    auto catalogResult = config::buildCatalog(vehicle);
+    REQUIRE(catalogResult);
+    catalog = std::move(*catalogResult);
+    std::filesystem::create_directories(folder);
+  }
+  ~Fixture() {
+    std::error_code ignored;
+    std::filesystem::remove_all(folder, ignored);
+  }
+  Result<cantx::Schedule> load(const std::string& json) {
+    vehicle.scheduleFile = (folder / "schedule.json").string();
+    std::ofstream(vehicle.scheduleFile) << json;
+    return cantx::loadSchedule(vehicle, catalog);
+  }
+  std::string error(const std::string& json) {
+    auto result = load(json);
+    REQUIRE_MESSAGE(!result, json);
+    return result.error().toString();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("#19 a schedule entry given twice is refused with both places, not the last one sent") {
+  Fixture f;
+  const std::string sut = f.error(
+      "{\n"
+      "  \"messages\": {\n"
+      "    \"PDU_Rx_1\": {\"cycleMs\": 100},\n"
+      "    \"PDU_Rx_1\": {\"cycleMs\": 1}\n"
+      "  }\n"
+      "}\n");
+  CHECK(sut.ends_with("schedule.json:4:5: /messages: key \"PDU_Rx_1\" given twice (first at 3:5)"));
+}
+
+TEST_CASE("#19 a fractional or too short cycle in the schedule file is refused, 0 means not cyclic") {
+  Fixture f;
+  CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 0.5}}})")
+            .ends_with("/messages/PDU_Rx_1/cycleMs: the cycle must be a whole number of ms from 1 to 3600000, "
+                       "not 0.5 (0: not cyclic)"));
+  CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 20.5}}})").find("not 20.5") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 3600001}}})").find("/cycleMs") != std::string::npos);
+  CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": -1}}})").find("/cycleMs") != std::string::npos);
+
+  const auto whole = f.load(R"({"messages": {"PDU_Rx_1": {"cycleMs": 20}, "HC1_Demands": {"cycleMs": 0}}})");
+  REQUIRE_MESSAGE(whole, whole.error().toString());
+  const auto pdu = cantx::findScheduled(*whole, f.vehicle, "PDU_Rx_1");
+  const auto hc1 = cantx::findScheduled(*whole, f.vehicle, "HC1_Demands");
+  REQUIRE(pdu);
+  REQUIRE(hc1);
+  CHECK(whole->messages[*pdu].cycleNs == 20 * NS_PER_MS);
+  CHECK(whole->messages[*hc1].cycleNs == 0);
+}
+
+TEST_CASE("#19 runtime cycle changes and added messages take whole milliseconds only") {
+  Fixture f;
+  const auto schedule = f.load("{}");
+  REQUIRE(schedule);
+  const auto pdu = cantx::findScheduled(*schedule, f.vehicle, "PDU_Rx_1");
+  REQUIRE(pdu);
+  const cantx::ScheduledMessage& entry = schedule->messages[*pdu];
+
+  CHECK(cantx::checkCycle(entry, 0.5) == "the cycle must be a whole number of ms from 1 to 3600000, not 0.5");
+  CHECK(cantx::checkCycle(entry, 1.5).has_value());
+  CHECK_FALSE(cantx::checkCycle(entry, config::MIN_CYCLE_MS).has_value());
+  const auto added = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 0.5);
+  REQUIRE_FALSE(added);
+  CHECK(added.error().message.find("not 0.5") != std::string::npos);
+}
+
+TEST_CASE("#19 a schedule whose cyclic frames would take over half the bus is refused, naming the heaviest") {
+  Fixture f;
+  const auto hhea = f.load("{}");  // every transmitted message at its DBC cycle
+  REQUIRE(hhea);
+  CHECK_FALSE(cantx::checkBusLoad(*hhea, f.vehicle).has_value());
+
+  // one 8-byte extended frame every ms is about 30 % of 500 kbit/s: two are over 50 %
+  const std::string sut = f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 1}, "HC1_Demands": {"cycleMs": 1}}})");
+
+  CHECK(sut.find("schedule.json: /: the cyclic frames on bus 'vehicle' would take ") != std::string::npos);
+  CHECK(sut.find("of its 500000 bit/s, more than the 50.0 % the VCU may use") != std::string::npos);
+  CHECK(sut.find("every 1 ms") != std::string::npos);
+  CHECK(sut.find("PDU_Rx_1") != std::string::npos);
+  CHECK(sut.find("HC1_Demands") != std::string::npos);
+}
