@@ -190,6 +190,16 @@ void Controller::safeState(std::int64_t nowNs) {
   }
 }
 
+void Controller::republish(std::int64_t nowNs) noexcept {
+  for (std::size_t i = 0; i < m_lines.size(); ++i) {
+    if (!output(i)) {
+      m_table->writeBus(m_lines[i].bound, m_levels[i].load(std::memory_order_relaxed) ? 1.0 : 0.0, nowNs, GPIO_WRITER,
+                        signals::Quality::Valid);
+    }
+    writeStatus(i, nowNs);
+  }
+}
+
 void Controller::writeStatus(std::size_t line, std::int64_t nowNs) noexcept {
   m_table->writeBus(m_lines[line].status, m_levels[line].load(std::memory_order_relaxed) ? 1.0 : 0.0, nowNs,
                     GPIO_WRITER, signals::Quality::Valid);

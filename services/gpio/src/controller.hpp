@@ -68,6 +68,9 @@ class Controller {
 
   /// Every output to its safe level (logged), status keys written.
   void safeState(std::int64_t nowNs);
+  /// After the signal table lost its values (docs/design/signal-table.md, "Damage"): every
+  /// line's status, and the bound value of every input, written again.
+  void republish(std::int64_t nowNs) noexcept;
 
   /// The level of `line` as vcu-gpio last drove or accepted it.
   [[nodiscard]] bool level(std::size_t line) const noexcept { return m_levels[line].load(std::memory_order_relaxed); }

@@ -130,7 +130,16 @@ struct GpioAppImpl {
     }
     signals::SignalWatch watch = runtime.table().watch(indexes);
     if (!watch.dedicated()) runtime.log().warning("no free watch entry in the signal table: woken by every table write");
+    std::uint64_t seenDamage = runtime.table().damageCount();
     while (!stopping.load(std::memory_order_relaxed)) {
+      // The table lost its values: the watch bits are gone, and the statuses must be written
+      // again (the simulated VIC wakes on internal.gpio.Cl15, written on change only).
+      if (const std::uint64_t damage = runtime.table().damageCount(); damage != seenDamage) {
+        seenDamage = damage;
+        watch = {};
+        watch = runtime.table().watch(indexes);
+        controller->republish(signals::monotonicNowNs());
+      }
       const std::uint32_t epoch = watch.epoch();
       chip->tableChanged();
       const std::int64_t now = signals::monotonicNowNs();

@@ -325,8 +325,10 @@ class Loader {
         if (!validSignalName(*name)) {
           m_check.error(path + "/name", "'" + *name + "' must be letters, digits, '_' and '.'");
         }
-        for (const auto& other : m_config.internalSignals) {
-          if (other.name == *name) m_check.error(path + "/name", "internal signal '" + *name + "' is declared twice");
+        // A hashed set: a linear search here made 100,000 signals take 17 s to load.
+        if (const auto [where, fresh] = m_internalNames.emplace(*name, path); !fresh) {
+          m_check.error(path + "/name",
+                        "internal signal '" + *name + "' is declared twice (first at " + where->second + ")");
         }
         sig.name = *name;
       }
@@ -406,6 +408,7 @@ class Loader {
  private:
   JsonChecker& m_check;
   VehicleConfig m_config;
+  std::unordered_map<std::string, std::string> m_internalNames;  ///< internal signal name -> its JSON path
   bool m_dbcLoaded{false};
 };
 

@@ -91,7 +91,7 @@ TEST_CASE("internal signal errors: bad name, duplicate, range") {
   CHECK(firstError(withBus(GOOD_BUS, R"(, "internalSignals": [{"name": "a b"}])")) ==
         "vehicle.json: /internalSignals/0/name: 'a b' must be letters, digits, '_' and '.'");
   CHECK(firstError(withBus(GOOD_BUS, R"(, "internalSignals": [{"name": "a"}, {"name": "a"}])")) ==
-        "vehicle.json: /internalSignals/1/name: internal signal 'a' is declared twice");
+        "vehicle.json: /internalSignals/1/name: internal signal 'a' is declared twice (first at /internalSignals/0)");
   CHECK(firstError(withBus(GOOD_BUS, R"(, "internalSignals": [{"name": "a", "min": 5, "max": 1}])")) ==
         "vehicle.json: /internalSignals/0/min: min is above max");
   CHECK(firstError(withBus(GOOD_BUS, R"(, "internalSignals": [{"name": "a", "values": {"x": "X"}}])")) ==
