@@ -20,6 +20,8 @@ using detail::Target;
 using detail::Where;
 
 constexpr std::size_t MAX_DIAGNOSTICS = 1000;
+/// Statements between two checks for a pending stop signal (one system call each).
+constexpr std::size_t STOP_CHECK_STATEMENTS = 4096;
 
 bool isKeyword(std::string_view word) noexcept { return detail::isStatementKeyword(word); }
 
@@ -29,9 +31,16 @@ class Parser {
       : m_scan(text), m_file(fileName), m_out(out) {}
 
   void run() {
+    std::size_t statements = 0;
     while (true) {
       m_scan.skipSpace();
       if (m_scan.atEnd()) break;
+      // A service blocks SIGTERM while it loads its DBCs (the largest allowed file takes
+      // seconds): a pending one ends the parse, the file is refused (issue 19).
+      if (++statements % STOP_CHECK_STATEMENTS == 0 && input::stopSignalPending()) {
+        error(m_scan.position(), "reading stopped: SIGTERM or SIGINT is pending");
+        return;
+      }
       if (m_out.diagnostics.size() >= MAX_DIAGNOSTICS) {
         error(m_scan.position(), "too many errors; giving up");
         break;

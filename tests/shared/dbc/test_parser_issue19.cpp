@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/pending_signal.hpp"
 #include "../core/temp_folder.hpp"
 #include "openvcu/dbc/codec.hpp"
 
@@ -227,6 +228,18 @@ TEST_CASE("loadFile refuses a directory and /dev/zero at once, naming what they 
   REQUIRE_FALSE(zero.ok());
   CHECK(zero.error().toString() == "/dev/zero: not a regular file (character device)");
   CHECK(std::chrono::steady_clock::now() - started < std::chrono::seconds(1));
+}
+
+TEST_CASE("a pending SIGTERM ends the parse of a long file with an error, so a loading service stops (#19)") {
+  constexpr int MESSAGES = 20000;  // several stop checks' worth of statements
+  std::string text = "BU_: Vcu\n";
+  for (int i = 1; i <= MESSAGES; ++i) text += "BO_ " + std::to_string(i) + " M" + std::to_string(i) + ": 8 Vcu\n";
+  const openvcu::test::PendingSigterm pending;
+
+  const ParseOutput sut = parseText(text);
+
+  CHECK(hasError(sut, "reading stopped: SIGTERM or SIGINT is pending"));
+  CHECK(sut.database.messages.size() < static_cast<std::size_t>(MESSAGES));
 }
 
 TEST_CASE("a diagnostic quoting a name with a NUL or newline from the file stays one line (#19)") {
