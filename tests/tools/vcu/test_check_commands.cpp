@@ -142,6 +142,26 @@ TEST_CASE("vcu check reports a broken simulation, dashboard and schedule togethe
   CHECK(result.out.find("error:") == std::string::npos);  // diagnostics on stderr only
 }
 
+TEST_CASE("vcu check refuses a fractional cycle in the schedule with its JSON path (#19)") {
+  const std::string vehicle = hheaCopy("check_cycle");
+  const fs::path schedulePath = fs::path(vehicle).parent_path() / "schedule.json";
+  std::string text;
+  {
+    std::ifstream in(schedulePath);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string message = "\"S1_ES_PGN61427\": {";
+  const auto at = text.find(message);
+  REQUIRE(at != std::string::npos);
+  text.insert(at + message.size(), "\"cycleMs\": 0.5, ");
+  writeScratchFile("check_cycle/schedule.json", text);
+  const RunResult result = runVcu({"check", "--config", vehicle});
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(result.err, "check_cycle/schedule.json: /messages/S1_ES_PGN61427/cycleMs: error: "));
+  CHECK(contains(result.err, "0.5"));
+  CHECK(contains(result.out, "schedule.json: 1 error"));
+}
+
 TEST_CASE("vcu check still checks the other files when vehicle.json itself has an error") {
   const std::string vehicle = hheaCopy("check_vehicle_error");
   std::string text;

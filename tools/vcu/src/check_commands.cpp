@@ -12,6 +12,7 @@
 #include "machine.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
+#include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/config/vehicle.hpp"
 
 namespace openvcu::cli {
@@ -38,13 +39,14 @@ struct ContentOwner {
   std::string_view key;      ///< the vehicle.json key ("schedule"); "dashboard" for the HMI's
   std::string_view service;  ///< "vcu-can-tx"
   std::string_view loader;   ///< "services/can-tx/src/schedule_config.cpp"
+  std::string_view checked;  ///< what vcu check itself checks of it
 };
 
 constexpr ContentOwner CONTENT_OWNERS[] = {
-    {"schedule", "vcu-can-tx", "services/can-tx/src/schedule_config.cpp"},
-    {"simulation", "vcu-ecu-sim", "services/ecu-sim/src/sim_config.cpp"},
-    {"receive", "vcu-can-rx", "services/can-rx/src/receive_config.cpp"},
-    {"dashboard", "vcu-hmi", "services/hmi/src/display_logic.cpp"},
+    {"schedule", "vcu-can-tx", "services/can-tx/src/schedule_config.cpp", "JSON syntax and cycles"},
+    {"simulation", "vcu-ecu-sim", "services/ecu-sim/src/sim_config.cpp", "JSON syntax"},
+    {"receive", "vcu-can-rx", "services/can-rx/src/receive_config.cpp", "JSON syntax"},
+    {"dashboard", "vcu-hmi", "services/hmi/src/display_logic.cpp", "JSON syntax"},
 };
 
 std::string plural(std::size_t count, const std::string& word) {
@@ -136,9 +138,30 @@ void checkJsonOnly(const std::string& path, const ContentOwner& owner, FileTally
     return;
   }
   if (!quiet) {
-    report(err, Error{"JSON syntax checked; its content is checked by " + std::string(owner.service) +
-                          " when it starts (its loader, " + std::string(owner.loader) + ", is not linked into vcu)",
+    report(err, Error{std::string(owner.checked) + " checked; the rest of its content is checked by " +
+                          std::string(owner.service) + " when it starts (its loader, " + std::string(owner.loader) + ", is not linked into vcu)",
                       Location{path, 0, 0, {}}, Severity::Note});
+  }
+}
+
+/// The schedule's cycles under the one rule of shared/config (config::checkCycleMs: whole
+/// ms within limits; 0 means not cyclic), the part of vcu-can-tx's schedule check whose
+/// rule lives in shared/. Reported at /messages/<name>/cycleMs.
+void checkScheduleCycles(const std::string& path, FileTally& tally, bool quiet, Sink& err) {
+  auto json = config::readJsonFile(path);
+  if (!json || !json->is_object()) return;
+  const auto messages = json->find("messages");
+  if (messages == json->end() || !messages->is_object()) return;
+  for (const auto& [name, settings] : messages->items()) {
+    if (!settings.is_object()) continue;
+    const auto cycle = settings.find("cycleMs");
+    if (cycle == settings.end() || !cycle->is_number()) continue;
+    const double cycleMs = cycle->get<double>();
+    if (cycleMs == 0) continue;
+    if (const auto problem = config::checkCycleMs(cycleMs)) {
+      tally.report(Error{*problem + " (0: not cyclic)", Location::json(path, "/messages/" + name + "/cycleMs")}, quiet,
+                   err);
+    }
   }
 }
 
@@ -257,6 +280,9 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
     }
     if (!vehicle.scheduleFile.empty() && !(scheduleBroken && !vehicle.fsmFile.empty())) {
       checkJsonOnly(vehicle.scheduleFile, *ownerOf("schedule"), tally, options.quiet, streams.err);
+    }
+    if (!vehicle.scheduleFile.empty() && !scheduleBroken) {
+      checkScheduleCycles(vehicle.scheduleFile, tally, options.quiet, streams.err);
     }
     for (const auto& [key, path] : {std::pair<std::string_view, const std::string*>{"simulation", &vehicle.simulationFile},
                                     {"receive", &vehicle.receiveFile}}) {

@@ -20,6 +20,8 @@
 //   them (vcu-can-tx, vcu-ecu-sim, vcu-can-rx, vcu-hmi) at its start: those loaders live in
 //   the services' own src/ folders, which `vcu` does not link (STYLE.md 16); a note on
 //   stderr says so for each such file.
+//   The schedule's cycles ("messages": {NAME: {"cycleMs": N}}) are checked here as well,
+//   with config::checkCycleMs (shared/config/transmit_limits.hpp, the rule vcu-can-tx uses).
 // When vehicle.json itself has errors, the other files named in it get the JSON check only.
 
 #include <cstddef>
