@@ -5,6 +5,7 @@
 #include "parser_state.hpp"
 
 #include <algorithm>
+#include <bitset>
 #include <cstdio>
 #include <unordered_map>
 #include <unordered_set>
@@ -371,18 +372,21 @@ class Resolver {
   }
 
   /// The bits a signal occupies, as a mask over its byte window (at most 9 bytes for a
-  /// signal of up to 64 bits), LSB0 numbering: bit k of the mask = frame bit base*8 + k.
+  /// signal of up to 64 bits), LSB0 numbering: bit k of the mask = frame bit lowByte*8 + k.
+  /// Room for a second window that starts up to 8 bytes later, shifted onto this one.
+  static constexpr std::size_t MASK_BITS = 9 * 8 + 8 * 8;
+  using Mask = std::bitset<MASK_BITS>;
   struct BitWindow {
     std::uint64_t lowByte{};
     std::uint64_t highByte{};
-    unsigned __int128 mask{};
+    Mask mask;
   };
   static BitWindow bitWindow(const Signal& sig) {
     BitWindow window;
     window.lowByte = sig.startBit / 8;
     const std::uint64_t base = window.lowByte * 8;
     if (sig.byteOrder == ByteOrder::LittleEndian) {
-      for (std::uint64_t k = 0; k < sig.size; ++k) window.mask |= static_cast<unsigned __int128>(1) << (sig.startBit + k - base);
+      for (std::uint64_t k = 0; k < sig.size; ++k) window.mask.set(sig.startBit + k - base);
       window.highByte = (std::uint64_t{sig.startBit} + sig.size - 1) / 8;
     } else {
       // Motorola: MSB at the start bit, then towards lower bits and on into the next byte.
@@ -390,7 +394,7 @@ class Resolver {
       for (std::uint64_t k = 0; k < sig.size; ++k) {
         const std::uint64_t linear = msbLinear + k;
         const std::uint64_t position = (linear / 8) * 8 + (7 - linear % 8);
-        window.mask |= static_cast<unsigned __int128>(1) << (position - base);
+        window.mask.set(position - base);
       }
       window.highByte = (msbLinear + sig.size - 1) / 8;
     }
@@ -466,13 +470,14 @@ class Resolver {
       const std::size_t a = order[i];
       for (std::size_t j = i + 1; j < order.size() && windows[order[j]].lowByte <= windows[a].highByte; ++j) {
         const std::size_t b = order[j];
-        const unsigned shift = static_cast<unsigned>((windows[b].lowByte - windows[a].lowByte) * 8);
-        const unsigned __int128 common = windows[a].mask & (windows[b].mask << shift);
-        if (common == 0 || !canCoexist(conditionsOf(a), conditionsOf(b))) continue;
+        // b starts at most 8 bytes after a (their windows meet): shifted onto a's window.
+        const std::size_t shift = static_cast<std::size_t>((windows[b].lowByte - windows[a].lowByte) * 8);
+        const Mask common = windows[a].mask & (windows[b].mask << shift);
+        if (common.none() || !canCoexist(conditionsOf(a), conditionsOf(b))) continue;
         ++found;
         if (found > MAX_OVERLAPS_SHOWN) continue;
-        unsigned lowest = 0;
-        while (((common >> lowest) & 1) == 0) ++lowest;
+        std::size_t lowest = 0;
+        while (!common.test(lowest)) ++lowest;
         const std::uint64_t bit = windows[a].lowByte * 8 + lowest;
         const std::size_t first = std::min(a, b);
         const std::size_t later = std::max(a, b);
