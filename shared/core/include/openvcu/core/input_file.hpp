@@ -37,7 +37,8 @@ struct FileKind {
 /// corpus is under 1 MiB; openvcu.s own about 110 KiB).
 inline constexpr FileKind DBC_FILE{"DBC file", std::uint64_t{64} << 20};
 /// CAN logs are streamed in constant memory, so the limit only bounds the time a read can
-/// take: 64 GiB is a day of four busses at 4,000 frames/s each in candump -L.
+/// take: 64 GiB holds a day of four busses at 3,500 frames/s each in candump -L (52-byte
+/// lines, 59 GiB).
 inline constexpr FileKind CAN_LOG{"CAN log", std::uint64_t{64} << 30};
 /// JSON, CSV and other configuration text read whole (text::readFile).
 inline constexpr FileKind TEXT_FILE{"configuration file", std::uint64_t{64} << 20};
