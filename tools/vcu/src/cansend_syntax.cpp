@@ -122,8 +122,14 @@ Result<can::Frame> parseCansendFrame(std::string_view text) {
   }
 
   std::size_t length = 0;
+  const auto trailingSeparator = [&](std::size_t at) {
+    return errorAt("a '.' with no byte after it", at, "remove the trailing '.'");
+  };
   while (length < maxLength) {
-    if (index < text.size() && text[index] == DATA_SEPARATOR) ++index;
+    if (index < text.size() && text[index] == DATA_SEPARATOR) {
+      if (index + 1 == text.size()) return trailingSeparator(index);
+      ++index;
+    }
     if (index >= text.size()) break;
     const std::optional<std::uint8_t> high = hexValue(text[index]);
     if (!high) return errorAt("not a hexadecimal digit", index);
@@ -133,8 +139,8 @@ Result<can::Frame> parseCansendFrame(std::string_view text) {
     frame.data[length++] = static_cast<std::uint8_t>((*high << 4) | *low);
     index += 2;
   }
-  const bool onlyTrailingSeparator = index + 1 == text.size() && text[index] == DATA_SEPARATOR;
-  if (index < text.size() && !onlyTrailingSeparator) {
+  if (index + 1 == text.size() && text[index] == DATA_SEPARATOR) return trailingSeparator(index);
+  if (index < text.size()) {
     if (!frame.fd() && text[index] == RAW_DLC_DELIMITER) return rawDlcError(index);
     return errorAt("more than " + std::to_string(maxLength) + " data bytes", index,
                    frame.fd() ? "the CAN FD limit" : "classic CAN; CAN FD is ID##<flags><data>");

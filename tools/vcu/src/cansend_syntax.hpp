@@ -20,6 +20,7 @@
 // frame (each of these is an error here):
 //   - text after the last byte: a 9th classic byte, a 65th FD byte, anything after "R" or
 //     "R<digit>" (cansend ignores it);
+//   - a '.' with no byte after it ("123#11.22.", "123#."; cansend drops it);
 //   - a standard ID above 0x7FF, an 8-digit ID above 0x1FFFFFFF (cansend sends bit 29
 //     as an error frame and bits 30/31 as flags);
 //   - the raw DLC suffix "_9".."_F" of an 8-byte classic frame (can::Frame has no field

@@ -126,7 +126,10 @@ void addDecode(CLI::App& dbc, CommandContext& context) {
   decode->add_option("--match", arguments->match, "how frames find their message (default j1939)")
       ->check(CLI::IsMember({"exact", "j1939", "j1939-tagged"}))
       ->option_text("exact|j1939|j1939-tagged");
-  decode->add_option("-n,--limit", options->limit, "stop after N frames (0: no limit)")->option_text("N");
+  // NonNegativeNumber checks the text before CLI11 converts it: "-1" would wrap to 2^64 - 1.
+  decode->add_option("-n,--limit", options->limit, "stop after N frames (0: no limit)")
+      ->check(CLI::NonNegativeNumber)
+      ->option_text("N");
   decode->add_flag("--stats", options->stats, "print frame counts on stderr at the end");
   decode->callback([options, arguments, &context] {
     options->logFile = arguments->files.back();

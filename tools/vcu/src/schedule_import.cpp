@@ -10,11 +10,16 @@
 #include <optional>
 #include <unordered_map>
 
+#include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/signals/catalog.hpp"
 
 namespace openvcu::cli {
+
+const std::uint32_t MIN_CYCLE_MS = config::MIN_CYCLE_MS;
+const std::uint32_t MAX_CYCLE_MS = config::MAX_CYCLE_MS;
+
 namespace {
 
 using Json = nlohmann::ordered_json;
@@ -524,9 +529,9 @@ class Importer {
     const std::string& text = field(Column::CycleTime);
     if (isEmptyCell(text)) return;
     const auto maybeMs = parseWholeNumber(text);
-    if (!maybeMs || *maybeMs < 1 || *maybeMs > MAX_CYCLE_MS) {
-      m_diagnostics.error(m_line,
-                          "CycleTime '" + text + "' is not whole milliseconds 1.." + std::to_string(MAX_CYCLE_MS));
+    if (!maybeMs || config::checkCycleMs(static_cast<double>(*maybeMs))) {
+      m_diagnostics.error(m_line, "CycleTime '" + text + "' is not whole milliseconds " + std::to_string(MIN_CYCLE_MS) +
+                                      ".." + std::to_string(MAX_CYCLE_MS));
       return;
     }
     const auto ms = static_cast<std::uint32_t>(*maybeMs);

@@ -80,8 +80,11 @@ inline constexpr std::array<std::string_view, 9> SCHEDULE_CSV_COLUMNS = {
 /// Prefix of the default send-group keys: NodeName "Battery" -> "internal.tx.Battery".
 inline constexpr std::string_view GROUP_SIGNAL_PREFIX = "internal.tx.";
 
-/// The longest cycle time a schedule takes (can-tx's runtime limit as well), ms.
-inline constexpr std::uint32_t MAX_CYCLE_MS = 3'600'000;
+/// The cycle limits of every schedule reader, ms: config::MIN_CYCLE_MS and MAX_CYCLE_MS
+/// (openvcu/config/transmit_limits.hpp), given here because vcu's library keeps
+/// openvcu::config private; defined from them in schedule_import.cpp.
+extern const std::uint32_t MIN_CYCLE_MS;
+extern const std::uint32_t MAX_CYCLE_MS;
 
 struct ImportOptions {
   /// This VCU's DBC node: a message it does not transmit gets a warning. Empty: no check.
