@@ -18,12 +18,12 @@
 # memory, also when the output is piped (`./run.sh | tee run.log`). Logs: the folder printed
 # at start (one file per service); it is kept.
 set -euo pipefail
-cd "$(dirname "$(readlink -f "$0")")"
-root=$PWD
+# paths given on the command line are the caller's (relative to where run.sh was started);
+# realpath -m: the folder of --record need not exist yet
+root=$(dirname "$(readlink -f "$0")")
 
 headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0; record=""
-config=config/hhea/vehicle.json
-args=("$@")
+config=$root/config/hhea/vehicle.json
 while [ $# -gt 0 ]; do
   case "$1" in
     --headless) headless=1 ;;
@@ -31,8 +31,8 @@ while [ $# -gt 0 ]; do
     --for) seconds=${2:?--for needs seconds}; shift ;;
     --isolated) isolated=1 ;;
     --bus) bus=${2:?--bus needs socketcan:IFACE}; shift ;;
-    --record) record=$(readlink -f "${2:?--record needs a folder}"); shift ;;
-    --config) config=${2:?--config needs a file}; shift ;;
+    --record) record=$(realpath -m -- "${2:?--record needs a folder}"); shift ;;
+    --config) config=$(realpath -m -- "${2:?--config needs a file}"); shift ;;
     --check) check=1 ;;
     -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
@@ -42,6 +42,7 @@ done
 case "$scenario" in ""|drive) ;; *) echo "run.sh: unknown scenario '$scenario' (known: drive)" >&2; exit 2 ;; esac
 case "$bus" in ""|socketcan:*) ;; *) echo "run.sh: --bus takes socketcan:IFACE" >&2; exit 2 ;; esac
 if [ -n "$seconds" ] && ! [[ "$seconds" =~ ^[0-9]+$ ]]; then echo "run.sh: --for takes whole seconds" >&2; exit 2; fi
+cd "$root"
 
 bin=${OPENVCU_BIN:-$root/build/bin}  # the tests point it at their build tree
 vcu=$bin/vcu
@@ -66,7 +67,7 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   cmake --build build -j "$(nproc 2>/dev/null || echo 2)" | tail -1
   if [ $isolated -eq 1 ]; then
     # the same sandbox as the tests: fresh /dev/shm and /tmp, lo only, PID namespace
-    keep=(--keep "$root")
+    keep=(--keep "$root" --keep "$(dirname "$config")")
     # The sandbox's /tmp is private and goes with it: the logs and the recording live in
     # folders of this machine, bound into the sandbox at the same paths, so they are there
     # to read afterwards.
@@ -77,11 +78,17 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
     # the X server's socket folder, so that the HMI reaches the display from the sandbox
     [ -n "${DISPLAY:-}" ] && [ -d /tmp/.X11-unix ] && keep+=(--keep /tmp/.X11-unix)
     case "${XAUTHORITY:-}" in /tmp/*) keep+=(--keep "$(dirname "$XAUTHORITY")") ;; esac
-    exec tests/harness/run_isolated.sh "${keep[@]}" -- "$root/run.sh" "${args[@]}"
+    # the options as parsed here, with absolute paths
+    inner=(--config "$config")
+    [ $headless -eq 1 ] && inner+=(--headless)
+    [ -n "$scenario" ] && inner+=(--scenario "$scenario")
+    [ -n "$seconds" ] && inner+=(--for "$seconds")
+    [ -n "$bus" ] && inner+=(--bus "$bus")
+    [ -n "$record" ] && inner+=(--record "$record")
+    exec tests/harness/run_isolated.sh "${keep[@]}" -- "$root/run.sh" "${inner[@]}"
   fi
 fi
 
-config=$(readlink -f "$config")
 echo "== configuration $config"
 # Every file checked before anything starts; errors (on stderr) refuse the run.
 "$vcu" check -q --config "$config" >/dev/null || { echo "run.sh: the configuration has errors (above)" >&2; exit 1; }
