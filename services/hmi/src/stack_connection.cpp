@@ -135,8 +135,9 @@ void StackConnection::openEvents() {
       bus.onHeartbeat([this](const ipc::Heartbeat& beat) { Q_EMIT heartbeat(beat); }) &&
       bus.onLog([this](const ipc::LogRecord& record) { Q_EMIT logRecord(record); }) &&
       bus.onFsmTransition([this](const ipc::FsmTransition& transition) { Q_EMIT fsmTransition(transition); }) &&
-      bus.onFault([this](const ipc::FaultEvent& event) { Q_EMIT fault(event); }) &&
-      bus.onAck([this](const ipc::CommandAck& ack) { onAck(ack); });
+      bus.onFault([this](const ipc::FaultEvent& event) { Q_EMIT fault(event); });
+  // Answers to the HMI's commands come only from the command sockets (commandWorker): an
+  // ack on the event bus could be forged by anyone on the host.
   if (!subscribed) {
     m_events.reset();
     m_eventStatus = ModelStatus::Error;

@@ -305,6 +305,25 @@ TEST_CASE("a refused command shows the responder's reason") {
   CHECK(finished.at(0).at(2).toString() == "refused by vcu-fsm: no");
 }
 
+TEST_CASE("a forged acceptance on the event bus does not finish an HMI command: only the command socket answers") {
+  auto stack = openStack();
+  QSignalSpy finished(stack.get(), &StackConnection::commandFinished);
+  FakeCommandService fsm(*stack, "vcu-fsm");
+  fsm.answer(false, "no");
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::OperatorSwitch;
+  request.key = "internal.operator.StartStop";
+  request.value = 1;
+  const std::int64_t id = stack->sendCommand(request);
+  stack->events()->publish(
+      ipc::CommandAck{.requestId = id, .issuer = "vcu-hmi", .responder = "vcu-fsm", .accepted = true, .reason = {}});
+  deliver(*stack);  // the forged ack is handled here, before the socket's answer
+
+  REQUIRE(deliverUntil([&] { return finished.count() == 1; }));
+  CHECK(finished.at(0).at(1).toBool() == false);
+  CHECK(finished.at(0).at(2).toString() == "refused by vcu-fsm: no");
+}
+
 TEST_CASE("the DBC tree lists bus and nodes and messages with ID and PGN and signals and search keeps parents") {
   auto stack = openStack();
   SignalTreeModel sut;
