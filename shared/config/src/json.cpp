@@ -139,6 +139,7 @@ class JsonScanner {
   };
 
   std::optional<Error> scan() {
+    if (m_text.starts_with("\xEF\xBB\xBF")) m_at = 3;  // a UTF-8 byte order mark, which nlohmann skips too
     while (true) {
       skipSpace();
       if (m_at >= m_text.size()) return std::nullopt;

@@ -47,6 +47,7 @@ TEST_CASE("#19 keys equal once decoded are the same key, and equal keys in diffe
   const auto atRoot = parseJson("{\"x\": 1, // a comment with \"x\": 2\n \"x\": 3}", "v.json");
   const auto separate = parseJson(R"([{"a": 1}, {"a": 2}, {"b": {"a": 3}}, "a", {"a": {"a": 4}}])", "v.json");
   const auto slashKey = parseJson(R"({"a/b": {"k": 1, "k": 2}})", "v.json");
+  const auto withByteOrderMark = parseJson("\xEF\xBB\xBF{\"k\": 1, \"k\": 2}", "v.json");
 
   REQUIRE_FALSE(escaped.ok());
   CHECK(escaped.error().toString() == "v.json:1:22: /a: key \"bitrate\" given twice (first at 1:8)");
@@ -55,6 +56,8 @@ TEST_CASE("#19 keys equal once decoded are the same key, and equal keys in diffe
   CHECK(separate.ok());
   REQUIRE_FALSE(slashKey.ok());
   CHECK(slashKey.error().location.jsonPath == "/a~1b");  // RFC 6901
+  REQUIRE_FALSE(withByteOrderMark.ok());
+  CHECK(withByteOrderMark.error().message == "key \"k\" given twice (first at 1:5)");  // columns count bytes
 }
 
 TEST_CASE("#19 a key given twice in an object of many keys is found (the hashed path)") {
