@@ -61,8 +61,10 @@ run_one() {
   for dir in "${extra[@]}"; do [ -d "$dir" ] && existing+=("$dir"); done
   echo "== $name: ${seconds}s, corpus $work, findings $findings, log $log"
   local status=0
+  # UBSan reports are findings too (the build does not make them fatal by itself).
   # shellcheck disable=SC2086
-  nice -n 19 "build-fuzz/fuzz/$name" "$work" "${existing[@]}" -max_total_time="$seconds" \
+  UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1} \
+    nice -n 19 "build-fuzz/fuzz/$name" "$work" "${existing[@]}" -max_total_time="$seconds" \
     -artifact_prefix="$findings/" -max_len="${MAX_LEN:-65536}" -timeout=10 -rss_limit_mb=2048 \
     -print_final_stats=1 ${FUZZ_ARGS:-} >"$log" 2>&1 || status=$?
   grep -E '^#[0-9]+' "$log" | tail -n 1 || true  # executions, coverage, corpus
