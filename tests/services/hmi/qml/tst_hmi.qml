@@ -74,7 +74,7 @@ Item {
         function test_schedule_edits_are_checked_before_sending() {
             const schedule = createTemporaryObject(scheduleComponent, root)
             verify(schedule.rowCount() > 0)
-            compare(schedule.setCycle(0, "fast"), "cycle must be a whole number of ms in 1..60000")
+            compare(schedule.setCycle(0, "fast"), "cycle must be a whole number of ms in 1..3600000")
             compare(schedule.setCycle(0, "20"), "")  // sent: the answer follows in lastResult
             compare(schedule.lastResult.indexOf("waiting for the answer") > 0, true)
         }
