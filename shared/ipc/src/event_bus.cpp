@@ -21,6 +21,7 @@
 #include <array>
 #include <atomic>
 #include <climits>
+#include <initializer_list>
 #include <vector>
 
 namespace openvcu::ipc {
@@ -195,6 +196,120 @@ SignalSnapshot fromLcm(const openvcu_lcm::signal_snapshot_t& in) {
   return out;
 }
 
+// ---- bounds check before lcm-gen's decoders ---------------------------------------------
+// lcm-gen 1.3's C++ decoders trust the lengths in a message: a string length of INT32_MIN
+// makes them copy ~2 GiB from the buffer (SIGSEGV), an array count makes them allocate
+// count x element size before reading a byte (fuzz_lcm, docs/testing.md). Every message is
+// therefore walked against its type's layout (the .lcm files) first: each string length
+// in 1..rest, each count in 0..what the rest can hold. Linear in the message, no allocation.
+
+enum class Field : std::uint8_t { I8, I32, I64, F64, Str, Count, StrArray, I64Array, F64Array, ByteArray };
+
+bool readInt32(const std::uint8_t* data, std::size_t size, std::size_t pos, std::int32_t& out) noexcept {
+  if (size - pos < 4) return false;
+  const std::uint32_t raw = (static_cast<std::uint32_t>(data[pos]) << 24) | (static_cast<std::uint32_t>(data[pos + 1]) << 16) |
+                            (static_cast<std::uint32_t>(data[pos + 2]) << 8) | static_cast<std::uint32_t>(data[pos + 3]);
+  out = static_cast<std::int32_t>(raw);
+  return true;
+}
+
+bool skipString(const std::uint8_t* data, std::size_t size, std::size_t& pos) noexcept {
+  std::int32_t length = 0;
+  if (!readInt32(data, size, pos, length)) return false;
+  pos += 4;
+  if (length < 1 || static_cast<std::size_t>(length) > size - pos) return false;
+  pos += static_cast<std::size_t>(length);
+  return true;
+}
+
+/// true when `data` holds the 8-byte type hash and then `fields` within `size` bytes.
+bool fitsLayout(const void* raw, std::size_t size, std::initializer_list<Field> fields) noexcept {
+  const auto* data = static_cast<const std::uint8_t*>(raw);
+  if (data == nullptr || size < 8) return false;
+  std::size_t pos = 8;
+  std::size_t count = 0;
+  for (const Field field : fields) {
+    const std::size_t rest = size - pos;
+    switch (field) {
+      case Field::I8:
+        if (rest < 1) return false;
+        pos += 1;
+        break;
+      case Field::I32:
+        if (rest < 4) return false;
+        pos += 4;
+        break;
+      case Field::I64:
+      case Field::F64:
+        if (rest < 8) return false;
+        pos += 8;
+        break;
+      case Field::Str:
+        if (!skipString(data, size, pos)) return false;
+        break;
+      case Field::Count: {
+        std::int32_t value = 0;
+        if (!readInt32(data, size, pos, value) || value < 0) return false;
+        pos += 4;
+        count = static_cast<std::size_t>(value);
+        if (count > size - pos) return false;  // every element takes at least one byte
+        break;
+      }
+      case Field::StrArray:
+        for (std::size_t i = 0; i < count; ++i) {
+          if (!skipString(data, size, pos)) return false;
+        }
+        break;
+      case Field::I64Array:
+      case Field::F64Array:
+        if (count > rest / 8) return false;
+        pos += count * 8;
+        break;
+      case Field::ByteArray:
+        if (count > rest) return false;
+        pos += count;
+        break;
+    }
+  }
+  return true;
+}
+
+bool fits(const openvcu_lcm::command_request_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size, {F::I64, F::I64, F::Str, F::I8, F::Str, F::F64, F::Str, F::I64});
+}
+bool fits(const openvcu_lcm::command_ack_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size, {F::I64, F::I64, F::Str, F::Str, F::I8, F::Str, F::I8});
+}
+bool fits(const openvcu_lcm::fsm_transition_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size, {F::I64, F::Str, F::Str, F::Str});
+}
+bool fits(const openvcu_lcm::fault_event_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size, {F::I64, F::Str, F::Str, F::I8, F::I8, F::Str});
+}
+bool fits(const openvcu_lcm::log_record_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size, {F::I64, F::Str, F::I8, F::Str});
+}
+bool fits(const openvcu_lcm::heartbeat_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size,
+                    {F::I64, F::Str, F::Str, F::I32, F::I64, F::Count, F::StrArray, F::I64Array, F::Str});
+}
+bool fits(const openvcu_lcm::signal_snapshot_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size, {F::I64, F::Str, F::Count, F::StrArray, F::F64Array, F::ByteArray});
+}
+
+/// The layout check for LcmType.
+template <typename LcmType>
+bool fitsType(const void* data, std::size_t size) noexcept {
+  return fits(static_cast<const LcmType*>(nullptr), data, size);
+}
+
 /// Receives raw LCM messages for one subscription and hands them to `dispatch`.
 struct RawHandler {
   std::function<void(const void* data, std::uint32_t size)> dispatch;
@@ -222,6 +337,7 @@ std::vector<std::uint8_t> encodeOne(const Plain& message) {
 template <typename LcmType>
 auto decodeOne(const void* data, std::size_t size) -> std::optional<decltype(fromLcm(std::declval<LcmType>()))> {
   if (data == nullptr || size == 0 || size > static_cast<std::size_t>(INT_MAX)) return std::nullopt;
+  if (!fitsType<LcmType>(data, size)) return std::nullopt;
   try {
     LcmType decoded;
     if (decoded.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) return std::nullopt;
@@ -300,7 +416,8 @@ struct EventBusImpl {
     handler->dispatch = [this, callback = std::move(callback)](const void* data, std::uint32_t size) {
       try {
         LcmType decoded;
-        if (size > static_cast<std::uint32_t>(INT_MAX) || decoded.decode(data, 0, static_cast<int>(size)) < 0) {
+        if (size > static_cast<std::uint32_t>(INT_MAX) || !fitsType<LcmType>(data, size) ||
+            decoded.decode(data, 0, static_cast<int>(size)) < 0) {
           ++decodeErrors;
           return;
         }

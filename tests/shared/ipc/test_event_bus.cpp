@@ -3,6 +3,8 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
+
 #include <chrono>
 #include <optional>
 #include <stdexcept>
@@ -126,6 +128,26 @@ TEST_CASE("empty arrays, empty strings and unknown command kinds are carried as 
   const auto received = ipc::decodeCommandRequest(bytes.data(), bytes.size());
   REQUIRE(received);
   CHECK(received->kind == UNKNOWN_KIND);
+}
+
+TEST_CASE("a command message whose string length is INT32_MIN or beyond the message does not decode (fuzz_lcm)") {
+  const ipc::CommandRequest request{SOME_TIME_NS, 7, "vcu", ipc::CommandKind::SetSignal, "internal.x", 1.0, "", 5};
+  auto bytes = ipc::encodeCommandRequest(request);
+  // hash (8), timestamp (8), request id (8), then the issuer's length: lcm-gen's decoder
+  // copied ~2 GiB for INT32_MIN (SIGSEGV) before the layout check.
+  constexpr std::size_t ISSUER_LENGTH = 24;
+  for (const std::uint32_t length : {0x80000000u, 0xFFFFFFFFu, 0u, 0x7FFFFFFFu}) {
+    auto forged = bytes;
+    forged[ISSUER_LENGTH] = static_cast<std::uint8_t>(length >> 24);
+    forged[ISSUER_LENGTH + 1] = static_cast<std::uint8_t>(length >> 16);
+    forged[ISSUER_LENGTH + 2] = static_cast<std::uint8_t>(length >> 8);
+    forged[ISSUER_LENGTH + 3] = static_cast<std::uint8_t>(length);
+    CHECK_FALSE(ipc::decodeCommandRequest(forged.data(), forged.size()));
+    auto ack = ipc::encodeCommandAck(ipc::CommandAck{SOME_TIME_NS, 7, "vcu", "vcu-fsm", true, ""});
+    std::copy(forged.begin() + ISSUER_LENGTH, forged.begin() + ISSUER_LENGTH + 4, ack.begin() + ISSUER_LENGTH);
+    CHECK_FALSE(ipc::decodeCommandAck(ack.data(), ack.size()));
+  }
+  CHECK(ipc::decodeCommandRequest(bytes.data(), bytes.size()) == request);
 }
 
 TEST_CASE("a command message that is cut, padded or of another type does not decode") {
