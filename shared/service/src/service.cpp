@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/core/input_file.hpp"
 #include "openvcu/ipc/runtime.hpp"
 
 namespace openvcu::service {
@@ -25,6 +26,9 @@ LoggerOptions loggerOptions(ipc::LogLevel threshold) {
 
 int reportStartupError(const ServiceInfo& info, const Error& error) {
   std::cerr << info.programName() << ": error: " << error.toString() << std::endl;
+  // A start-up that a SIGTERM/SIGINT cut short (a long DBC read stops on it) is an orderly
+  // stop, not a failure: exit 0 as after any SIGTERM.
+  if (input::stopSignalPending()) return static_cast<int>(ExitCode::Ok);
   return static_cast<int>(ExitCode::Failure);
 }
 

@@ -16,7 +16,7 @@ std::string formatDiagnostic(const Error& error) {
       out += ": note: ";
       break;
   }
-  out += error.message;
+  out += escapeControlCharacters(error.message);  // a NUL or newline from a file stays visible, one line
   return out;
 }
 

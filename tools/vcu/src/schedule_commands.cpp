@@ -348,7 +348,7 @@ ExitCode runScheduleImport(const ScheduleImportOptions& options, Streams streams
   const dbc::Database& database = maybeDatabase ? *maybeDatabase : maybeStack->config.database;
   if (!options.node.empty() && !knownNode(database, options.node, streams.err)) return ExitCode::Failure;
 
-  Result<std::string> readResult = readFileBytes(options.csvFile);
+  Result<std::string> readResult = readFileBytes(options.csvFile, input::TEXT_FILE);
   if (!readResult) {
     report(streams.err, readResult.error());
     return ExitCode::Failure;
