@@ -4,6 +4,7 @@
 // made by the test, each with one file damaged.
 
 #include <doctest/doctest.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <sys/socket.h>
@@ -73,6 +74,12 @@ class FakeService {
     m_pid = ::fork();
     REQUIRE(m_pid >= 0);
     if (m_pid == 0) {
+      // a group of its own, so the destructor ends the script's `sleep` too; output away
+      // from the test's (ctest waits for every holder of its pipe)
+      ::setpgid(0, 0);
+      const int null = ::open("/dev/null", O_RDWR);
+      ::dup2(null, STDOUT_FILENO);
+      ::dup2(null, STDERR_FILENO);
       const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET, 0);
       sockaddr_un address{};
       address.sun_family = AF_UNIX;
@@ -102,7 +109,7 @@ class FakeService {
     FAIL("the stand-in service did not listen");
   }
   ~FakeService() {
-    ::kill(m_pid, SIGKILL);
+    ::kill(-m_pid, SIGKILL);
     ::waitpid(m_pid, nullptr, 0);
   }
   FakeService(const FakeService&) = delete;
