@@ -22,6 +22,8 @@
 #      ACL and group bits of both segments and of the socket are removed: 0600. The chmod
 #      moves the socket's change time: a service that registered before it takes RouDi for
 #      replaced (ipc::Runtime::roudiReplaced compares it) and exits 75 once.
+# In every case RouDi gets SIGTERM when its parent (supervisord, run.sh's sandbox, a test)
+# dies (setpriv --pdeathsig), like the services (PR_SET_PDEATHSIG in their runtime).
 # In B and C the files are 0660 for a few milliseconds during RouDi's start-up.
 # The test: tests/demo/roudi_permissions_test.sh. Design: docs/design/signal-table.md.
 set -euo pipefail
@@ -66,13 +68,13 @@ close_later() {
 
 if getent group "$GROUP" >/dev/null 2>&1; then
   if id -Gn "$user" | tr ' ' '\n' | grep -qx "$GROUP"; then
-    exec setpriv --regid "$GROUP" --clear-groups -- iox-roudi -c "$config" "${args[@]}"
+    exec setpriv --pdeathsig TERM --regid "$GROUP" --clear-groups -- iox-roudi -c "$config" "${args[@]}"
   fi
   echo "iox-roudi.sh: user $user is not a member of group $GROUP: RouDi runs with group $GROUP," \
     "its data segment /dev/shm/$own_group is made owner-only (0600)" >&2
   close_later "/dev/shm/$own_group"
   # the configuration with the user's group as the segment's reader and writer, on stdin
-  exec setpriv --regid "$GROUP" --clear-groups -- iox-roudi -c /dev/stdin "${args[@]}" <<EOF
+  exec setpriv --pdeathsig TERM --regid "$GROUP" --clear-groups -- iox-roudi -c /dev/stdin "${args[@]}" <<EOF
 $(sed -e '/^[[:space:]]*\(reader\|writer\)[[:space:]]*=/d' \
       -e "s/^\[\[segment\]\][[:space:]]*\$/[[segment]]\nreader = \"$own_group\"\nwriter = \"$own_group\"/" "$config")
 EOF
@@ -81,4 +83,4 @@ fi
 echo "iox-roudi.sh: no group $GROUP (scripts/install-deps.sh creates it): iceoryx's shared memory" \
   "and $SOCKET are made owner-only (0600)" >&2
 close_later /dev/shm/iceoryx_mgmt "/dev/shm/$own_group" "$SOCKET"
-exec iox-roudi -c "$config" "${args[@]}"
+exec setpriv --pdeathsig TERM -- iox-roudi -c "$config" "${args[@]}"

@@ -1,7 +1,8 @@
 #pragma once
 // SIGTERM and SIGINT as a file descriptor (signalfd), so an orderly stop arrives through the
 // same wait as everything else: no handler runs at an arbitrary instruction, no flag is
-// polled. Supervisors stop services with SIGTERM, and so does iox-roudi when it shuts down.
+// polled. Supervisors stop services with SIGTERM, and so does iox-roudi when it shuts down;
+// install() also asks for a SIGTERM when the parent process dies (PR_SET_PDEATHSIG).
 //
 //   auto signalsResult = service::ShutdownSignals::install();   // first thing in main
 //   loop.addFd(signalsResult->fd(), [&] { if (signalsResult->take()) loop.stop(0); });
