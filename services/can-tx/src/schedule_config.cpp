@@ -708,6 +708,9 @@ Result<ScheduledMessage> runtimeMessage(const Schedule& schedule, const config::
   for (const dbc::Signal& signal : message->signals) {
     entry.keys.push_back(catalog.indexOf(config::signalKey(*message, signal)));
   }
+  Schedule withEntry = schedule;  // a copy per added message: commands and overlay loading, never per frame
+  withEntry.messages.push_back(entry);
+  if (auto problem = checkBusLoad(withEntry, vehicle)) return Error{*problem};
   return entry;
 }
 

@@ -139,7 +139,8 @@ std::optional<std::string> checkCycle(const ScheduledMessage& message, double cy
 /// The entry for DBC message `name` added at run time with cycle `cycleMs` (ScheduleAdd): its
 /// DBC start values, no group, no computed fields, no safety pair. A reason when the message
 /// is unknown, pseudo, on no configured bus, a J1939-76 safety header, longer than a frame,
-/// already scheduled, or the cycle is out of range.
+/// already scheduled, the cycle is out of range, or the schedule with it would fail
+/// checkBusLoad. (A runtime cycle change, checkCycle, is not checked against the bus load.)
 Result<ScheduledMessage> runtimeMessage(const Schedule& schedule, const config::VehicleConfig& vehicle,
                                         const signals::Catalog& catalog, std::string_view name, double cycleMs);
 

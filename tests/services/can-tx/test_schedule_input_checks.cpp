@@ -115,3 +115,17 @@ TEST_CASE("#19 a schedule whose cyclic frames would take over half the bus is re
   CHECK(sut.find("PDU_Rx_1") != std::string::npos);
   CHECK(sut.find("HC1_Demands") != std::string::npos);
 }
+
+TEST_CASE("#19 a message added at run time is refused when the schedule with it would take over half the bus") {
+  Fixture f;
+  const auto schedule = f.load("{}");  // HHEA: about a third of the bus
+  REQUIRE(schedule);
+
+  const auto sut = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 1);
+  const auto slower = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 100);
+
+  REQUIRE_FALSE(sut);
+  CHECK(sut.error().message.find("the cyclic frames on bus 'vehicle' would take") != std::string::npos);
+  CHECK(sut.error().message.find("HVESSD2_PGN61585 every 1 ms") != std::string::npos);
+  CHECK(slower);
+}
