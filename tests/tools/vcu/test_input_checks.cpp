@@ -43,7 +43,7 @@ TEST_CASE("#19 vcu dbc decode refuses a negative --limit as a usage error") {
   const RunResult zero = runVcu({"dbc", "decode", "--limit", "0", dataPath("vehicle.dbc"), log});
 
   CHECK(sut.exitCode == EXIT_USAGE);
-  CHECK(contains(sut.err, "--limit"));
+  CHECK(sut.err == "vcu: error: --limit: must be 0 or more, not -1 (see --help)\n");  // no 309-digit bound
   CHECK(sut.out.empty());
   CHECK(zero.exitCode == EXIT_OK);
 }
