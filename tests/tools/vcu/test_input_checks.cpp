@@ -47,3 +47,13 @@ TEST_CASE("#19 vcu dbc decode refuses a negative --limit as a usage error") {
   CHECK(sut.out.empty());
   CHECK(zero.exitCode == EXIT_OK);
 }
+
+TEST_CASE("#19 negative or non-numeric durations are refused with a short message, not a 309-digit bound") {
+  const RunResult top = runVcu({"top", "--for", "-1"});
+  const RunResult send = runVcu({"send", "--interval", "abc", "vehicle", "123#11"});
+
+  CHECK(top.exitCode == EXIT_USAGE);
+  CHECK(top.err == "vcu: error: --for: must be 0 or more, not -1 (see --help)\n");
+  CHECK(send.exitCode == EXIT_USAGE);
+  CHECK(send.err == "vcu: error: --interval: 'abc' is not a number (see --help)\n");
+}

@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+
+#include "cli_checks.hpp"
 #include <algorithm>
 #include <chrono>
 #include <csignal>
@@ -548,7 +550,7 @@ void registerBusCommands(CLI::App& app, CommandContext& context) {
       ->check(CLI::Range(1u, 1'000'000'000u))
       ->option_text("N");
   send->add_option("--interval", sendOptions->intervalMs, "milliseconds between two frames (default 0)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(nonNegativeNumber())
       ->option_text("MS");
   addStackOptions(*send, sendOptions->stack);
   send->callback([sendOptions, &context] { context.exitCode = runSend(*sendOptions, context.streams); });

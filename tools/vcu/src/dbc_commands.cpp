@@ -3,6 +3,8 @@
 #include "dbc_commands.hpp"
 
 #include <CLI/CLI.hpp>
+
+#include "cli_checks.hpp"
 #include <memory>
 
 namespace openvcu::cli {
@@ -126,15 +128,8 @@ void addDecode(CLI::App& dbc, CommandContext& context) {
   decode->add_option("--match", arguments->match, "how frames find their message (default j1939)")
       ->check(CLI::IsMember({"exact", "j1939", "j1939-tagged"}))
       ->option_text("exact|j1939|j1939-tagged");
-  // Checked as text before CLI11 converts it: "-1" would wrap to 2^64 - 1. (Not
-  // CLI::NonNegativeNumber: its message prints DBL_MAX in 309 digits.)
   decode->add_option("-n,--limit", options->limit, "stop after N frames (0: no limit)")
-      ->check(CLI::Validator(
-          [](std::string& text) {
-            const auto first = text.find_first_not_of(" \t");
-            return first != std::string::npos && text[first] == '-' ? "must be 0 or more, not " + text : std::string();
-          },
-          "N"))
+      ->check(nonNegativeNumber("N"))
       ->option_text("N");
   decode->add_flag("--stats", options->stats, "print frame counts on stderr at the end");
   decode->callback([options, arguments, &context] {

@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+
+#include "cli_checks.hpp"
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -811,7 +813,7 @@ void registerRecordCommands(CLI::App& app, CommandContext& context) {
   replay->footer(std::string(REPLAY_FOOTER) + CONFIG_NOTE);
   replay->add_option("DIR", replayOptions->directory, "folder with the <bus>.log files")->required()->type_name("");
   replay->add_option("--speed", replayOptions->speed, "time factor: 2 twice as fast, 0 as fast as possible (default 1)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(nonNegativeNumber())
       ->option_text("X");
   replay->add_flag("--loop", replayOptions->loop, "start again at the end until Ctrl-C");
   addStackOptions(*replay, replayOptions->stack);

@@ -20,6 +20,7 @@
 
 #include "dbc_loading.hpp"
 #include "diagnostics.hpp"
+#include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/core/text.hpp"
 #include "schedule_import.hpp"
 
@@ -414,9 +415,13 @@ ExitCode runScheduleCommand(const ScheduleCommandOptions& options, Streams strea
     request.key = message->name;
     if (options.action == ScheduleAction::Cycle || options.action == ScheduleAction::Add) {
       const auto maybeMs = parseMilliseconds(options.value);
-      if (!maybeMs || *maybeMs < 1 || *maybeMs > MAX_CYCLE_MS) {
+      if (!maybeMs) {
         reportError(streams.err,
                     "cycle time '" + options.value + "': expected milliseconds, 1.." + std::to_string(MAX_CYCLE_MS));
+        return ExitCode::Failure;
+      }
+      if (const auto problem = config::checkCycleMs(*maybeMs)) {  // whole ms, the limits every reader uses
+        reportError(streams.err, "cycle time '" + options.value + "': " + *problem);
         return ExitCode::Failure;
       }
       request.kind = options.action == ScheduleAction::Add ? ipc::CommandKind::ScheduleAdd

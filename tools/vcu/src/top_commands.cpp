@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+
+#include "cli_checks.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -287,7 +289,7 @@ void registerTopCommands(CLI::App& app, CommandContext& context) {
   CLI::App* top = app.add_subcommand("top", TOP_DESCRIPTION);
   top->footer(TOP_FOOTER);
   top->add_flag("--once", options->once, "one snapshot after 1.5 s, then exit");
-  top->add_option("--for", options->forSeconds, "stop after SECONDS")->check(CLI::NonNegativeNumber);
+  top->add_option("--for", options->forSeconds, "stop after SECONDS")->check(nonNegativeNumber());
   addStackOptions(*top, options->stack);
   top->callback([options, &context] { context.exitCode = runTop(*options, context.streams); });
 }
