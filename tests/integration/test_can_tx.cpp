@@ -272,6 +272,10 @@ TEST_CASE("a runtime cycle change is acknowledged, takes effect and survives a r
   f.keepAlive();
   const auto refused = vcuOn(f.sut, f.config, {"schedule", "cycle", "CCVS1_PGN65265", "1"});
   CHECK(contains(refused.out + refused.err, "refused"));  // shorter than its 2 ms SHM->SDM delta
+  const auto overload = vcuOn(f.sut, f.config, {"schedule", "cycle", "PropA_C4_PGN61184", "1"});
+  // issue 19: 1 ms would take the VCU's frames over 50 % of the bus
+  const bool overloadRefused = contains(overload.out, "refused: the cyclic frames on bus 'vehicle' would take");
+  CHECK_MESSAGE(overloadRefused, (overload.out + overload.err));
   const auto accepted = vcuOn(f.sut, f.config, {"schedule", "cycle", "CCVS1_PGN65265", "50"});
   REQUIRE_MESSAGE(contains(accepted.out, "accepted"), (accepted.out + accepted.err));
   REQUIRE(listener.skipToNextFrameOf(CCVS1, 2s));  // sent under the new cycle

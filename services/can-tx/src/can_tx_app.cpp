@@ -336,6 +336,12 @@ struct CanTxAppImpl final : TxPort, Clock {
       ScheduledMessage& entry = schedule.messages[*found];
       if (request.kind == ipc::CommandKind::ScheduleCycle) {
         if (auto problem = checkCycle(entry, request.value)) return problem;
+        // The bus-load limit holds for runtime changes too (the schedule file's rule).
+        const std::int64_t previousCycleNs = entry.cycleNs;
+        entry.cycleNs = static_cast<std::int64_t>(std::llround(request.value * NS_PER_MS));
+        const auto overload = checkBusLoad(schedule, vehicle);
+        entry.cycleNs = previousCycleNs;
+        if (overload) return *overload;
         Overlay changed = overlay;
         changeOf(changed, request.key).cycleMs = request.value;
         if (auto refusal = persist(std::move(changed))) return refusal;

@@ -140,7 +140,7 @@ std::optional<std::string> checkCycle(const ScheduledMessage& message, double cy
 /// DBC start values, no group, no computed fields, no safety pair. A reason when the message
 /// is unknown, pseudo, on no configured bus, a J1939-76 safety header, longer than a frame,
 /// already scheduled, the cycle is out of range, or the schedule with it would fail
-/// checkBusLoad. (A runtime cycle change, checkCycle, is not checked against the bus load.)
+/// checkBusLoad. (A runtime cycle change is checked against the bus load by vcu-can-tx too.)
 Result<ScheduledMessage> runtimeMessage(const Schedule& schedule, const config::VehicleConfig& vehicle,
                                         const signals::Catalog& catalog, std::string_view name, double cycleMs);
 
