@@ -32,6 +32,14 @@ bool validInstanceName(std::string_view name) noexcept {
 
 namespace {
 
+/// fs::exists without exceptions: a name over 255 characters (ENAMETOOLONG) made the
+/// throwing overload end every service in std::terminate (fuzz_vehicle). Such a path
+/// counts as missing; the file's own open reports the reason.
+bool existsNoThrow(const std::string& path) noexcept {
+  std::error_code error;
+  return fs::exists(path, error);
+}
+
 bool validSignalName(std::string_view name) {
   if (name.empty() || name.front() == '.' || name.back() == '.') return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
@@ -197,7 +205,7 @@ class Loader {
           m_check.error(path + "/link", parsed.error().message);
         } else {
           bus.link = *parsed;
-          if (bus.link.kind == LinkKind::Replay && !fs::exists(bus.link.target)) {
+          if (bus.link.kind == LinkKind::Replay && !existsNoThrow(bus.link.target)) {
             m_check.error(path + "/link", "replay file '" + bus.link.target + "' does not exist");
           }
         }
@@ -308,7 +316,7 @@ class Loader {
       const auto file = m_check.string(root, "", key, false);
       if (!file) continue;
       *target = resolvePath(m_config.directory, *file);
-      if (!fs::exists(*target)) m_check.error("/" + std::string(key), "file '" + *target + "' does not exist");
+      if (!existsNoThrow(*target)) m_check.error("/" + std::string(key), "file '" + *target + "' does not exist");
     }
   }
 
@@ -366,7 +374,7 @@ class Loader {
 
   /// The GPIO map is part of the configuration: its lines add status keys to the catalog.
   void gpio() {
-    if (m_config.gpioFile.empty() || !fs::exists(m_config.gpioFile)) return;
+    if (m_config.gpioFile.empty() || !existsNoThrow(m_config.gpioFile)) return;
     auto map = loadGpioMap(m_config.gpioFile, m_config.internalSignals, m_otherFiles);
     if (map) m_config.gpio = std::move(*map);
   }

@@ -696,7 +696,9 @@ class Importer {
       if (m_options.catalog == nullptr || !m_options.catalog->indexOf(key)) undeclared.push_back(key);
       groups.push_back(Group{name, std::move(key)});
     }
-    for (const auto& [node, key] : m_options.groupSignals) {
+    for (const auto& entry : m_options.groupSignals) {
+      const std::string& node = entry.first;  // not a structured binding: clang 14 cannot capture one
+      const auto& key = entry.second;
       if (std::none_of(groups.begin(), groups.end(), [&](const Group& group) { return group.name == node; })) {
         m_diagnostics.optionWarning("--group-signal " + node + "=" + key + ": no row has NodeName '" + node + "'");
       }
