@@ -565,12 +565,19 @@ TEST_CASE("vcu schedule cycle, enable and disable refuse an unknown message loca
   }
 }
 
-TEST_CASE("vcu schedule cycle refuses a cycle time outside 1..3600000 ms locally") {
-  const RunResult result =
-      runVcu({"schedule", "cycle", "HC1_Demands", "0", "--config", dataPath("schedule/vehicle.json")});
+TEST_CASE("vcu schedule cycle refuses a cycle time outside 1..3600000 ms or not whole locally") {
+  const std::string config = dataPath("schedule/vehicle.json");
+  const RunResult zero = runVcu({"schedule", "cycle", "HC1_Demands", "0", "--config", config});
+  const RunResult fraction = runVcu({"schedule", "cycle", "HC1_Demands", "2.5", "--config", config});
+  const RunResult text = runVcu({"schedule", "cycle", "HC1_Demands", "fast", "--config", config});
 
-  CHECK(result.exitCode == EXIT_INPUT_ERROR);
-  CHECK(result.err == "vcu: error: cycle time '0': expected milliseconds, 1..3600000\n");
+  CHECK(zero.exitCode == EXIT_INPUT_ERROR);
+  CHECK(zero.err == "vcu: error: cycle time '0': the cycle must be a whole number of ms from 1 to 3600000, not 0\n");
+  CHECK(fraction.exitCode == EXIT_INPUT_ERROR);
+  CHECK(fraction.err ==
+        "vcu: error: cycle time '2.5': the cycle must be a whole number of ms from 1 to 3600000, not 2.5\n");
+  CHECK(text.exitCode == EXIT_INPUT_ERROR);
+  CHECK(text.err == "vcu: error: cycle time 'fast': expected milliseconds, 1..3600000\n");
 }
 
 TEST_CASE("vcu schedule default refuses an unknown key, an internal signal and a bad value locally") {
