@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "openvcu/ipc/command_socket.hpp"
+#include "openvcu/ipc/event_bus.hpp"
 #include "openvcu_lcm/fault_event_t.hpp"
 #include "openvcu_lcm/fsm_transition_t.hpp"
 #include "openvcu_lcm/heartbeat_t.hpp"
@@ -42,7 +43,8 @@ bool anyNul(std::initializer_list<const std::string*> texts) {
 }
 
 template <typename LcmType>
-void decodeEvent(const std::uint8_t* data, std::size_t size) {
+void decodeEvent(ipc::EventKind kind, const std::uint8_t* data, std::size_t size) {
+  if (!ipc::fitsEventLayout(kind, data, size)) return;  // what EventBus checks first
   try {  // as EventBus's decodeOne: std::length_error / bad_alloc count as "does not decode"
     LcmType decoded;
     if (decoded.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) return;
@@ -92,11 +94,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   switch (type) {
     case 0: checkRequest(message, messageSize); break;
     case 1: checkAck(message, messageSize); break;
-    case 2: decodeEvent<openvcu_lcm::fsm_transition_t>(message, messageSize); break;
-    case 3: decodeEvent<openvcu_lcm::fault_event_t>(message, messageSize); break;
-    case 4: decodeEvent<openvcu_lcm::log_record_t>(message, messageSize); break;
-    case 5: decodeEvent<openvcu_lcm::heartbeat_t>(message, messageSize); break;
-    default: decodeEvent<openvcu_lcm::signal_snapshot_t>(message, messageSize); break;
+    case 2: decodeEvent<openvcu_lcm::fsm_transition_t>(ipc::EventKind::Fsm, message, messageSize); break;
+    case 3: decodeEvent<openvcu_lcm::fault_event_t>(ipc::EventKind::Fault, message, messageSize); break;
+    case 4: decodeEvent<openvcu_lcm::log_record_t>(ipc::EventKind::Log, message, messageSize); break;
+    case 5: decodeEvent<openvcu_lcm::heartbeat_t>(ipc::EventKind::Heartbeat, message, messageSize); break;
+    default: decodeEvent<openvcu_lcm::signal_snapshot_t>(ipc::EventKind::Snapshot, message, messageSize); break;
   }
   return 0;
 }

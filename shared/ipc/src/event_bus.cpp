@@ -349,6 +349,19 @@ auto decodeOne(const void* data, std::size_t size) -> std::optional<decltype(fro
 
 }  // namespace
 
+bool fitsEventLayout(EventKind kind, const void* data, std::size_t size) noexcept {
+  switch (kind) {
+    case EventKind::Command: return fitsType<openvcu_lcm::command_request_t>(data, size);
+    case EventKind::Ack: return fitsType<openvcu_lcm::command_ack_t>(data, size);
+    case EventKind::Fsm: return fitsType<openvcu_lcm::fsm_transition_t>(data, size);
+    case EventKind::Fault: return fitsType<openvcu_lcm::fault_event_t>(data, size);
+    case EventKind::Log: return fitsType<openvcu_lcm::log_record_t>(data, size);
+    case EventKind::Heartbeat: return fitsType<openvcu_lcm::heartbeat_t>(data, size);
+    case EventKind::Snapshot: return fitsType<openvcu_lcm::signal_snapshot_t>(data, size);
+  }
+  return false;
+}
+
 // Command socket messages (command_socket.hpp) share the event types' encoding.
 std::vector<std::uint8_t> encodeCommandRequest(const CommandRequest& request) {
   return encodeOne<openvcu_lcm::command_request_t>(request);

@@ -13,6 +13,7 @@
 // for unit tests), "file://LOG?speed=0" (replay), "tcpq://127.0.0.1:7700" (hub).
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -41,6 +42,12 @@ enum class HandleResult : std::uint8_t {
 /// @note publish() may be called from any thread (LCM serialises sends). subscribe,
 ///       unsubscribe and handle from one thread; callbacks run inside handle(), on that
 ///       thread. Not real-time: encoding allocates. Never throws.
+/// true when `data` fits the layout of `kind`'s LCM type (every string length and array
+/// count within the message): what EventBus checks before lcm-gen's decoder sees a message
+/// (lcm-gen 1.3 trusts those fields: SIGSEGV or 64 GiB allocations otherwise). For tools and
+/// fuzzers that decode events themselves.
+[[nodiscard]] bool fitsEventLayout(EventKind kind, const void* data, std::size_t size) noexcept;
+
 class EventBus {
  public:
   /// Connects to `url` (empty: DEFAULT_EVENT_URL). `instance` names the channels
