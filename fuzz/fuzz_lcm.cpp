@@ -26,6 +26,8 @@
 #include "openvcu_lcm/heartbeat_t.hpp"
 #include "openvcu_lcm/log_record_t.hpp"
 #include "openvcu_lcm/signal_snapshot_t.hpp"
+#include "openvcu_lcm/stats_t.hpp"
+#include "openvcu_lcm/tx_schedule_t.hpp"
 
 using namespace openvcu;
 
@@ -88,7 +90,7 @@ void checkAck(const std::uint8_t* data, std::size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1 || size > ipc::MAX_COMMAND_BYTES * 8) return 0;
-  const std::uint8_t type = data[0] % 7;
+  const std::uint8_t type = data[0] % 9;
   const std::uint8_t* message = data + 1;
   const std::size_t messageSize = size - 1;
   switch (type) {
@@ -98,7 +100,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     case 3: decodeEvent<openvcu_lcm::fault_event_t>(ipc::EventKind::Fault, message, messageSize); break;
     case 4: decodeEvent<openvcu_lcm::log_record_t>(ipc::EventKind::Log, message, messageSize); break;
     case 5: decodeEvent<openvcu_lcm::heartbeat_t>(ipc::EventKind::Heartbeat, message, messageSize); break;
-    default: decodeEvent<openvcu_lcm::signal_snapshot_t>(ipc::EventKind::Snapshot, message, messageSize); break;
+    case 6: decodeEvent<openvcu_lcm::signal_snapshot_t>(ipc::EventKind::Snapshot, message, messageSize); break;
+    case 7: decodeEvent<openvcu_lcm::stats_t>(ipc::EventKind::Stats, message, messageSize); break;
+    default: decodeEvent<openvcu_lcm::tx_schedule_t>(ipc::EventKind::Schedule, message, messageSize); break;
   }
   return 0;
 }

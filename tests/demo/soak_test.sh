@@ -25,7 +25,7 @@ echo "soak: seed $seed, $rounds round(s); logs $run"
 drive
 
 # can-tx's per-message missed-cycle counters of the keep-alive and safety messages
-missed() { beats | grep '^vcu-can-tx' | grep -o 'tx\.\(S1_ES_PGN61427\|CCVS1_PGN65265\|HVESSC1_PGN6912\|CN_PGN61483\)\.missed=[0-9]*' | sort; }
+missed() { "$vcu" status --config "$config" --wait 1.2 --stats 2>/dev/null | grep '^vcu-can-tx' | grep -o 'tx\.\(S1_ES_PGN61427\|CCVS1_PGN65265\|HVESSC1_PGN6912\|CN_PGN61483\)\.missed=[0-9]*' | sort; }
 baseline=$(missed)
 echo "soak: can-tx missed counters before the kills: $(echo $baseline)"
 times=(); ready_times=(); roudi_times=(); stalls=0

@@ -194,7 +194,7 @@ busy=$(( u2 + n2 + s2 - u1 - n1 - s1 )); idle=$(( i2 - i1 ))
 t "guest CPU busy during the capture: $(( 100 * busy / (busy + idle + 1) )) % of 2 vCPUs"
 # can-tx's own counters right after the window (send failures, missed cycles), before the
 # link-down check below adds its own send failures
-"$VCU" status --config "$CFG" > "$OUT/status-after-tx.txt" 2>&1
+"$VCU" status --config "$CFG" --stats > "$OUT/status-after-tx.txt" 2>&1
 t "can-tx counters: $(grep -o 'vehicle.send_failures=[0-9]*\|tx.S1_ES_PGN61427.\(missed\|send_failures\)=[0-9]*' "$OUT/status-after-tx.txt" | tr '\n' ' ')"
 # Periods inside the VM: the mean within 5 % and no gap of 10 cycles or more. QEMU's TCG
 # vCPUs share this host's two cores with everything else, and a descheduled vCPU stalls the
@@ -288,7 +288,7 @@ fi
 # opens the session with TP.CM RTS and sends the TP.DT packets only as vcu-can-rx grants them
 # with CTS; vcu-can-rx closes it with EndOfMsgAck. Seen on the wire (candump of TP.CM) and in
 # can-rx's counter of completed sessions.
-tp_count() { "$VCU" status --config "$CFG" 2>&1 | grep -o 'vehicle\.tp_completed=[0-9]*' | head -1 | cut -d= -f2; }
+tp_count() { "$VCU" status --config "$CFG" --stats 2>&1 | grep -o 'vehicle\.tp_completed=[0-9]*' | head -1 | cut -d= -f2; }
 tp_before=$(tp_count)
 candump -L vcan0,00EC0000:00FF0000 > "$OUT/tp_cm.txt" 2>&1 &
 dpid=$!; sleep 0.3

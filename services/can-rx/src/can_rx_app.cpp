@@ -210,7 +210,7 @@ struct CanRxAppImpl final : ReceiverOutputs {
     for (std::size_t b = 0; b < buses.size(); ++b) {
       const std::string prefix = vehicle.buses[b].name + ".";
       auto add = [&](const char* name, auto read) {
-        runtime.heartbeat().addCounterSource(prefix + name, [this, b, read] {
+        runtime.heartbeat().addStatSource(prefix + name, [this, b, read] {
           return static_cast<std::int64_t>(read(receiver->counters(b), buses[b]));
         });
       };
@@ -238,7 +238,7 @@ struct CanRxAppImpl final : ReceiverOutputs {
     for (const std::size_t messageIndex : receiver->trackedMessages()) {
       const std::string prefix = "rx." + vehicle.database.messages[messageIndex].name + ".";
       auto add = [&](const char* name, auto read) {
-        runtime.heartbeat().addCounterSource(prefix + name, [this, messageIndex, read] {
+        runtime.heartbeat().addStatSource(prefix + name, [this, messageIndex, read] {
           return static_cast<std::int64_t>(read(receiver->messageCounters(messageIndex)));
         });
       };

@@ -1,5 +1,7 @@
 #include "can_tx_app.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <ctime>
@@ -253,7 +255,11 @@ struct CanTxAppImpl final : TxPort, Clock {
     };
     policy.customKinds = {ipc::CommandKind::ScheduleCycle, ipc::CommandKind::ScheduleEnable,
                           ipc::CommandKind::ScheduleDefault, ipc::CommandKind::ScheduleAdd};
-    policy.custom = [this](const ipc::CommandRequest& request) { return scheduleCommand(request); };
+    policy.custom = [this](const ipc::CommandRequest& request) {
+      auto refusal = scheduleCommand(request);
+      if (!refusal) publishSchedule();  // watchers see the change at once, not at the next beat
+      return refusal;
+    };
     return policy;
   }
 
@@ -445,31 +451,38 @@ struct CanTxAppImpl final : TxPort, Clock {
     heartbeat.addCounterSource("writers_lost", [this] { return static_cast<std::int64_t>(writersLost); });
     for (std::size_t b = 0; b < buses.size(); ++b) {
       const std::string prefix = vehicle.buses[b].name + ".";
-      heartbeat.addCounterSource(prefix + "frames_sent", [this, b] {
+      heartbeat.addStatSource(prefix + "frames_sent", [this, b] {
         return static_cast<std::int64_t>(buses[b].framesSent.load(std::memory_order_relaxed));
       });
-      heartbeat.addCounterSource(prefix + "send_failures",
-                                 [this, b] { return static_cast<std::int64_t>(buses[b].link->stats().sendFailures); });
-      heartbeat.addCounterSource(prefix + "publish_failures", [this, b] {
+      heartbeat.addStatSource(prefix + "send_failures",
+                              [this, b] { return static_cast<std::int64_t>(buses[b].link->stats().sendFailures); });
+      heartbeat.addStatSource(prefix + "publish_failures", [this, b] {
         return static_cast<std::int64_t>(buses[b].publishFailures.load(std::memory_order_relaxed));
       });
     }
     for (std::size_t s = 0; s < schedule.messages.size(); ++s) registerMessageCounters(s, scheduler->stats(s));
+    heartbeat.addBeatListener([this] { publishSchedule(); });
   }
 
-  /// tx.<Msg>.*: the message's statistics and its live settings (cycle_us, enabled, added),
-  /// which the HMI's ECU Setup shows.
+  /// The live schedule (cycle, enabled, added per message) on the SCHEDULE channel, which
+  /// the HMI's ECU Setup shows: after every beat and after every accepted schedule command.
+  void publishSchedule() {
+    ipc::TxSchedule live{.service = runtime.program(), .instance = runtime.config().instance,
+                         .pid = static_cast<std::int32_t>(::getpid()), .entries = {}};
+    live.entries.reserve(schedule.messages.size());
+    for (const ScheduledMessage& entry : schedule.messages) {
+      live.entries.push_back(ipc::ScheduleEntry{vehicle.database.messages[entry.message].name, entry.cycleNs / 1000,
+                                                entry.enabled, entry.added});
+    }
+    runtime.events().publish(live);
+  }
+
+  /// tx.<Msg>.*: the message's statistics on the STATS channel.
   void registerMessageCounters(std::size_t s, const MessageStats& stats) {
     service::HeartbeatPublisher& heartbeat = runtime.heartbeat();
     const std::string prefix = "tx." + vehicle.database.messages[schedule.messages[s].message].name + ".";
-    heartbeat.addCounterSource(prefix + "cycle_us",
-                               [this, s] { return static_cast<std::int64_t>(schedule.messages[s].cycleNs / 1000); });
-    heartbeat.addCounterSource(prefix + "enabled",
-                               [this, s] { return static_cast<std::int64_t>(schedule.messages[s].enabled); });
-    heartbeat.addCounterSource(prefix + "added",
-                               [this, s] { return static_cast<std::int64_t>(schedule.messages[s].added); });
     auto add = [&](const std::string& name, auto read) {
-      heartbeat.addCounterSource(prefix + name, [&stats, read] { return static_cast<std::int64_t>(read(stats)); });
+      heartbeat.addStatSource(prefix + name, [&stats, read] { return static_cast<std::int64_t>(read(stats)); });
     };
     add("frames", [](const MessageStats& m) { return m.frames.load(std::memory_order_relaxed); });
     add("missed", [](const MessageStats& m) { return m.missed.load(std::memory_order_relaxed); });

@@ -113,8 +113,7 @@ struct GpioAppImpl {
     add("input_bounces", counters.inputBounces);
     add("set_failures", counters.setFailures);
     for (std::size_t i = 0; i < map.lines.size(); ++i) {
-      runtime.heartbeat().addCounterSource("line." + map.lines[i].name,
-                                           [this, i] { return controller->level(i) ? 1 : 0; });
+      runtime.heartbeat().addStatSource("line." + map.lines[i].name, [this, i] { return controller->level(i) ? 1 : 0; });
     }
   }
 

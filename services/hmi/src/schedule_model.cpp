@@ -40,7 +40,7 @@ ScheduleModel::ScheduleModel(QObject* parent) : QAbstractListModel(parent) {
   build();
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::displayTick, this, &ScheduleModel::refresh);
-    connect(stack, &StackConnection::heartbeat, this, &ScheduleModel::applyHeartbeat);
+    connect(stack, &StackConnection::txSchedule, this, &ScheduleModel::applySchedule);
     connect(stack, &StackConnection::commandFinished, this, [this](qint64 id, bool accepted, const QString& text) {
       const auto it = m_pending.find(id);
       if (it == m_pending.end()) return;
@@ -112,33 +112,12 @@ void ScheduleModel::appendRows(std::vector<Row>& rows, std::size_t messageIndex,
   }
 }
 
-void ScheduleModel::applyHeartbeat(const ipc::Heartbeat& beat) {
+void ScheduleModel::applySchedule(const ipc::TxSchedule& live) {
   StackConnection* stack = StackConnection::instance();
-  if (!stack || beat.service != "vcu-can-tx") return;
-  struct Live {
-    std::optional<std::int64_t> cycleUs;
-    bool enabled{true};
-    bool added{};
-  };
-  std::map<std::string, Live> live;  // once a second: the allocation does not matter
-  for (const ipc::Counter& counter : beat.counters) {
-    const std::string_view name = counter.name;
-    if (!name.starts_with("tx.")) continue;
-    const std::size_t dot = name.rfind('.');
-    if (dot <= 3) continue;
-    const std::string message(name.substr(3, dot - 3));
-    const std::string_view field = name.substr(dot + 1);
-    if (field == "cycle_us") {
-      live[message].cycleUs = counter.value;
-    } else if (field == "enabled") {
-      live[message].enabled = counter.value != 0;
-    } else if (field == "added") {
-      live[message].added = counter.value != 0;
-    }
-  }
+  if (!stack) return;
   const dbc::Database& database = stack->config().database;
-  for (const auto& [name, settings] : live) {
-    if (!settings.cycleUs) continue;  // a can-tx before the live counters
+  for (const ipc::ScheduleEntry& settings : live.entries) {
+    const std::string& name = settings.message;
     const dbc::Message* message = database.findMessage(name);
     if (message == nullptr) continue;
     const auto messageIndex = static_cast<std::size_t>(message - database.messages.data());
@@ -152,7 +131,7 @@ void ScheduleModel::applyHeartbeat(const ipc::Heartbeat& beat) {
       for (Row& row : rows) m_rows.push_back(std::move(row));
       endInsertRows();
     }
-    const int cycleMs = static_cast<int>((*settings.cycleUs + 500) / 1000);
+    const int cycleMs = static_cast<int>((settings.cycleUs + 500) / 1000);
     for (std::size_t i = 0; i < m_rows.size(); ++i) {
       Row& row = m_rows[i];
       if (row.messageIndex != messageIndex) continue;

@@ -16,9 +16,10 @@
 namespace openvcu::hmi {
 
 /// The transmit schedule of this VCU as rows of signals with the value commanded and the
-/// override. Until vcu-can-tx's heartbeat arrives: the messages its DBC node transmits, the
-/// DBC cycle and the J1939-76 pairs of the schedule file; from then on what can-tx actually
-/// runs (its tx.<Msg>.cycle_us|enabled|added counters), including messages added at run
+/// override. Until vcu-can-tx's live schedule arrives (ipc::TxSchedule on the SCHEDULE
+/// channel): the messages its DBC node transmits, the DBC cycle and the J1939-76 pairs of
+/// the schedule file; from then on what can-tx actually runs (cycle, enabled, added per
+/// message), including messages added at run
 /// time, which get rows of their own. Edits are commands to can-tx and the owning services:
 /// setCycle (ScheduleCycle), setEnabled (ScheduleEnable), addMessage (ScheduleAdd),
 /// setDefault (ScheduleDefault), setOverride / clearOverride; each is checked here first
@@ -41,7 +42,7 @@ class ScheduleModel : public QAbstractListModel {
     OverriddenRole,
     KeyRole,
     RangeRole,
-    LiveRole,     ///< cycle and enable come from can-tx's heartbeat (else from the DBC)
+    LiveRole,     ///< cycle and enable come from can-tx's live schedule (else from the DBC)
     EnabledRole,  ///< can-tx sends the message
     AddedRole     ///< added at run time (ScheduleAdd)
   };
@@ -68,7 +69,7 @@ class ScheduleModel : public QAbstractListModel {
   /// The first row of `message`, or -1.
   Q_INVOKABLE int rowOfMessage(const QString& message) const;
   /// Applies vcu-can-tx's live schedule (tests call it directly).
-  void applyHeartbeat(const ipc::Heartbeat& beat);
+  void applySchedule(const ipc::TxSchedule& live);
  Q_SIGNALS:
   void statusChanged();
 

@@ -113,6 +113,8 @@ class StackConnection : public QObject {
   /// At display rate: models read the table here.
   void displayTick();
   void heartbeat(const openvcu::ipc::Heartbeat& beat);
+  /// vcu-can-tx's live transmit schedule, one part at a time.
+  void txSchedule(const openvcu::ipc::TxSchedule& schedule);
   void logRecord(const openvcu::ipc::LogRecord& record);
   void fsmTransition(const openvcu::ipc::FsmTransition& transition);
   void fault(const openvcu::ipc::FaultEvent& fault);

@@ -11,6 +11,8 @@
 #include <openvcu_lcm/heartbeat_t.hpp>
 #include <openvcu_lcm/log_record_t.hpp>
 #include <openvcu_lcm/signal_snapshot_t.hpp>
+#include <openvcu_lcm/stats_t.hpp>
+#include <openvcu_lcm/tx_schedule_t.hpp>
 
 // The C API, not lcm-cpp.hpp: LCM 1.3.1's member-handler subscription crashes when built
 // with -fsanitize=vptr (part of the Asan preset's -fsanitize=undefined); the C API is all we need.
@@ -21,7 +23,9 @@
 #include <array>
 #include <atomic>
 #include <climits>
+#include <cstdint>
 #include <initializer_list>
+#include <stdexcept>
 #include <vector>
 
 namespace openvcu::ipc {
@@ -52,7 +56,6 @@ static_assert(static_cast<std::int8_t>(LogLevel::Critical) == openvcu_lcm::log_r
 
 namespace {
 
-constexpr std::size_t EVENT_KIND_COUNT = 7;
 /// Messages LCM keeps per subscription until handle() takes them; beyond, it drops
 /// arrivals. LCM's default of 30 overflows when a busy service is ~10 ms late with a burst of
 /// log records; 512 small events cost nothing until they are actually queued.
@@ -168,6 +171,90 @@ Heartbeat fromLcm(const openvcu_lcm::heartbeat_t& in) {
     out.counters.push_back(Counter{in.counter_names[i], in.counter_values[i]});
   }
   return out;
+}
+
+bool toLcm(const Stats& in, openvcu_lcm::stats_t& out) {
+  if (!fitsArray(in.counters.size())) return false;
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.service = in.service;
+  out.instance = in.instance;
+  out.pid = in.pid;
+  out.part = in.part;
+  out.parts = in.parts;
+  out.num_counters = static_cast<std::int32_t>(in.counters.size());
+  out.counter_names.clear();
+  out.counter_values.clear();
+  out.counter_names.reserve(in.counters.size());
+  out.counter_values.reserve(in.counters.size());
+  for (const Counter& counter : in.counters) {
+    out.counter_names.push_back(counter.name);
+    out.counter_values.push_back(counter.value);
+  }
+  return true;
+}
+Stats fromLcm(const openvcu_lcm::stats_t& in) {
+  Stats out{in.timestamp_ns, in.service, in.instance, in.pid, in.part, in.parts, {}};
+  const std::size_t count = std::min(in.counter_names.size(), in.counter_values.size());
+  out.counters.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) out.counters.push_back(Counter{in.counter_names[i], in.counter_values[i]});
+  return out;
+}
+
+bool toLcm(const TxSchedule& in, openvcu_lcm::tx_schedule_t& out) {
+  if (!fitsArray(in.entries.size())) return false;
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.service = in.service;
+  out.instance = in.instance;
+  out.pid = in.pid;
+  out.part = in.part;
+  out.parts = in.parts;
+  out.num_messages = static_cast<std::int32_t>(in.entries.size());
+  out.messages.clear();
+  out.cycle_us.clear();
+  out.enabled.clear();
+  out.added.clear();
+  for (const ScheduleEntry& entry : in.entries) {
+    out.messages.push_back(entry.message);
+    out.cycle_us.push_back(entry.cycleUs);
+    out.enabled.push_back(entry.enabled ? 1 : 0);
+    out.added.push_back(entry.added ? 1 : 0);
+  }
+  return true;
+}
+TxSchedule fromLcm(const openvcu_lcm::tx_schedule_t& in) {
+  TxSchedule out{in.timestamp_ns, in.service, in.instance, in.pid, in.part, in.parts, {}};
+  const std::size_t count = std::min({in.messages.size(), in.cycle_us.size(), in.enabled.size(), in.added.size()});
+  out.entries.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    out.entries.push_back(ScheduleEntry{in.messages[i], in.cycle_us[i], in.enabled[i] != 0, in.added[i] != 0});
+  }
+  return out;
+}
+
+// ---- datagram-sized parts ------------------------------------------------------------------
+// LCM encodes a string as int32 length (with the NUL), the bytes and the NUL.
+constexpr std::size_t encodedStringSize(const std::string& text) noexcept { return 4 + text.size() + 1; }
+std::size_t encodedItemSize(const Counter& counter) noexcept { return encodedStringSize(counter.name) + 8; }
+std::size_t encodedItemSize(const ScheduleEntry& entry) noexcept {
+  return encodedStringSize(entry.message) + 8 + 1 + 1;
+}
+
+/// Cuts `items` into runs whose encoded message (`fixedSize` plus the items) stays within
+/// `limit`; an item too large for any datagram gets a run of its own (LCM fragments it).
+/// Returns the start index of each run (at least one run, possibly empty).
+template <typename Item>
+std::vector<std::size_t> splitPoints(const std::vector<Item>& items, std::size_t fixedSize, std::size_t limit) {
+  std::vector<std::size_t> starts{0};
+  std::size_t size = fixedSize;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const std::size_t item = encodedItemSize(items[i]);
+    if (size + item > limit && size > fixedSize) {
+      starts.push_back(i);
+      size = fixedSize;
+    }
+    size += item;
+  }
+  return starts;
 }
 
 bool toLcm(const SignalSnapshot& in, openvcu_lcm::signal_snapshot_t& out) {
@@ -303,6 +390,17 @@ bool fits(const openvcu_lcm::signal_snapshot_t*, const void* data, std::size_t s
   using F = Field;
   return fitsLayout(data, size, {F::I64, F::Str, F::Count, F::StrArray, F::F64Array, F::ByteArray});
 }
+bool fits(const openvcu_lcm::stats_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size,
+                    {F::I64, F::Str, F::Str, F::I32, F::I32, F::I32, F::Count, F::StrArray, F::I64Array});
+}
+bool fits(const openvcu_lcm::tx_schedule_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size,
+                    {F::I64, F::Str, F::Str, F::I32, F::I32, F::I32, F::Count, F::StrArray, F::I64Array,
+                     F::ByteArray, F::ByteArray});
+}
 
 /// The layout check for LcmType.
 template <typename LcmType>
@@ -358,6 +456,8 @@ bool fitsEventLayout(EventKind kind, const void* data, std::size_t size) noexcep
     case EventKind::Log: return fitsType<openvcu_lcm::log_record_t>(data, size);
     case EventKind::Heartbeat: return fitsType<openvcu_lcm::heartbeat_t>(data, size);
     case EventKind::Snapshot: return fitsType<openvcu_lcm::signal_snapshot_t>(data, size);
+    case EventKind::Stats: return fitsType<openvcu_lcm::stats_t>(data, size);
+    case EventKind::Schedule: return fitsType<openvcu_lcm::tx_schedule_t>(data, size);
   }
   return false;
 }
@@ -417,6 +517,37 @@ struct EventBusImpl {
         }
       }
     } catch (...) {  // bad_alloc while encoding: count it like any failed send
+    }
+    ++publishFailures;
+    return false;
+  }
+
+  /// Publishes `whole` as parts of one datagram each (splitPoints): every part carries the
+  /// same timestamp, its number and the number of parts. false if any part failed.
+  template <typename LcmType, typename Plain, typename Item>
+  bool publishParts(EventKind kind, const Plain& whole, std::vector<Item> Plain::*items) noexcept {
+    try {
+      const std::vector<Item>& all = whole.*items;
+      Plain part = whole;
+      (part.*items).clear();
+      part.timestampNs = stampOrNow(whole.timestampNs);
+      part.part = 0;
+      part.parts = 1;
+      LcmType empty;
+      if (!toLcm(part, empty)) throw std::length_error("parts");
+      const std::vector<std::size_t> starts =
+          splitPoints(all, static_cast<std::size_t>(empty.getEncodedSize()), datagramPayloadLimit(channel(kind)));
+      part.parts = static_cast<std::int32_t>(starts.size());
+      bool ok = true;
+      for (std::size_t k = 0; k < starts.size(); ++k) {
+        const std::size_t end = k + 1 < starts.size() ? starts[k + 1] : all.size();
+        part.part = static_cast<std::int32_t>(k);
+        (part.*items).assign(all.begin() + static_cast<std::ptrdiff_t>(starts[k]),
+                             all.begin() + static_cast<std::ptrdiff_t>(end));
+        ok = publish<LcmType>(kind, part) && ok;
+      }
+      return ok;
+    } catch (...) {  // bad_alloc while copying: count it like any failed send
     }
     ++publishFailures;
     return false;
@@ -506,6 +637,32 @@ Result<Subscription> EventBus::onFault(std::function<void(const FaultEvent&)> ca
 Result<Subscription> EventBus::onLog(std::function<void(const LogRecord&)> callback) {
   return m_impl->subscribe<openvcu_lcm::log_record_t>(EventKind::Log, std::move(callback));
 }
+bool EventBus::publish(const Stats& message) noexcept {
+  return m_impl->publishParts<openvcu_lcm::stats_t>(EventKind::Stats, message, &Stats::counters);
+}
+bool EventBus::publish(const TxSchedule& message) noexcept {
+  return m_impl->publishParts<openvcu_lcm::tx_schedule_t>(EventKind::Schedule, message, &TxSchedule::entries);
+}
+Result<Subscription> EventBus::onStats(std::function<void(const Stats&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::stats_t>(EventKind::Stats, std::move(callback));
+}
+Result<Subscription> EventBus::onSchedule(std::function<void(const TxSchedule&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::tx_schedule_t>(EventKind::Schedule, std::move(callback));
+}
+
+namespace {
+template <typename LcmType, typename Plain>
+std::size_t encodedSizeOf(const Plain& message) {
+  LcmType encoded;
+  if (!toLcm(message, encoded)) return SIZE_MAX;
+  return static_cast<std::size_t>(encoded.getEncodedSize());
+}
+}  // namespace
+
+std::size_t encodedSize(const Heartbeat& message) { return encodedSizeOf<openvcu_lcm::heartbeat_t>(message); }
+std::size_t encodedSize(const Stats& message) { return encodedSizeOf<openvcu_lcm::stats_t>(message); }
+std::size_t encodedSize(const TxSchedule& message) { return encodedSizeOf<openvcu_lcm::tx_schedule_t>(message); }
+
 Result<Subscription> EventBus::onHeartbeat(std::function<void(const Heartbeat&)> callback) {
   return m_impl->subscribe<openvcu_lcm::heartbeat_t>(EventKind::Heartbeat, std::move(callback));
 }

@@ -38,6 +38,10 @@ std::string_view channelSuffix(EventKind kind) noexcept {
       return "HEARTBEAT";
     case EventKind::Snapshot:
       return "SNAPSHOT";
+    case EventKind::Stats:
+      return "STATS";
+    case EventKind::Schedule:
+      return "SCHEDULE";
   }
   return "UNKNOWN";
 }

@@ -255,20 +255,13 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   CHECK(canTx.requests()[1].kind == ipc::CommandKind::ScheduleEnable);
   CHECK(canTx.requests()[1].value == 0);
 
-  // can-tx's heartbeat: CCVS1 at 50 ms and disabled, HVESSD2 added at 40 ms
+  // can-tx's live schedule: CCVS1 at 50 ms and disabled, HVESSD2 added at 40 ms
   const int before = sut.rowCount();
-  stack->events()->publish(ipc::Heartbeat{.service = "vcu-can-tx",
-                                          .instance = "x",
-                                          .pid = 1,
-                                          .uptimeMs = 1000,
-                                          .counters = {{"tx.CCVS1_PGN65265.cycle_us", 50'000},
-                                                       {"tx.CCVS1_PGN65265.enabled", 0},
-                                                       {"tx.CCVS1_PGN65265.added", 0},
-                                                       {"tx.CCVS1_PGN65265.frames", 7},
-                                                       {"tx.HVESSD2_PGN61585.cycle_us", 40'000},
-                                                       {"tx.HVESSD2_PGN61585.enabled", 1},
-                                                       {"tx.HVESSD2_PGN61585.added", 1}},
-                                          .status = "ready"});
+  stack->events()->publish(ipc::TxSchedule{.service = "vcu-can-tx",
+                                           .instance = "x",
+                                           .pid = 1,
+                                           .entries = {{"CCVS1_PGN65265", 50'000, false, false},
+                                                       {"HVESSD2_PGN61585", 40'000, true, true}}});
   deliver(*stack);
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::LiveRole).toBool());
@@ -280,9 +273,9 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   CHECK(sut.data(sut.index(added), ScheduleModel::CycleRole).toInt() == 40);
   CHECK(sut.data(sut.index(added), ScheduleModel::SignalRole).toString() == "HS_FastUpdSOC");
   CHECK_FALSE(sut.candidates("hvessd").contains("HVESSD2_PGN61585"));
-  // another service's counters of the same name change nothing
+  // heartbeat counters of the old names change nothing: the schedule has its own channel
   stack->events()->publish(ipc::Heartbeat{
-      .service = "vcu-fsm", .instance = "x", .pid = 2, .counters = {{"tx.CCVS1_PGN65265.cycle_us", 7'000}}});
+      .service = "vcu-can-tx", .instance = "x", .pid = 1, .counters = {{"tx.CCVS1_PGN65265.cycle_us", 7'000}}});
   deliver(*stack);
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
 }

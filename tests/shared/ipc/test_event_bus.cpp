@@ -51,6 +51,64 @@ TEST_CASE("channel names are OPENVCU_<INSTANCE>_<KIND> with the instance in uppe
   CHECK(ipc::channelName("hhea", ipc::EventKind::Fault) == "OPENVCU_HHEA_FAULT");
   CHECK(ipc::channelName("hhea", ipc::EventKind::Log) == "OPENVCU_HHEA_LOG");
   CHECK(ipc::channelName("hhea", ipc::EventKind::Snapshot) == "OPENVCU_HHEA_SNAPSHOT");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Stats) == "OPENVCU_HHEA_STATS");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Schedule) == "OPENVCU_HHEA_SCHEDULE");
+}
+
+TEST_CASE("statistics and the transmit schedule go out in parts that each fit one datagram (#19)") {
+  ipc::EventBus sut = openMemq("hhea");
+  // 400 counters of 46-character names: about 24 kB, LCM would send it in 18 fragments
+  ipc::Stats whole{.timestampNs = SOME_TIME_NS, .service = "vcu-can-rx", .instance = "hhea", .pid = 42, .part = 0,
+                   .parts = 0, .counters = {}};
+  for (int i = 0; i < 400; ++i) {
+    whole.counters.push_back(ipc::Counter{"rx.Message_" + std::to_string(1000 + i) + "_PGN61234.max_period_us", i});
+  }
+  REQUIRE(ipc::encodedSize(whole) > 10 * ipc::LCM_DATAGRAM_BYTES);
+  std::vector<ipc::Stats> parts;
+  auto subscription = sut.onStats([&](const ipc::Stats& part) { parts.push_back(part); });
+  REQUIRE(subscription.ok());
+  REQUIRE(sut.publish(whole));
+  sut.handleAll();
+  REQUIRE(parts.size() > 10);
+  std::vector<ipc::Counter> joined;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    CHECK(parts[k].part == static_cast<std::int32_t>(k));
+    CHECK(parts[k].parts == static_cast<std::int32_t>(parts.size()));
+    CHECK(parts[k].timestampNs == SOME_TIME_NS);
+    CHECK(parts[k].service == "vcu-can-rx");
+    CHECK(parts[k].pid == 42);
+    CHECK(ipc::encodedSize(parts[k]) <= ipc::datagramPayloadLimit(sut.channel(ipc::EventKind::Stats)));
+    joined.insert(joined.end(), parts[k].counters.begin(), parts[k].counters.end());
+  }
+  CHECK(joined == whole.counters);
+
+  ipc::TxSchedule schedule{.timestampNs = SOME_TIME_NS, .service = "vcu-can-tx", .instance = "hhea", .pid = 43,
+                           .part = 0, .parts = 0, .entries = {}};
+  for (int i = 0; i < 200; ++i) {
+    schedule.entries.push_back(ipc::ScheduleEntry{"Message_" + std::to_string(i), 1000 * i, i % 2 == 0, i % 3 == 0});
+  }
+  std::vector<ipc::TxSchedule> scheduleParts;
+  auto scheduleSubscription = sut.onSchedule([&](const ipc::TxSchedule& part) { scheduleParts.push_back(part); });
+  REQUIRE(scheduleSubscription.ok());
+  REQUIRE(sut.publish(schedule));
+  sut.handleAll();
+  REQUIRE(scheduleParts.size() > 1);
+  std::vector<ipc::ScheduleEntry> entries;
+  for (const ipc::TxSchedule& part : scheduleParts) {
+    CHECK(part.parts == static_cast<std::int32_t>(scheduleParts.size()));
+    CHECK(ipc::encodedSize(part) <= ipc::datagramPayloadLimit(sut.channel(ipc::EventKind::Schedule)));
+    entries.insert(entries.end(), part.entries.begin(), part.entries.end());
+  }
+  CHECK(entries == schedule.entries);
+
+  // a small message is one part; an empty one still tells "0 counters" in one part
+  parts.clear();
+  REQUIRE(sut.publish(ipc::Stats{.timestampNs = SOME_TIME_NS, .service = "s", .instance = "hhea", .pid = 1, .part = 7,
+                                 .parts = 9, .counters = {{"vehicle.frames", 5}}}));
+  sut.handleAll();
+  REQUIRE(parts.size() == 1);
+  CHECK(parts[0].part == 0);
+  CHECK(parts[0].parts == 1);
 }
 
 TEST_CASE("frame topics name service openvcu, instance <instance>.<bus> and event rx/tx/send") {

@@ -3,6 +3,7 @@
 
 #include <doctest/doctest.h>
 #include <unistd.h>
+#include <string>
 
 #include "openvcu/service/heartbeat.hpp"
 
@@ -59,4 +60,47 @@ TEST_CASE("a default counter reference counts nothing and reads 0") {
 
 TEST_CASE("the heartbeat slot of a service is internal.service.<name>.heartbeat") {
   CHECK(service::heartbeatKey("can-rx") == "internal.service.can-rx.heartbeat");
+}
+
+TEST_CASE("a heartbeat always fits one datagram: what does not fit goes to the statistics (#19)") {
+  service::HeartbeatPublisher sut("vcu-can-rx", "hhea", nullptr, nullptr, std::nullopt, 7);
+  sut.addCounter("frames_rx").set(9);
+  for (int i = 0; i < 150; ++i) {
+    sut.addCounterSource("service_counter_with_a_long_name_" + std::to_string(i), [i] { return std::int64_t{i}; });
+  }
+  sut.addStatSource("rx.EEC1_PGN61444.frames", [] { return std::int64_t{77}; });
+  // a status of 300 bytes of two-byte characters: cut at a character boundary
+  std::string status;
+  for (int i = 0; i < 150; ++i) status += "\xc3\xa4";
+  sut.setStatus(status);
+
+  const openvcu::ipc::Heartbeat heartbeat = sut.message();
+  const std::size_t limit =
+      openvcu::ipc::datagramPayloadLimit(openvcu::ipc::channelName("hhea", openvcu::ipc::EventKind::Heartbeat));
+  CHECK(openvcu::ipc::encodedSize(heartbeat) <= limit);
+  CHECK(heartbeat.status.size() <= service::HeartbeatPublisher::MAX_STATUS_BYTES);
+  CHECK(heartbeat.status.ends_with("..."));
+  CHECK(heartbeat.status.size() % 2 == 1);  // whole two-byte characters, then "..."
+  REQUIRE(heartbeat.counters.size() > 10);
+  REQUIRE(heartbeat.counters.size() < 151);
+  CHECK(heartbeat.counters[0] == openvcu::ipc::Counter{"frames_rx", 9});
+
+  const openvcu::ipc::Stats stats = sut.statsMessage();
+  REQUIRE(!stats.counters.empty());
+  CHECK(stats.counters[0] == openvcu::ipc::Counter{"rx.EEC1_PGN61444.frames", 77});
+  CHECK(stats.service == "vcu-can-rx");
+  CHECK(stats.pid == heartbeat.pid);
+  // every counter once: in the heartbeat while it fits, in the statistics after
+  CHECK(heartbeat.counters.size() + stats.counters.size() == 1 + 150 + 1);
+  const std::size_t firstMoved = heartbeat.counters.size() - 1;  // sources after frames_rx
+  CHECK(stats.counters[1].name == "service_counter_with_a_long_name_" + std::to_string(firstMoved));
+  CHECK(stats.counters.back().name == "service_counter_with_a_long_name_149");
+}
+
+TEST_CASE("a small heartbeat keeps every counter and sends no statistics") {
+  service::HeartbeatPublisher sut("vcu-fsm", "hhea", nullptr, nullptr, std::nullopt, 7);
+  sut.addCounter("transitions");
+  sut.addCounterSource("commands_accepted", [] { return std::int64_t{1}; });
+  CHECK(sut.message().counters.size() == 2);
+  CHECK(sut.statsMessage().counters.empty());
 }

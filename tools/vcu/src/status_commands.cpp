@@ -32,10 +32,13 @@ constexpr const char* STATUS_FOOTER =
     "seconds (default 1.5; services beat once a second) and prints one line per service\n"
     "process heard: program, pid, uptime, age of its last heartbeat, its status line\n"
     "('starting', 'ready', 'stopping (SIGTERM)', or its own) and its counters.\n"
+    "--stats adds each process's per-bus and per-message statistics (channel\n"
+    "OPENVCU_<INSTANCE>_STATS: 'vehicle.frames_rx', 'rx.EEC1.period_us', 'tx.CCVS1.missed').\n"
     "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
     "\n"
     "Example:\n"
     "  vcu status --config config/hhea/vehicle.json --wait 3\n"
+    "  vcu status --stats | tr ' ' '\\n' | grep '^tx\\.'\n"
     "Exit: 0 at least one service heard, 1 none heard or configuration error, 2 usage\n"
     "error.\n";
 
@@ -103,6 +106,7 @@ void addStatus(CLI::App& app, CommandContext& context) {
   status->add_option("-w,--wait", options->waitSeconds, "seconds to listen (default 1.5)")
       ->check(CLI::PositiveNumber)
       ->option_text("SECONDS");
+  status->add_flag("--stats", options->stats, "also the per-bus and per-message statistics");
   addStackOptions(*status, options->stack);
   status->callback([options, &context] { context.exitCode = runStatus(*options, context.streams); });
 }
@@ -139,6 +143,18 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
     reportError(streams.err, subscribed.error().message);
     return ExitCode::Failure;
   }
+  // (program, pid) -> name -> value, merged from the parts as they come
+  std::map<std::pair<std::string, std::int32_t>, std::map<std::string, std::int64_t>> stats;
+  if (options.stats) {
+    auto statsSubscribed = events.onStats([&](const ipc::Stats& part) {
+      auto& values = stats[{part.service, part.pid}];
+      for (const ipc::Counter& counter : part.counters) values[counter.name] = counter.value;
+    });
+    if (!statsSubscribed) {
+      reportError(streams.err, statsSubscribed.error().message);
+      return ExitCode::Failure;
+    }
+  }
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
                                                                std::chrono::duration<double>(options.waitSeconds));
   while (true) {
@@ -155,9 +171,13 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
   const std::int64_t now = realtimeNowNs();
   TextTable table({"SERVICE", "PID", "UPTIME", "LAST BEAT", "STATUS", "COUNTERS"});
   for (const auto& [key, heartbeat] : latest) {
+    std::vector<ipc::Counter> counters = heartbeat.counters;
+    if (const auto found = stats.find(key); found != stats.end()) {
+      for (const auto& [name, value] : found->second) counters.push_back(ipc::Counter{name, value});
+    }
     table.addRow({heartbeat.service, std::to_string(heartbeat.pid), formatDuration(heartbeat.uptimeMs * 1'000'000),
                   formatDuration(std::max<std::int64_t>(0, now - heartbeat.timestampNs)) + " ago",
-                  heartbeat.status.empty() ? "-" : heartbeat.status, counterText(heartbeat.counters)});
+                  heartbeat.status.empty() ? "-" : heartbeat.status, counterText(counters)});
   }
   std::string out;
   table.appendTo(out);

@@ -21,6 +21,7 @@ inline constexpr double DEFAULT_STATUS_WAIT_SECONDS = 1.5;
 struct StatusOptions {
   StackOptions stack;
   double waitSeconds{DEFAULT_STATUS_WAIT_SECONDS};
+  bool stats{};  ///< also the per-bus and per-message statistics (STATS channel)
 };
 
 struct SpyOptions {

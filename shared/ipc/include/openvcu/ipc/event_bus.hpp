@@ -71,6 +71,9 @@ class EventBus {
   bool publish(const LogRecord& message) noexcept;
   bool publish(const Heartbeat& message) noexcept;
   bool publish(const SignalSnapshot& message) noexcept;
+  /// Sent as parts of one datagram each (events.hpp); `part` and `parts` are set here.
+  bool publish(const Stats& message) noexcept;
+  bool publish(const TxSchedule& message) noexcept;
 
   /// Calls `callback` from handle() for each message on this instance's channel.
   /// A message that does not decode is dropped and counted (decodeErrors()); an exception
@@ -81,6 +84,9 @@ class EventBus {
   Result<Subscription> onLog(std::function<void(const LogRecord&)> callback);
   Result<Subscription> onHeartbeat(std::function<void(const Heartbeat&)> callback);
   Result<Subscription> onSnapshot(std::function<void(const SignalSnapshot&)> callback);
+  /// Called once per part (Stats::part of Stats::parts).
+  Result<Subscription> onStats(std::function<void(const Stats&)> callback);
+  Result<Subscription> onSchedule(std::function<void(const TxSchedule&)> callback);
   void unsubscribe(Subscription subscription) noexcept;
 
   /// Readable when a message waits: for poll/epoll or Waiter::attachFd. -1 on failure.

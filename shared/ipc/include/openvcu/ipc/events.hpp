@@ -11,10 +11,18 @@
 //   OPENVCU_<INSTANCE>_LOG        LogRecord        openvcu_lcm.log_record_t
 //   OPENVCU_<INSTANCE>_HEARTBEAT  Heartbeat        openvcu_lcm.heartbeat_t
 //   OPENVCU_<INSTANCE>_SNAPSHOT   SignalSnapshot   openvcu_lcm.signal_snapshot_t
+//   OPENVCU_<INSTANCE>_STATS      Stats            openvcu_lcm.stats_t        (in datagram-sized parts)
+//   OPENVCU_<INSTANCE>_SCHEDULE   TxSchedule       openvcu_lcm.tx_schedule_t  (in datagram-sized parts)
+//
+// A heartbeat always fits one datagram (LCM_DATAGRAM_BYTES): per-bus and per-message
+// statistics go to STATS, can-tx's live schedule to SCHEDULE, each split into parts that
+// fit one datagram. LCM fragments larger messages, and a lost fragment loses the whole
+// message: a heartbeat of hundreds of counters kept a restarted service unseen for seconds.
 //
 // Timestamps are CLOCK_REALTIME nanoseconds since the Unix epoch; EventBus stamps the
 // current time into a 0 timestampNs when publishing.
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -26,9 +34,20 @@ namespace openvcu::ipc {
 /// lcm-spy and lcm-logger without arguments see the stack.
 inline constexpr std::string_view DEFAULT_EVENT_URL = "udpm://239.255.76.67:7667?ttl=0";
 
-enum class EventKind : std::uint8_t { Command, Ack, Fsm, Fault, Log, Heartbeat, Snapshot };
+enum class EventKind : std::uint8_t { Command, Ack, Fsm, Fault, Log, Heartbeat, Snapshot, Stats, Schedule };
+inline constexpr std::size_t EVENT_KIND_COUNT = 9;
 
-/// "COMMAND", "ACK", "FSM", "FAULT", "LOG", "HEARTBEAT", "SNAPSHOT".
+/// LCM 1.3 sends a message of at most this many bytes (its 8-byte header, the channel name
+/// with its NUL, the payload) as one UDP datagram, and fragments anything larger.
+inline constexpr std::size_t LCM_DATAGRAM_BYTES = 1400;
+
+/// The largest encoded payload (with the type's 8-byte fingerprint) that goes out on
+/// `channel` as one datagram.
+constexpr std::size_t datagramPayloadLimit(std::string_view channel) noexcept {
+  return LCM_DATAGRAM_BYTES - 8 - (channel.size() + 1);
+}
+
+/// "COMMAND", "ACK", "FSM", "FAULT", "LOG", "HEARTBEAT", "SNAPSHOT", "STATS", "SCHEDULE".
 std::string_view channelSuffix(EventKind kind) noexcept;
 
 /// "OPENVCU_HHEA_HEARTBEAT" for ("hhea", EventKind::Heartbeat). `instance` must satisfy
@@ -131,6 +150,47 @@ struct Heartbeat {
   std::string status;  ///< one line: "ok", "bus vehicle: bus-off", ...
   bool operator==(const Heartbeat&) const = default;
 };
+
+/// Per-bus and per-message statistics of one service (names like "vehicle.frames_rx",
+/// "rx.EEC1.period_us"). EventBus::publish splits it into parts of one datagram each;
+/// a subscriber gets the parts one by one (`part` of `parts`, same timestampNs).
+struct Stats {
+  std::int64_t timestampNs{};
+  std::string service;
+  std::string instance;
+  std::int32_t pid{};
+  std::int32_t part{};   ///< set by publish
+  std::int32_t parts{};  ///< set by publish
+  std::vector<Counter> counters;
+  bool operator==(const Stats&) const = default;
+};
+
+/// One message of can-tx's live schedule.
+struct ScheduleEntry {
+  std::string message;  ///< DBC message name
+  std::int64_t cycleUs{};
+  bool enabled{true};
+  bool added{};  ///< added at run time, not from schedule.json
+  bool operator==(const ScheduleEntry&) const = default;
+};
+
+/// vcu-can-tx's live transmit schedule; split into parts like Stats.
+struct TxSchedule {
+  std::int64_t timestampNs{};
+  std::string service;
+  std::string instance;
+  std::int32_t pid{};
+  std::int32_t part{};
+  std::int32_t parts{};
+  std::vector<ScheduleEntry> entries;
+  bool operator==(const TxSchedule&) const = default;
+};
+
+/// Encoded size in bytes of the LCM payload (with the 8-byte fingerprint) of a message,
+/// as EventBus sends it; compare with datagramPayloadLimit().
+std::size_t encodedSize(const Heartbeat& message);
+std::size_t encodedSize(const Stats& message);
+std::size_t encodedSize(const TxSchedule& message);
 
 /// One signal in a snapshot.
 struct SignalValue {

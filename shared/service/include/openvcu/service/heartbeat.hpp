@@ -10,9 +10,16 @@
 //     on any received signal. The count continues from the table's value after a restart,
 //     so a watcher never sees it go backwards (docs/design/service-runtime.md).
 //
+//   - LCM (OPENVCU_<INSTANCE>_STATS), right after the heartbeat: ipc::Stats with the
+//     per-bus and per-message statistics the service registered with addStatSource
+//     ("vehicle.frames_rx", "rx.EEC1.period_us"), in parts of one datagram each. The
+//     heartbeat itself always fits one datagram (ipc::LCM_DATAGRAM_BYTES): its status is
+//     cut to MAX_STATUS_BYTES and counters that do not fit move to the stats message.
+//
 //   service::CounterRef framesRx = heartbeat.addCounter("frames_rx");
 //   framesRx.increment();                       // per frame: one add, no allocation
 //   heartbeat.addCounterSource("event_decode_errors", [&] { return std::int64_t(events.decodeErrors()); });
+//   heartbeat.addStatSource("rx.EEC1.frames", [&] { return std::int64_t(counters.frames); });
 
 #include <chrono>
 #include <cstdint>
@@ -65,11 +72,23 @@ class HeartbeatPublisher {
   /// A counter read at each beat from elsewhere (e.g. a library's own count).
   void addCounterSource(std::string name, std::function<std::int64_t()> read);
 
+  /// A per-bus or per-message statistic read at each beat and sent on the STATS channel.
+  void addStatSource(std::string name, std::function<std::int64_t()> read);
+  /// Called after each beat (e.g. can-tx publishes its live schedule with it).
+  void addBeatListener(std::function<void()> listener);
+
+  /// The longest status a heartbeat carries (bytes; a longer one is cut at a UTF-8
+  /// character boundary and ends in "...").
+  static constexpr std::size_t MAX_STATUS_BYTES = 200;
+
   void setStatus(std::string status);
   [[nodiscard]] const std::string& status() const noexcept { return m_status; }
 
-  /// The message the next beat publishes (tests, and `beat` itself).
+  /// The message the next beat publishes (tests, and `beat` itself): fits one datagram.
   [[nodiscard]] ipc::Heartbeat message() const;
+  /// The statistics the next beat publishes: the stat sources, then the counters that did
+  /// not fit the heartbeat. Empty counters: nothing is sent.
+  [[nodiscard]] ipc::Stats statsMessage() const;
   /// Publishes one heartbeat on the bus and advances the table counter.
   void beat();
   /// Beats published by this process.
@@ -80,6 +99,9 @@ class HeartbeatPublisher {
     std::string name;
     std::function<std::int64_t()> read;
   };
+  /// How many counters (m_counters, then m_sources) fit after a heartbeat of `fixedSize`
+  /// encoded bytes without counters.
+  [[nodiscard]] std::size_t countersInHeartbeat(std::size_t fixedSize) const noexcept;
   std::string m_program;
   std::string m_instance;
   ipc::EventBus* m_events;
@@ -88,6 +110,9 @@ class HeartbeatPublisher {
   signals::WriterId m_writer;
   std::deque<std::pair<std::string, std::int64_t>> m_counters;  // deque: stable addresses
   std::vector<Source> m_sources;
+  std::vector<Source> m_statSources;
+  std::vector<std::function<void()>> m_beatListeners;
+  std::size_t m_payloadLimit;  // the heartbeat channel's one-datagram payload
   std::string m_status{"starting"};
   std::chrono::steady_clock::time_point m_start;
   std::uint64_t m_beats{};
