@@ -94,7 +94,7 @@ switches_of() { echo "${1##* }"; }
 
 # The latest heartbeat counters of vcu-can-rx as "name=value" words (one per line).
 heartbeat_counters() {
-  "$vcu" status --config "$config" --wait 1.2 2>/dev/null | grep -E '^vcu-can-rx ' | tr ' ' '\n' | grep '=' || true
+  "$vcu" status --config "$config" --wait 1.2 --stats 2>/dev/null | grep -E '^vcu-can-rx ' | tr ' ' '\n' | grep '=' || true
 }
 
 # counter WORDS BUS NAME -> value (0 when absent)

@@ -27,7 +27,7 @@
 #      for the causes of late frames: its page faults, the hypervisor's steal time and how
 #      busy each CPU was (all processes, /proc/stat) over the window, and the scheduling
 #      class of each of its threads;
-#   7. can-tx's own statistics from its heartbeat (`vcu status`): tx.<Msg>.period_err_* and
+#   7. can-tx's own statistics (`vcu status --stats`): tx.<Msg>.period_err_* and
 #      delta_err_* (since can-tx started, so they include the time before the window).
 # LISTENER_ARGS: more options for bench_tx_listener, e.g. "--late-events 100" or
 # "--dump /work/tx.csv" (a path outside /tmp: the sandbox's /tmp is private).
@@ -134,7 +134,7 @@ percent() { awk -v n="$1" -v d="$2" 'BEGIN { printf "%.3f", (d > 0 ? 100 * n / d
 
 # The latest heartbeat counters of vcu-can-tx as "name=value" words (one per line).
 heartbeat_counters() {
-  "$vcu" status --config "$config" --wait 1.2 2>/dev/null | grep -E '^vcu-can-tx ' | tr ' ' '\n' | grep '=' || true
+  "$vcu" status --config "$config" --wait 1.2 --stats 2>/dev/null | grep -E '^vcu-can-tx ' | tr ' ' '\n' | grep '=' || true
 }
 # counter WORDS NAME -> value (0 when absent)
 counter() {
