@@ -9,12 +9,13 @@
 
 #include <memory>
 
+#include "openvcu/config/services.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/service/service.hpp"
 
 namespace openvcu::canrx {
 
-inline constexpr signals::WriterId CAN_RX_WRITER = 1;
+inline constexpr signals::WriterId CAN_RX_WRITER = config::writerOf(config::ServiceId::CanRx);
 
 struct CanRxAppImpl;
 

@@ -11,11 +11,12 @@
 #include <memory>
 
 #include "openvcu/core/result.hpp"
+#include "openvcu/config/services.hpp"
 #include "openvcu/service/service.hpp"
 
 namespace openvcu::ecusim {
 
-inline constexpr signals::WriterId ECU_SIM_WRITER = 6;
+inline constexpr signals::WriterId ECU_SIM_WRITER = config::writerOf(config::ServiceId::EcuSim);
 
 struct EcuSimAppImpl;
 

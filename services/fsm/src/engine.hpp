@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "machine.hpp"
+#include "openvcu/config/services.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/ipc/events.hpp"
 #include "openvcu/signals/catalog.hpp"
@@ -30,7 +31,7 @@
 namespace openvcu::fsm {
 
 /// vcu-fsm's writer id in the signal table.
-inline constexpr signals::WriterId FSM_WRITER = 3;
+inline constexpr signals::WriterId FSM_WRITER = config::writerOf(config::ServiceId::Fsm);
 /// Transitions taken in one step before the loop guard stops it and raises "fsm_loop". The
 /// stopped machine evaluates again only when one of its state's signals changes or one of
 /// its deadlines passes (never because of its own writes), so a machine that does not settle

@@ -27,10 +27,11 @@
 #include <vector>
 
 #include "chip.hpp"
+#include "openvcu/config/services.hpp"
 
 namespace openvcu::gpio {
 
-inline constexpr signals::WriterId GPIO_WRITER = 4;
+inline constexpr signals::WriterId GPIO_WRITER = config::writerOf(config::ServiceId::Gpio);
 inline constexpr std::int64_t NO_DEADLINE = std::numeric_limits<std::int64_t>::max();
 /// After a failed set(), the next attempt comes this much later (no retry storm).
 inline constexpr std::int64_t RETRY_NS = 1'000'000'000;

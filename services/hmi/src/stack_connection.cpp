@@ -18,8 +18,8 @@ StackConnection* g_instance = nullptr;
 constexpr const char* ISSUER = "vcu-hmi";
 /// An operator command not answered within this time is shown as "no answer".
 constexpr std::int64_t ACK_TIMEOUT_NS = 2'000'000'000;
-/// The HMI's writer id (docs/design/service-runtime.md: position in config::SERVICES + 1).
-constexpr std::uint16_t HMI_WRITER = 5;
+/// The HMI's writer id (config/services.hpp).
+constexpr signals::WriterId HMI_WRITER = config::writerOf(config::ServiceId::Hmi);
 
 }  // namespace
 

@@ -58,6 +58,14 @@ Result<std::unique_ptr<Service>> Service::open(ServiceInfo info, ServiceOptions 
 }
 
 Status Service::start() {
+  // The writer id is part of the contract (config/services.hpp): a known service with
+  // another id would make its table writes look like someone else's.
+  if (const config::ServiceEntry* known = config::findService(m_info.name);
+      known != nullptr && known->writer != m_info.writerId) {
+    return Error{"service '" + m_info.name + "' has writer id " + std::to_string(m_info.writerId) +
+                 ", config::SERVICES gives it " + std::to_string(known->writer)};
+  }
+  if (m_info.writerId == 0) return Error{"service '" + m_info.name + "' has writer id 0 (reserved for 'never written')"};
   std::vector<Error> warnings;
   auto configResult = config::loadVehicleConfig(m_options.configPath, &warnings);
   if (!configResult) return configResult.error();

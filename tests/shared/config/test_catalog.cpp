@@ -3,6 +3,9 @@
 
 #include <doctest/doctest.h>
 
+#include <set>
+#include <string_view>
+
 using namespace openvcu;
 using namespace openvcu::config;
 using openvcu::test::CONFIG_DATA_DIR;
@@ -50,4 +53,21 @@ TEST_CASE("the HHEA catalog holds every decodable signal of its DBC") {
   REQUIRE_MESSAGE(sut.ok(), (sut.ok() ? "" : sut.error().toString()));
   CHECK(sut->indexOf("VIC.HVESSD2_PGN61585.HS_FastUpdSOC").has_value());
   CHECK(sut->indexOf("internal.operator.StartStop").has_value());
+}
+
+TEST_CASE("the services of a stack have unique names and writer ids, found both ways (#20)") {
+  std::set<std::string_view> names;
+  std::set<openvcu::signals::WriterId> writers;
+  for (const config::ServiceEntry& entry : config::SERVICES) {
+    CHECK(names.insert(entry.name).second);
+    CHECK(writers.insert(entry.writer).second);
+    CHECK(entry.writer > 0);
+    CHECK(entry.writer < 200);  // 200 and up: tools and tests
+    CHECK(&config::serviceEntry(entry.id) == &entry);
+    CHECK(config::serviceOfWriter(entry.writer) == entry.name);
+    CHECK(config::findService(entry.name) == &entry);
+  }
+  CHECK(config::writerOf(config::ServiceId::Fsm) == 3);
+  CHECK_FALSE(config::serviceOfWriter(240).has_value());
+  CHECK(config::findService("vcu-fsm") == nullptr);
 }

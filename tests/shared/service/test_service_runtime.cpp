@@ -351,6 +351,23 @@ TEST_CASE("Service::open refuses a missing configuration and a bad --instance wi
   CHECK(second.error().message == "--instance 'no spaces': must be 1-32 letters, digits, '-' or '_'");
 }
 
+TEST_CASE("Service::open refuses a known service with another writer id than config::SERVICES gives it (#20)") {
+  SKIP_UNLESS_ISOLATED();
+  service::ServiceOptions options;
+  options.configPath = CONFIG;
+  service::ServiceInfo fsm = demoInfo();
+  fsm.name = "fsm";
+  fsm.writerId = 9;
+  const auto refused = service::Service::open(fsm, options);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message == "service 'fsm' has writer id 9, config::SERVICES gives it 3");
+  service::ServiceInfo zero = demoInfo();
+  zero.writerId = 0;
+  const auto none = service::Service::open(zero, options);
+  REQUIRE_FALSE(none.ok());
+  CHECK(none.error().message.find("writer id 0") != std::string::npos);
+}
+
 TEST_CASE("a pending SIGTERM is read from the shutdown signalfd, not delivered as a kill") {
   SKIP_UNLESS_ISOLATED();
   auto signalsResult = service::ShutdownSignals::install();

@@ -16,6 +16,7 @@
 #include "command_request.hpp"
 #include "diagnostics.hpp"
 #include "stop_signal.hpp"
+#include "openvcu/config/services.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/signals/table.hpp"
 #include "text_table.hpp"
@@ -48,8 +49,9 @@ constexpr const char* LIST_FOOTER =
 constexpr const char* GET_DESCRIPTION = "Show the bus, command and override planes of signals";
 constexpr const char* GET_FOOTER =
     "For each KEY: the bus plane (value seen on the bus, quality, source address), the\n"
-    "command plane (commanded value, writer id), the override plane (active or not,\n"
-    "writer id) and the effective command (override if active, else the command). Each\n"
+    "command plane (commanded value, writer: the service and its id, 'fsm (3)'), the\n"
+    "override plane (active or not, writer) and the effective command (override if\n"
+    "active, else the command). Each\n"
     "written plane shows its time as UTC and its age, and its update count. Values with\n"
     "a value table show their text: 1 \"Start\". Needs the running stack's table.\n"
     "\n"
@@ -132,6 +134,12 @@ std::string sourceText(std::uint16_t source) {
   return text.data();
 }
 
+/// "fsm (3)" for a service's writer id (config::SERVICES), the bare id for another writer.
+std::string writerText(signals::WriterId writer) {
+  if (const auto service = config::serviceOfWriter(writer)) return std::string(*service) + " (" + std::to_string(writer) + ")";
+  return std::to_string(writer);
+}
+
 std::optional<signals::SignalTable> openTable(const Stack& stack, Sink& err) {
   auto tableResult = signals::SignalTable::open(stack.catalog, stack.config.instance, signals::OpenMode::AttachOnly);
   if (!tableResult) {
@@ -157,7 +165,7 @@ void appendPlanes(std::string& out, const signals::SignalInfo& signal, const sig
     out += "never commanded\n";
   } else {
     out += formatValue(signal, command.value) + "  " + whenText(command.timestampNs) + "  writer " +
-           std::to_string(command.writer) + "  update " + std::to_string(command.updates) + "\n";
+           writerText(command.writer) + "  update " + std::to_string(command.updates) + "\n";
   }
   const signals::OverrideValue& override = slot.override;
   out += "  override   ";
@@ -165,9 +173,9 @@ void appendPlanes(std::string& out, const signals::SignalInfo& signal, const sig
     out += "never set\n";
   } else if (override.active) {
     out += formatValue(signal, override.value) + "  ACTIVE  " + whenText(override.timestampNs) + "  writer " +
-           std::to_string(override.writer) + "  update " + std::to_string(override.updates) + "\n";
+           writerText(override.writer) + "  update " + std::to_string(override.updates) + "\n";
   } else {
-    out += "cleared  " + whenText(override.timestampNs) + "  by writer " + std::to_string(override.writer) +
+    out += "cleared  " + whenText(override.timestampNs) + "  by writer " + writerText(override.writer) +
            "  update " + std::to_string(override.updates) + "\n";
   }
   out += "  effective  ";
@@ -212,14 +220,14 @@ bool scanChanges(const signals::SignalTable& table, const signals::Catalog& cata
       if (slot.command.updates != planes.commandUpdates) {
         changes->emplace_back(slot.command.timestampNs, signal.key + "  command  " +
                                                             formatValue(signal, slot.command.value) + "  writer " +
-                                                            std::to_string(slot.command.writer));
+                                                            writerText(slot.command.writer));
       }
       if (slot.override.updates != planes.overrideUpdates) {
         changes->emplace_back(slot.override.timestampNs,
                               signal.key + "  override  " +
                                   (slot.override.active ? formatValue(signal, slot.override.value) + "  active"
                                                         : std::string("cleared")) +
-                                  "  writer " + std::to_string(slot.override.writer));
+                                  "  writer " + writerText(slot.override.writer));
       }
     }
     planes.busUpdates = slot.bus.updates;

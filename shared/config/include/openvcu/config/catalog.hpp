@@ -9,6 +9,7 @@
 // the FSM's state and timers, one heartbeat per service, the health of each bus (BUS_HEALTH_FIELDS)
 // and the DM1 summary of each addressed node (DM1_FIELDS).
 
+#include "openvcu/config/services.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/signals/catalog.hpp"
@@ -23,8 +24,8 @@ namespace openvcu::config {
 
 inline constexpr std::string_view INTERNAL_PREFIX = "internal.";
 
-/// The services of a stack; each has a heartbeat counter "internal.service.<name>.heartbeat".
-inline constexpr std::array<std::string_view, 6> SERVICES = {"can-rx", "can-tx", "fsm", "gpio", "hmi", "ecu-sim"};
+// The services of a stack (each has a heartbeat counter "internal.service.<name>.heartbeat")
+// and their writer ids: config::SERVICES in services.hpp.
 
 /// Slots "internal.fsm.timer.<i>" in which vcu-fsm keeps its running `for` timers.
 inline constexpr std::uint32_t FSM_TIMER_SLOTS = 32;
