@@ -1,12 +1,15 @@
 // The main of every test executable: doctest's, plus one guard. ctest runs each discovered
 // case by name (--test-case=NAME); a case whose name CMake cut short (a ';' in the name
 // splits a CMake list) would match nothing and "pass" without running. Here a run with a
-// test-case filter that selects no case fails instead.
+// test-case filter that selects no case fails instead, and a run that failed nothing but
+// skipped cases (tests/skip.hpp) exits with 77, which ctest reports as "Skipped".
 #define DOCTEST_CONFIG_IMPLEMENT
 #include <doctest/doctest.h>
 
 #include <cstring>
 #include <iostream>
+
+#include "skip.hpp"
 
 namespace {
 
@@ -43,6 +46,10 @@ int main(int argc, char** argv) {
   if (filtered && g_selected == 0) {
     std::cerr << "error: no test case matches the --test-case filter (is the name cut at a ';'?)\n";
     return 1;
+  }
+  if (result == 0 && openvcu::testing::skippedCases() > 0) {
+    std::cerr << openvcu::testing::skippedCases() << " test case(s) skipped, not run\n";
+    return openvcu::testing::SKIPPED_EXIT_CODE;
   }
   return result;
 }

@@ -2,6 +2,8 @@
 // and silence reported promptly, commands run to completion, processes stopped by PID.
 
 #include <doctest/doctest.h>
+
+#include "skip.hpp"
 #include <signal.h>
 
 #include <algorithm>
@@ -21,8 +23,7 @@ constexpr auto SHORT_READY_TIMEOUT = 500ms;
 
 TEST_CASE("start returns once the process sent READY=1, and a SIGTERM stop records STOPPING=1 and exit code 0") {
   if (!harness::isolated()) {
-    MESSAGE(harness::NOT_ISOLATED);
-    return;
+    OPENVCU_SKIP(harness::NOT_ISOLATED);
   }
   harness::Harness sut;
   auto started = sut.start({.name = "peer", .argv = {PEER, "ready"}, .notifyReadiness = true});
@@ -42,8 +43,7 @@ TEST_CASE("start returns once the process sent READY=1, and a SIGTERM stop recor
 
 TEST_CASE("start fails at once with the exit status and the log when the process exits before READY=1") {
   if (!harness::isolated()) {
-    MESSAGE(harness::NOT_ISOLATED);
-    return;
+    OPENVCU_SKIP(harness::NOT_ISOLATED);
   }
   harness::Harness sut;
   const auto before = std::chrono::steady_clock::now();
@@ -58,8 +58,7 @@ TEST_CASE("start fails at once with the exit status and the log when the process
 
 TEST_CASE("start fails after the timeout when the process never sends READY=1") {
   if (!harness::isolated()) {
-    MESSAGE(harness::NOT_ISOLATED);
-    return;
+    OPENVCU_SKIP(harness::NOT_ISOLATED);
   }
   harness::Harness sut;
 
@@ -71,8 +70,7 @@ TEST_CASE("start fails after the timeout when the process never sends READY=1") 
 
 TEST_CASE("READY=1 sent by another process (a child of the started one) does not count as its readiness") {
   if (!harness::isolated()) {
-    MESSAGE(harness::NOT_ISOLATED);
-    return;
+    OPENVCU_SKIP(harness::NOT_ISOLATED);
   }
   harness::Harness sut;
 
@@ -85,8 +83,7 @@ TEST_CASE("READY=1 sent by another process (a child of the started one) does not
 
 TEST_CASE("run captures stdout, stderr and the exit code of a command") {
   if (!harness::isolated()) {
-    MESSAGE(harness::NOT_ISOLATED);
-    return;
+    OPENVCU_SKIP(harness::NOT_ISOLATED);
   }
   harness::Harness sut;
 
@@ -99,8 +96,7 @@ TEST_CASE("run captures stdout, stderr and the exit code of a command") {
 
 TEST_CASE("run kills a command that outlives its timeout and reports it as timed out") {
   if (!harness::isolated()) {
-    MESSAGE(harness::NOT_ISOLATED);
-    return;
+    OPENVCU_SKIP(harness::NOT_ISOLATED);
   }
   harness::Harness sut;
 
@@ -113,8 +109,7 @@ TEST_CASE("run kills a command that outlives its timeout and reports it as timed
 
 TEST_CASE("a captured process's output is readable line by line while it runs") {
   if (!harness::isolated()) {
-    MESSAGE(harness::NOT_ISOLATED);
-    return;
+    OPENVCU_SKIP(harness::NOT_ISOLATED);
   }
   harness::Harness sut;
   auto started = sut.start({.name = "talker", .argv = {PEER, "ready"}, .notifyReadiness = true, .captureOutput = true});

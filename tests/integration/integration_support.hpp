@@ -4,6 +4,8 @@
 
 #include <doctest/doctest.h>
 
+#include "skip.hpp"
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -145,10 +147,7 @@ struct ConfiguredStack {
 }  // namespace openvcu::integration
 
 /// Every case starts with this: outside the sandbox it skips with a message.
-#define SKIP_UNLESS_ISOLATED()                 \
-  do {                                         \
-    if (!openvcu::harness::isolated()) {       \
-      MESSAGE(openvcu::harness::NOT_ISOLATED); \
-      return;                                  \
-    }                                          \
+#define SKIP_UNLESS_ISOLATED() \
+  do {                          \
+    if (!openvcu::harness::isolated()) OPENVCU_SKIP(openvcu::harness::NOT_ISOLATED); \
   } while (false)

@@ -6,6 +6,8 @@
 
 #include <doctest/doctest.h>
 
+#include "skip.hpp"
+
 #include <algorithm>
 #include <filesystem>
 #include <string>
@@ -108,9 +110,8 @@ TEST_CASE("the round trip keeps what the fixtures are about") {
 
 TEST_CASE("every corpus DBC that parses without errors round-trips" * doctest::timeout(600)) {
   if (!fs::is_directory(CORPUS_DIR)) {
-    MESSAGE("skipped: corpus folder " << CORPUS_DIR.string()
+    OPENVCU_SKIP("skipped: corpus folder " << CORPUS_DIR.string()
                                       << " not found (the team kit is not beside the repository)");
-    return;
   }
   const std::vector<fs::path> files = dbcFilesUnder(CORPUS_DIR);
   std::size_t clean = 0;

@@ -3,6 +3,8 @@
 
 #include <doctest/doctest.h>
 
+#include "skip.hpp"
+
 #include <optional>
 
 #include "ipc_test_support.hpp"
@@ -22,8 +24,7 @@ constexpr int ECHOED_KINDS = 6;  // every kind but Ack, which the peer sends as 
 
 TEST_CASE("every event type crosses from one process to another over udpm and back unchanged") {
   if (!ipctest::isolated()) {
-    MESSAGE(ipctest::NOT_ISOLATED_MESSAGE);
-    return;
+    OPENVCU_SKIP(ipctest::NOT_ISOLATED_MESSAGE);
   }
   const std::string url(ipc::DEFAULT_EVENT_URL);
   auto peer = ipctest::ChildProcess::spawn({PEER, "echo-events", url, "test", "echo", std::to_string(ECHOED_KINDS)});
@@ -85,8 +86,7 @@ TEST_CASE("opening udpm without a multicast route fails with a clear error") {
   // Outside the sandbox this host may have a route (or traffic could leave): only test inside,
   // in a fresh network namespace without the route.
   if (!ipctest::isolated()) {
-    MESSAGE(ipctest::NOT_ISOLATED_MESSAGE);
-    return;
+    OPENVCU_SKIP(ipctest::NOT_ISOLATED_MESSAGE);
   }
   auto child = ipctest::ChildProcess::spawn({"unshare", "--net", "sh", "-c",
                                              std::string("ip link set lo up; exec ") + PEER + " echo-events '" +

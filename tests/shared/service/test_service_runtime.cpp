@@ -3,6 +3,8 @@
 // with readiness and SIGTERM, and the loop's iceoryx back end with a real iox-roudi.
 
 #include <doctest/doctest.h>
+
+#include "skip.hpp"
 #include <poll.h>
 #include <signal.h>
 #include <sys/socket.h>
@@ -33,12 +35,9 @@ namespace {
 const std::string CONFIG = INTEGRATION_CONFIG;
 constexpr signals::WriterId WRITER = 0xF0;
 
-#define SKIP_UNLESS_ISOLATED()        \
-  do {                                \
-    if (!harness::isolated()) {       \
-      MESSAGE(harness::NOT_ISOLATED); \
-      return;                         \
-    }                                 \
+#define SKIP_UNLESS_ISOLATED() \
+  do {                          \
+    if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED); \
   } while (false)
 
 signals::SignalTable openTable(const signals::Catalog& catalog, const std::string& instance) {
