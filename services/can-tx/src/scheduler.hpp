@@ -44,8 +44,8 @@
 
 namespace openvcu::cantx {
 
-// can-tx sends by the schedule model of shared/schedule (the one `vcu check` and `vcu
-// schedule` load too) and names its parts without the namespace.
+// can-tx sends by the schedule model of shared/schedule (the loader `vcu check` runs too)
+// and names its parts without the namespace.
 using schedule::applyOverlay;
 using schedule::checkBusLoad;
 using schedule::checkCycle;

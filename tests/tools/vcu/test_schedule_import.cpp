@@ -13,15 +13,15 @@
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/dbc/parser.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
+#include "openvcu/schedule/schedule_import.hpp"
 #include "openvcu/signals/catalog.hpp"
-#include "schedule_import.hpp"
 #include "vcu_test_support.hpp"
 
 using namespace openvcu::cli::test;
 using openvcu::Error;
 using openvcu::Severity;
-using openvcu::cli::ImportOptions;
-using openvcu::cli::importScheduleCsv;
+using openvcu::schedule::ImportOptions;
+using openvcu::schedule::importScheduleCsv;
 using Json = nlohmann::ordered_json;
 
 namespace {
