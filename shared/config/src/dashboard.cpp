@@ -77,8 +77,7 @@ Result<DashboardConfig> parseDashboardConfig(std::string_view text, const std::s
     dial("current", result.currentKey, result.currentRange);
     dial("power", result.powerKey, result.powerRange);
   }
-  if (const Json* header = check.member(root, "", "header", false);
-      header && check.isObject(*header, "/header")) {
+  if (const Json* header = check.member(root, "", "header", false); header && check.isObject(*header, "/header")) {
     check.onlyKeys(*header, "/header", {"soc", "soh", "charger"});
     result.socKey = check.string(*header, "/header", "soc", false).value_or("");
     result.sohKey = check.string(*header, "/header", "soh", false).value_or("");

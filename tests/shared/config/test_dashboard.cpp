@@ -80,7 +80,8 @@ TEST_CASE("a dial is a key or a key with its scale, checked (defaults 0..1000 V,
   CHECK(sut->powerKey.empty());  // computed from U x I
   CHECK(sut->powerRange.minimum == -150);
   CHECK(sut->powerRange.maximum == 250);
-  const auto inverted = parseDashboardConfig(R"({"dials": {"current": {"min": 5, "max": -5}}, "items": []})", "d", catalog);
+  const auto inverted =
+      parseDashboardConfig(R"({"dials": {"current": {"min": 5, "max": -5}}, "items": []})", "d", catalog);
   REQUIRE_FALSE(inverted);
   CHECK(inverted.error().toString().find("/dials/current: min must be below max") != std::string::npos);
   const auto wrongType = parseDashboardConfig(R"({"dials": {"voltage": 12}, "items": []})", "d", catalog);

@@ -40,11 +40,11 @@ struct DialRange {
 struct DashboardConfig {
   std::string voltageKey;
   std::string currentKey;
-  std::string powerKey;  ///< empty: power = voltage x current
-  DialRange voltageRange{0, 1000};   ///< V
+  std::string powerKey;               ///< empty: power = voltage x current
+  DialRange voltageRange{0, 1000};    ///< V
   DialRange currentRange{-400, 400};  ///< A
   DialRange powerRange{-300, 300};    ///< kW
-  std::string socKey;    ///< header; empty: not shown
+  std::string socKey;                 ///< header; empty: not shown
   std::string sohKey;
   std::string chargerKey;
   std::vector<std::string> statusKeys;  ///< the Vehicle tab's status table
