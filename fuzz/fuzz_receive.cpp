@@ -4,7 +4,7 @@
 // Invariants: no crash, hang or leak; a refused file names an error.
 #include "fuzz_support.hpp"
 
-#include "receive_config.hpp"
+#include "openvcu/config/receive.hpp"
 
 using namespace openvcu;
 
@@ -27,7 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string path = fuzz::scratch().write("receive.json", data, size);
   for (config::VehicleConfig* vehicle : {&rx, &hhea}) {
     vehicle->receiveFile = path;
-    auto receiveResult = canrx::loadReceiveConfig(*vehicle);
+    auto receiveResult = config::loadReceiveConfig(*vehicle);
     if (!receiveResult) fuzz::require(!receiveResult.error().message.empty());
   }
   return 0;

@@ -4,23 +4,23 @@
 // Invariants: no crash, hang or leak; a refused file names an error.
 #include "fuzz_support.hpp"
 
-#include "schedule_config.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
 
 using namespace openvcu;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const fuzz::Hhea& hhea = fuzz::hhea();
-  static const auto hheaSchedule = cantx::loadSchedule(hhea.vehicle, hhea.catalog);
+  static const auto hheaSchedule = schedule::loadSchedule(hhea.vehicle, hhea.catalog);
   fuzz::require(hheaSchedule.ok());
 
   static config::VehicleConfig vehicle = hhea.vehicle;  // copied once: the DBC model is large
   vehicle.scheduleFile = fuzz::scratch().write("schedule.json", data, size);
-  auto scheduleResult = cantx::loadSchedule(vehicle, hhea.catalog);
+  auto scheduleResult = schedule::loadSchedule(vehicle, hhea.catalog);
   if (!scheduleResult) fuzz::require(!scheduleResult.error().message.empty());
 
-  auto overlayResult = cantx::loadOverlay(vehicle.scheduleFile);
+  auto overlayResult = schedule::loadOverlay(vehicle.scheduleFile);
   if (overlayResult) {
-    auto applied = cantx::applyOverlay(*hheaSchedule, *overlayResult, hhea.vehicle, hhea.catalog);
+    auto applied = schedule::applyOverlay(*hheaSchedule, *overlayResult, hhea.vehicle, hhea.catalog);
     if (!applied) fuzz::require(!applied.error().message.empty());
   }
   return 0;

@@ -1,23 +1,23 @@
 // libFuzzer target: `vcu schedule import`, the thesis' schedule sheet as CSV
-// (tools/vcu/src/schedule_import.hpp), against the HHEA DBC, node and catalog.
+// (shared/schedule, openvcu/schedule/schedule_import.hpp), against the HHEA DBC, node and catalog.
 // Invariants: no crash, hang or leak; a refused sheet has an error diagnostic; an
 // imported one has none, and its "include" lists exactly its "messages".
 #include "fuzz_support.hpp"
 
 #include <vector>
 
-#include "schedule_import.hpp"
+#include "openvcu/schedule/schedule_import.hpp"
 
 using namespace openvcu;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const fuzz::Hhea& hhea = fuzz::hhea();
-  cli::ImportOptions options;
+  schedule::ImportOptions options;
   options.node = hhea.vehicle.node;
   options.catalog = &hhea.catalog;
   std::vector<Error> diagnostics;
   auto importResult =
-      cli::importScheduleCsv(fuzz::asText(data, size), "fuzz.csv", hhea.vehicle.database, options, &diagnostics);
+      schedule::importScheduleCsv(fuzz::asText(data, size), "fuzz.csv", hhea.vehicle.database, options, &diagnostics);
   bool anyError = false;
   for (const Error& diagnostic : diagnostics) anyError = anyError || diagnostic.severity == Severity::Error;
   fuzz::require(importResult.ok() != anyError);

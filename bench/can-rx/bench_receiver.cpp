@@ -133,7 +133,7 @@ double median(std::vector<double> values) {
 /// The bench itself; the table is opened and removed by main.
 int run(const config::VehicleConfig& vehicle, const signals::Catalog& catalog, signals::SignalTable& table,
         std::uint64_t frames, int repeat, std::uint64_t seed) {
-  auto receiveResult = canrx::loadReceiveConfig(vehicle);
+  auto receiveResult = config::loadReceiveConfig(vehicle);
   if (!receiveResult) {
     std::cerr << "bench_receiver: " << receiveResult.error().toString() << '\n';
     return 1;

@@ -2,7 +2,8 @@
 # Issue 19: `./run.sh --check` runs `vcu check` and nothing else: no install, no build, no
 # Python. The shipped vehicle passes (exit 0); a copy with a broken simulation.json, a
 # dashboard.json that is not an object and a schedule with a syntax error fails (exit 1)
-# with each file named with its line (or JSON path) on stderr and no Python traceback.
+# with each file named with its line (or JSON path) on stderr and no Python traceback; so
+# does one whose simulation and dashboard are valid JSON their loaders refuse.
 # RUN_SH=FILE tests another script (the run.sh before issue 19 fails it).
 set -uo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -28,4 +29,16 @@ grep -q "^$work/dashboard.json: error: the top level must be a JSON object" "$wo
 grep -q "^$work/schedule.json:4:" "$work/err" || fail "schedule.json's syntax error not reported with its line"
 grep -q "Traceback" "$work/out" "$work/err" && fail "a Python traceback"
 grep -q "7 files, 3 errors" "$work/out" || fail "the summary does not count 3 errors"
+
+# Valid JSON the loaders refuse (#20): a state of charge over 100 % and a dashboard signal
+# the catalog lacks, each named with its JSON path.
+cp "$root"/config/hhea/* "$work/"
+printf '{"battery": {"initialSoc": 150}}\n' > "$work/simulation.json"
+printf '{"items": [{"key": "internal.relay.Cl16"}]}\n' > "$work/dashboard.json"
+"${RUN_SH:-$root/run.sh}" --check --config "$work/vehicle.json" >"$work/out" 2>"$work/err"
+status=$?
+[ $status -eq 1 ] || fail "the vehicle with refused content: exit $status, not 1"
+grep -q "^$work/simulation.json: /battery/initialSoc: error: " "$work/err" || fail "simulation.json's content not refused"
+grep -q "^$work/dashboard.json: /items/0/key: error: unknown signal" "$work/err" || fail "dashboard.json's content not refused"
+grep -q "7 files, 2 errors" "$work/out" || fail "the summary does not count 2 errors"
 echo "run_check_test: PASS"

@@ -93,7 +93,7 @@ class TpSink final : public j1939::TpSink {
 
 struct ReceiverImpl {
   const config::VehicleConfig& vehicle;
-  ReceiveConfig receive;
+  config::ReceiveConfig receive;
   signals::SignalTable& table;
   ReceiverOutputs& outputs;
   dbc::DatabaseCodec codecs;
@@ -111,7 +111,7 @@ struct ReceiverImpl {
   std::int64_t startNs{};
   std::int64_t lastTickNs{};
 
-  ReceiverImpl(const config::VehicleConfig& vehicleConfig, ReceiveConfig receiveConfig,
+  ReceiverImpl(const config::VehicleConfig& vehicleConfig, config::ReceiveConfig receiveConfig,
                signals::SignalTable& signalTable, ReceiverOutputs& receiverOutputs)
       : vehicle(vehicleConfig),
         receive(std::move(receiveConfig)),
@@ -215,7 +215,7 @@ struct ReceiverImpl {
   // ---- forwarding -----------------------------------------------------------------------
 
   void forward(std::size_t busIndex, const can::Frame& frame) noexcept {
-    for (const ForwardRule& rule : receive.forward) {
+    for (const config::ForwardRule& rule : receive.forward) {
       if (rule.fromBus != busIndex || rule.extended != frame.extended()) continue;
       if (rule.byPgn) {
         const j1939::Id id = j1939::Id::fromCanId(frame.id);
@@ -471,7 +471,7 @@ void TpSink::event(const j1939::TpEvent& event) noexcept {
 
 // ---- construction -------------------------------------------------------------------------
 
-Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, ReceiveConfig receive,
+Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::ReceiveConfig receive,
                                   const signals::Catalog& catalog, signals::SignalTable& table,
                                   ReceiverOutputs& outputs, std::int64_t startNs) {
   auto impl = std::make_unique<ReceiverImpl>(vehicle, std::move(receive), table, outputs);
@@ -539,7 +539,7 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, ReceiveC
     }
   }
 
-  for (const SafetyGroup& group : impl->receive.safety) {
+  for (const config::SafetyGroup& group : impl->receive.safety) {
     const dbc::Message& message = database.messages[group.dataMessage];
     j1939::SafetyPairConfig pairConfig;
     pairConfig.dataCanId = message.id;
@@ -642,7 +642,7 @@ std::vector<can::IdFilter> Receiver::filters(std::size_t busIndex) const {
       result.push_back(can::IdFilter{group.headerCanId, can::EXTENDED_ID_MASK, true});
     }
   }
-  for (const ForwardRule& rule : m_impl->receive.forward) {
+  for (const config::ForwardRule& rule : m_impl->receive.forward) {
     if (rule.fromBus != busIndex) continue;
     if (rule.byPgn) {
       addPgn(rule.id);

@@ -30,7 +30,7 @@
 #include "openvcu/ipc/events.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
-#include "receive_config.hpp"
+#include "openvcu/config/receive.hpp"
 
 namespace openvcu::canrx {
 
@@ -88,7 +88,7 @@ class Receiver {
  public:
   /// Compiles codecs and the lookup tables. `table` and `outputs` must outlive it.
   /// Fails when a bus has no J1939 address for TP answers and ... never otherwise.
-  static Result<Receiver> create(const config::VehicleConfig& vehicle, ReceiveConfig receive,
+  static Result<Receiver> create(const config::VehicleConfig& vehicle, config::ReceiveConfig receive,
                                  const signals::Catalog& catalog, signals::SignalTable& table,
                                  ReceiverOutputs& outputs, std::int64_t startNs);
   Receiver(Receiver&&) noexcept;

@@ -38,11 +38,36 @@
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/codec.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
-#include "schedule_config.hpp"
 
 namespace openvcu::cantx {
+
+// can-tx sends by the schedule model of shared/schedule (the loader `vcu check` runs too)
+// and names its parts without the namespace.
+using schedule::applyOverlay;
+using schedule::checkBusLoad;
+using schedule::checkCycle;
+using schedule::checkSignalValue;
+using schedule::ComputedField;
+using schedule::FieldAlgorithm;
+using schedule::fieldAlgorithmName;
+using schedule::findScheduled;
+using schedule::findScheduledSignal;
+using schedule::loadOverlay;
+using schedule::loadSchedule;
+using schedule::MessageChange;
+using schedule::Overlay;
+using schedule::runtimeMessage;
+using schedule::safetyIdentityWarnings;
+using schedule::saveOverlay;
+using schedule::SafeValue;
+using schedule::Schedule;
+using schedule::ScheduledMessage;
+using schedule::SendGroup;
+using schedule::SignalRef;
+using schedule::WatchedWriter;
 
 inline constexpr signals::WriterId CAN_TX_WRITER = 2;
 /// After the table lost its values (issue 18), how long a signal or send group whose command

@@ -33,7 +33,7 @@ void sleepUntil(std::int64_t monotonicNs) noexcept {
 
 struct EcuSimAppImpl {
   service::Service& runtime;
-  SimConfig config;
+  config::SimConfig config;
   std::optional<VirtualBus> bus;
   std::optional<VehicleModel> model;
   std::vector<std::unique_ptr<can::Link>> links;
@@ -55,7 +55,7 @@ struct EcuSimAppImpl {
 
   Status open() {
     const config::VehicleConfig& vehicle = runtime.config();
-    auto configResult = loadSimConfig(vehicle.simulationFile, vehicle);
+    auto configResult = config::loadSimConfig(vehicle.simulationFile, vehicle);
     if (!configResult) return configResult.error();
     config = std::move(*configResult);
     auto busResult = VirtualBus::create(vehicle);

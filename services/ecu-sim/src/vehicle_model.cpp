@@ -27,13 +27,13 @@ std::optional<Fault> faultByName(std::string_view name) noexcept {
   return std::nullopt;
 }
 
-Result<VehicleModel> VehicleModel::create(VirtualBus& bus, const SimConfig& config) {
+Result<VehicleModel> VehicleModel::create(VirtualBus& bus, const config::SimConfig& config) {
   VehicleModel model(bus, config);
   if (Status resolved = model.resolve(); !resolved) return resolved.error();
   bus.setSilent("VIC", true);  // asleep until the keep-alive (and the wake signal) come
   model.m_soc = config.initialSoc;
   model.m_socBeforeLow = config.initialSoc;
-  for (const SafetyCheckConfig& pair : config.safety) {
+  for (const config::SafetyCheckConfig& pair : config.safety) {
     const j1939::SafetyPairConfig checker{pair.dataCanId, pair.srvtNs, pair.sctNs};
     model.m_pairs.push_back(Pair{j1939::SafetyPairChecker(checker), j1939::safetyHeaderCanId(pair.dataCanId)});
   }

@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "openvcu/config/simulation.hpp"
 #include "openvcu/j1939/safety.hpp"
-#include "sim_config.hpp"
 #include "virtual_bus.hpp"
 
 namespace openvcu::ecusim {
@@ -61,7 +61,7 @@ struct SafetyStats {
 
 class VehicleModel {
  public:
-  static Result<VehicleModel> create(VirtualBus& bus, const SimConfig& config);
+  static Result<VehicleModel> create(VirtualBus& bus, const config::SimConfig& config);
 
   /// A VCU frame: J1939-76 headers and data go through the VIC's checkers first.
   void receive(const can::Frame& frame, std::int64_t atNs) noexcept;
@@ -104,7 +104,7 @@ class VehicleModel {
     bool headerTakenByOther{};  ///< that frame was not the SDM's identifier: the SDM after it is not judged
   };
 
-  VehicleModel(VirtualBus& bus, const SimConfig& config) : m_bus(&bus), m_config(&config) {}
+  VehicleModel(VirtualBus& bus, const config::SimConfig& config) : m_bus(&bus), m_config(&config) {}
   Status resolve();
   void stepVic(std::int64_t nowNs, double dt, bool wake);
   void stepPowerNodes(std::int64_t nowNs, double dt);
@@ -113,7 +113,7 @@ class VehicleModel {
   [[nodiscard]] bool hvPresent() const noexcept { return m_connection == 1 || m_connection == 5; }
 
   VirtualBus* m_bus;
-  const SimConfig* m_config;
+  const config::SimConfig* m_config;
   std::array<bool, FAULT_COUNT> m_faults{};
   // VCU inputs
   InputRef m_esRelay{}, m_consent{}, m_ccvsAny{}, m_hvesscAny{}, m_crashType{}, m_contactorA{}, m_contactorB{},

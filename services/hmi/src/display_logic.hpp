@@ -1,6 +1,6 @@
 #pragma once
-// The HMI's display logic without Qt: how a table value becomes text and a status, what
-// the dashboard file says, which operator switches the state machine allows, the service
+// The HMI's display logic without Qt: how a table value becomes text and a status,
+// which operator switches the state machine allows, the service
 // health seen through heartbeats, the commands waiting for their acknowledgement and the
 // log ring. The Qt models (models.hpp) wrap these; the unit tests drive them directly.
 //
@@ -69,50 +69,6 @@ using signals::valueText;
 /// "Fault", "Error", "Fail", "Alarm" -> Bad; else Neutral.
 enum class TextTone : std::uint8_t { Neutral, Good, Bad };
 [[nodiscard]] TextTone toneOf(std::string_view text) noexcept;
-
-// ---- dashboard file ------------------------------------------------------------------
-
-/// One tile of the dashboard grid.
-struct DashboardItem {
-  std::string key;
-  std::string label;   ///< default: the last component of the key
-  std::string unit;    ///< default: the catalog's unit
-  std::string format;  ///< printf for the number, default "%.1f"
-};
-
-/// A dial's scale.
-struct DialRange {
-  double minimum{};
-  double maximum{};
-};
-
-/// The dashboard file: {"dials": {"voltage": DIAL, "current": DIAL, "power": DIAL}, where
-/// DIAL is a KEY or {"key": KEY, "min": NUMBER, "max": NUMBER} ("power": "" or no "key":
-/// voltage x current),
-/// "header": {"soc": KEY, "soh": KEY, "charger": KEY}, "status": [KEY, ...],
-/// "items": [{"key":..., "label":..., "unit":..., "format":...}], "staleAfterMs": 2000}.
-/// Every key is the vehicle's: nothing in the HMI names a signal of one vehicle.
-struct DashboardConfig {
-  std::string voltageKey;
-  std::string currentKey;
-  std::string powerKey;  ///< empty: power = voltage x current
-  DialRange voltageRange{0, 1000};   ///< V
-  DialRange currentRange{-400, 400};  ///< A
-  DialRange powerRange{-300, 300};    ///< kW
-  std::string socKey;    ///< header; empty: not shown
-  std::string sohKey;
-  std::string chargerKey;
-  std::vector<std::string> statusKeys;  ///< the Vehicle tab's status table
-  std::vector<DashboardItem> items;
-  std::int64_t staleAfterMs{2000};
-};
-
-/// Parses and checks a dashboard file against the catalog: unknown keys are refused with
-/// "<file>: /items/3/key: unknown signal 'X' (did you mean 'Y'?)". Never throws.
-Result<DashboardConfig> loadDashboardConfig(const std::string& path, const signals::Catalog& catalog);
-/// The same from JSON text (`source` names it in errors).
-Result<DashboardConfig> parseDashboardConfig(std::string_view text, const std::string& source,
-                                             const signals::Catalog& catalog);
 
 // ---- state machine rules -------------------------------------------------------------
 

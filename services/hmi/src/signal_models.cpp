@@ -103,7 +103,7 @@ DashboardSettings::DashboardSettings(QObject* parent) : QObject(parent) {
   }
   const std::string& path = stack->settings().dashboardPath;
   if (path.empty()) return;
-  auto loaded = loadDashboardConfig(path, stack->catalog());
+  auto loaded = config::loadDashboardConfig(path, stack->catalog());
   if (!loaded) {
     m_status = ModelStatus::Error;
     m_error = toQ(loaded.error().toString());
@@ -169,9 +169,9 @@ QStringList SignalListModel::keys() const {
 }
 
 void SignalListModel::setKeys(const QStringList& keys) {
-  std::vector<DashboardItem> items;
+  std::vector<config::DashboardItem> items;
   for (const QString& key : keys) {
-    DashboardItem item;
+    config::DashboardItem item;
     item.key = key.toStdString();
     item.label = shortLabel(item.key);
     item.format = "%.1f";
@@ -194,11 +194,11 @@ void SignalListModel::setDashboard(bool dashboard) {
   setRows(settings.config().items);
 }
 
-void SignalListModel::setRows(std::vector<DashboardItem> items) {
+void SignalListModel::setRows(std::vector<config::DashboardItem> items) {
   beginResetModel();
   m_rows.clear();
   StackConnection* stack = StackConnection::instance();
-  for (DashboardItem& item : items) {
+  for (config::DashboardItem& item : items) {
     Row row;
     if (stack) row.index = stack->catalog().indexOf(item.key);
     row.item = std::move(item);

@@ -17,6 +17,7 @@
 
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "display_logic.hpp"
+#include "openvcu/config/dashboard.hpp"
 #include "stack_connection.hpp"
 #endif
 
@@ -102,11 +103,11 @@ class DashboardSettings : public QObject {
   [[nodiscard]] double staleAfterMs() const noexcept { return static_cast<double>(m_config.staleAfterMs); }
   [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
   [[nodiscard]] QString errorString() const { return m_error; }
-  [[nodiscard]] const DashboardConfig& config() const noexcept { return m_config; }
+  [[nodiscard]] const config::DashboardConfig& config() const noexcept { return m_config; }
 
  private:
-  static QVariantList range(const DialRange& dial) { return {dial.minimum, dial.maximum}; }
-  DashboardConfig m_config;
+  static QVariantList range(const config::DialRange& dial) { return {dial.minimum, dial.maximum}; }
+  config::DashboardConfig m_config;
   ModelStatus::Value m_status{ModelStatus::Ready};
   QString m_error;
 };
@@ -141,13 +142,13 @@ class SignalListModel : public QAbstractListModel {
 
  private:
   struct Row {
-    DashboardItem item;
+    config::DashboardItem item;
     std::optional<sig::SignalIndex> index;
     QString text{QStringLiteral("--")};
     ValueStatus status{ValueStatus::NotConnected};
     TextTone tone{TextTone::Neutral};
   };
-  void setRows(std::vector<DashboardItem> items);
+  void setRows(std::vector<config::DashboardItem> items);
   std::vector<Row> m_rows;
   bool m_dashboard{};
   std::int64_t m_staleAfterNs{2'000'000'000};

@@ -80,7 +80,7 @@ struct Fixture {
     auto tableResult = signals::SignalTable::open(catalog, instance);
     REQUIRE_MESSAGE(tableResult, (tableResult ? "" : tableResult.error().toString()));
     table.emplace(std::move(*tableResult));
-    auto receiveResult = canrx::loadReceiveConfig(vehicle);
+    auto receiveResult = config::loadReceiveConfig(vehicle);
     REQUIRE_MESSAGE(receiveResult, (receiveResult ? "" : receiveResult.error().toString()));
     auto receiverResult = canrx::Receiver::create(vehicle, std::move(*receiveResult), catalog, *table, outputs, START);
     REQUIRE(receiverResult);

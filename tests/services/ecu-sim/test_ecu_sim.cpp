@@ -12,7 +12,7 @@
 
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/j1939/safety.hpp"
-#include "sim_config.hpp"
+#include "openvcu/config/simulation.hpp"
 #include "vehicle_model.hpp"
 
 using namespace openvcu;
@@ -26,7 +26,7 @@ constexpr std::int64_t T0 = 1000 * 1'000'000'000LL;
 
 struct Fixture {
   config::VehicleConfig vehicle;
-  ecusim::SimConfig sim;
+  config::SimConfig sim;
   std::optional<ecusim::VirtualBus> bus;
   std::optional<ecusim::VehicleModel> model;
   dbc::DatabaseCodec codecs;
@@ -39,7 +39,7 @@ struct Fixture {
     auto loaded = config::loadVehicleConfig(HHEA);
     REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
     vehicle = std::move(*loaded);
-    auto simResult = ecusim::loadSimConfig(vehicle.simulationFile, vehicle);
+    auto simResult = config::loadSimConfig(vehicle.simulationFile, vehicle);
     REQUIRE_MESSAGE(simResult, (simResult ? "" : simResult.error().toString()));
     sim = std::move(*simResult);
     auto busResult = ecusim::VirtualBus::create(vehicle);
@@ -114,7 +114,7 @@ TEST_CASE("the HHEA simulation file loads, and a bad one is refused with its JSO
   const fs::path file = fs::temp_directory_path() / ("openvcu-sim-" + std::to_string(::getpid()) + ".json");
   std::ofstream(file) << R"({"battery": {"capacityAh": -1, "colour": 1}, "timing": {"connect": "fast"},
     "safety": [{"message": "S1_ES"}]})";
-  auto bad = ecusim::loadSimConfig(file.string(), f.vehicle);
+  auto bad = config::loadSimConfig(file.string(), f.vehicle);
   fs::remove(file);
   REQUIRE_FALSE(bad);
   CHECK(bad.error().location.jsonPath == "/battery/colour");  // the first error

@@ -1,5 +1,4 @@
-// The HMI's display logic without Qt: value text and status, the dashboard file, the FSM
-// rules behind the operator switches, service health, command acknowledgements, the log
+// The HMI's display logic without Qt: value text and status, the FSM rules behind the operator switches, service health, command acknowledgements, the log
 // ring and the plot's decimation (issue 10).
 #include <doctest/doctest.h>
 
@@ -90,86 +89,6 @@ TEST_CASE("row labels keep the node of bus keys and the group of internal keys")
   CHECK(shortLabel("HVLP_SA71.HS2_Status_Feedback.InverterStatus") == "HVLP_SA71 InverterStatus");
   CHECK(shortLabel("internal.relay.Cl15") == "relay Cl15");
   CHECK(shortLabel("plain") == "plain");
-}
-
-TEST_CASE("a dashboard file is read with defaults for label, unit and format") {
-  const signals::Catalog catalog = smallCatalog();
-  const auto sut = parseDashboardConfig(
-      R"({"dials": {"voltage": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"},
-          "items": [{"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"}, {"key": "internal.relay.Cl15", "label": "Cl15", "format": "%.0f"}]})",
-      "dash.json", catalog);
-  REQUIRE_MESSAGE(sut, sut.error().toString());
-  REQUIRE(sut->items.size() == 2);
-  CHECK(sut->items[0].label == "HS_FastUpdSOC");
-  CHECK(sut->items[0].unit == "%");
-  CHECK(sut->items[0].format == "%.1f");
-  CHECK(sut->items[1].label == "Cl15");
-  CHECK(sut->voltageKey == "VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
-  CHECK(sut->staleAfterMs == 2000);
-  CHECK(sut->socKey.empty());
-  CHECK(sut->statusKeys.empty());
-}
-
-TEST_CASE("a dashboard file names the header's and the status table's signals and they are checked too") {
-  const signals::Catalog catalog = smallCatalog();
-  const auto sut = parseDashboardConfig(
-      R"({"header": {"soc": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"}, "status": ["internal.relay.Cl15", "internal.fault.Contactor"], "items": []})",
-      "dash.json", catalog);
-  REQUIRE_MESSAGE(sut, sut.error().toString());
-  CHECK(sut->socKey == "VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
-  CHECK(sut->statusKeys == std::vector<std::string>{"internal.relay.Cl15", "internal.fault.Contactor"});
-  const auto badStatus = parseDashboardConfig(R"({"status": ["internal.relay.Cl15", 7], "items": []})", "d", catalog);
-  REQUIRE_FALSE(badStatus);
-  CHECK(badStatus.error().toString().find("/status/1") != std::string::npos);
-  const auto badHeader = parseDashboardConfig(R"({"header": {"soc": "nope"}, "items": []})", "d", catalog);
-  REQUIRE_FALSE(badHeader);
-  CHECK(badHeader.error().toString().find("/header/soc") != std::string::npos);
-}
-
-TEST_CASE("a dial is a key or a key with its scale, checked (defaults 0..1000 V, -400..400 A, -300..300 kW)") {
-  const signals::Catalog catalog = smallCatalog();
-  const auto sut = parseDashboardConfig(
-      R"({"dials": {"voltage": {"key": "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "min": 0, "max": 850},
-                    "power": {"min": -150, "max": 250}}, "items": []})",
-      "dash.json", catalog);
-  REQUIRE_MESSAGE(sut, sut.error().toString());
-  CHECK(sut->voltageKey == "VIC.HVESSD2_PGN61585.HS_FastUpdSOC");
-  CHECK(sut->voltageRange.minimum == 0);
-  CHECK(sut->voltageRange.maximum == 850);
-  CHECK(sut->currentRange.minimum == -400);  // not in the file: the default
-  CHECK(sut->currentRange.maximum == 400);
-  CHECK(sut->powerKey.empty());  // computed from U x I
-  CHECK(sut->powerRange.minimum == -150);
-  CHECK(sut->powerRange.maximum == 250);
-  const auto inverted = parseDashboardConfig(R"({"dials": {"current": {"min": 5, "max": -5}}, "items": []})", "d", catalog);
-  REQUIRE_FALSE(inverted);
-  CHECK(inverted.error().toString().find("/dials/current: min must be below max") != std::string::npos);
-  const auto wrongType = parseDashboardConfig(R"({"dials": {"voltage": 12}, "items": []})", "d", catalog);
-  REQUIRE_FALSE(wrongType);
-  CHECK(wrongType.error().toString().find("/dials/voltage") != std::string::npos);
-  const auto badKey = parseDashboardConfig(R"({"dials": {"voltage": {"key": "nope"}}, "items": []})", "d", catalog);
-  REQUIRE_FALSE(badKey);
-  CHECK(badKey.error().toString().find("/dials/voltage/key") != std::string::npos);
-  const auto extra = parseDashboardConfig(R"({"dials": {"voltage": {"maximum": 5}}, "items": []})", "d", catalog);
-  REQUIRE_FALSE(extra);
-}
-
-TEST_CASE("a dashboard file with an unknown key is refused with its JSON path and a suggestion") {
-  const signals::Catalog catalog = smallCatalog();
-  const auto sut = parseDashboardConfig(R"({"items": [{"key": "internal.relay.Cl16"}]})", "dash.json", catalog);
-  REQUIRE_FALSE(sut);
-  const std::string text = sut.error().toString();
-  CHECK_MESSAGE(text.find("/items/0/key") != std::string::npos, text);
-  CHECK_MESSAGE(text.find("did you mean 'internal.relay.Cl15'") != std::string::npos, text);
-}
-
-TEST_CASE("a dashboard file with bad JSON, a bad format or a mistyped member is refused, never thrown") {
-  const signals::Catalog catalog = smallCatalog();
-  CHECK_FALSE(parseDashboardConfig("{", "dash.json", catalog));
-  CHECK_FALSE(parseDashboardConfig(R"({"items": [{"key": "internal.relay.Cl15", "format": "%s"}]})", "d", catalog));
-  CHECK_FALSE(parseDashboardConfig(R"({"itemz": []})", "d", catalog));
-  CHECK_FALSE(parseDashboardConfig(R"({"items": [], "staleAfterMs": 5})", "d", catalog));
-  CHECK_FALSE(loadDashboardConfig("/nonexistent/dash.json", catalog));
 }
 
 TEST_CASE("the FSM rules name states by index and know which switches each state reads") {

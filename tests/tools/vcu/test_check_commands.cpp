@@ -14,6 +14,8 @@
 
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "stack_access.hpp"
 #include "vcu_test_support.hpp"
@@ -130,6 +132,8 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
   }
   CHECK(contains(result.out, "vehicle 'hhea': 7 files, 0 errors, 0 warnings\n"));
   CHECK_FALSE(contains(result.err, "error:"));
+  // every file through its loader: no note that a service checks the rest when it starts (#20)
+  CHECK_MESSAGE(result.err.empty(), result.err);
 }
 
 TEST_CASE("vcu check reports a broken simulation, dashboard and schedule together with their locations (#19)") {
@@ -167,6 +171,92 @@ TEST_CASE("vcu check refuses a fractional cycle in the schedule with its JSON pa
   CHECK(contains(result.err, "check_cycle/schedule.json: /messages/S1_ES_PGN61427/cycleMs: error: "));
   CHECK(contains(result.err, "0.5"));
   CHECK(contains(result.out, "schedule.json: 1 error"));
+}
+
+/// The text of `path`.
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path);
+  REQUIRE(in.good());
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// A copy of config/hhea under `name` whose vehicle.json also names "receive": "receive.json",
+/// holding `receive`; returns the copy's vehicle.json.
+std::string hheaCopyWithReceive(const std::string& name, const std::string& receive) {
+  const std::string vehicle = hheaCopy(name, "receive.json", receive);
+  std::string text = readFile(vehicle);
+  const std::string simulation = "\"simulation\": \"simulation.json\"";
+  const auto at = text.find(simulation);
+  REQUIRE(at != std::string::npos);
+  text.insert(at + simulation.size(), ",\n  \"receive\": \"receive.json\"");
+  writeScratchFile(name + "/vehicle.json", text);
+  return vehicle;
+}
+
+TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file and the JSON path (#19, #20)") {
+  const std::string vehicle = hheaCopy("check_simulation", "simulation.json", R"({"battery": {"initialSoc": 150}})");
+
+  const RunResult result = runVcu({"check", "--config", vehicle});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK_MESSAGE(contains(result.err, "check_simulation/simulation.json: /battery/initialSoc: error: "), result.err);
+  CHECK(contains(result.out, "simulation.json: 1 error"));
+  CHECK(contains(result.out, "7 files, 1 error"));
+}
+
+TEST_CASE("vcu check refuses a receive file naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
+  const std::string vehicle =
+      hheaCopyWithReceive("check_receive", R"({"messages": {"HVESSS1_PGN6159": {"timeoutMs": 300}}})");
+
+  const RunResult result = runVcu({"check", "--config", vehicle});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK_MESSAGE(contains(result.err, "check_receive/receive.json: /messages/HVESSS1_PGN6159: error: "), result.err);
+  CHECK(contains(result.err, "HVESSS1_PGN61590"));  // the suggestion
+  CHECK(contains(result.out, "receive.json: 1 error"));
+  CHECK(contains(result.out, "8 files, 1 error"));
+}
+
+TEST_CASE("vcu check passes a receive file its loader accepts and counts it") {
+  const std::string vehicle = hheaCopyWithReceive("check_receive_ok", R"({"timeoutFactor": 5, "dm1": true})");
+
+  const RunResult result = runVcu({"check", "--config", vehicle});
+
+  CHECK_MESSAGE(result.exitCode == EXIT_OK, result.err);
+  CHECK(contains(result.out, "receive.json: 0 errors, 0 warnings"));
+  CHECK(contains(result.out, "vehicle 'hhea': 8 files, 0 errors, 0 warnings\n"));
+}
+
+TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
+  const std::string vehicle = hheaCopy("check_schedule");
+  const fs::path schedulePath = fs::path(vehicle).parent_path() / "schedule.json";
+  std::string text = readFile(schedulePath);
+  const std::string messages = "\"messages\": {";
+  const auto at = text.find(messages);
+  REQUIRE(at != std::string::npos);
+  text.insert(at + messages.size(), "\"HVESSC1_PGN691\": {\"cycleMs\": 100}, ");
+  writeScratchFile("check_schedule/schedule.json", text);
+
+  const RunResult result = runVcu({"check", "--config", vehicle});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK_MESSAGE(contains(result.err, "check_schedule/schedule.json: /messages/HVESSC1_PGN691"), result.err);
+  CHECK(contains(result.out, "schedule.json: 1 error"));
+  CHECK(contains(result.out, "fsm.json: 0 errors"));  // its send groups still come from the schedule
+  CHECK(contains(result.out, "7 files, 1 error"));
+}
+
+TEST_CASE("vcu check refuses a dashboard naming a signal the catalog lacks, with the file and the JSON path (#19, #20)") {
+  const std::string vehicle =
+      hheaCopy("check_dashboard", "dashboard.json", R"({"items": [{"key": "internal.relay.Cl15"}, {"key": "internal.relay.Cl16"}]})");
+
+  const RunResult result = runVcu({"check", "--config", vehicle});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK_MESSAGE(contains(result.err, "check_dashboard/dashboard.json: /items/1/key: error: unknown signal 'internal.relay.Cl16'"),
+                result.err);
+  CHECK(contains(result.out, "dashboard.json: 1 error"));
+  CHECK(contains(result.out, "7 files, 1 error"));
 }
 
 TEST_CASE("vcu check still checks the other files when vehicle.json itself has an error") {

@@ -9,16 +9,19 @@
 #include <optional>
 
 #include "diagnostics.hpp"
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/config/vehicle.hpp"
 #include "openvcu/dbc/parser.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
+#include "openvcu/schedule/schedule_import.hpp"
 #include "openvcu/signals/catalog.hpp"
-#include "schedule_import.hpp"
 #include "vcu_test_support.hpp"
 
 using namespace openvcu::cli::test;
 using openvcu::Error;
 using openvcu::Severity;
-using openvcu::cli::ImportOptions;
-using openvcu::cli::importScheduleCsv;
+using openvcu::schedule::ImportOptions;
+using openvcu::schedule::importScheduleCsv;
 using Json = nlohmann::ordered_json;
 
 namespace {
@@ -496,6 +499,43 @@ TEST_CASE("vcu schedule import -o writes the JSON atomically, it reads back as t
   const std::string written = readText(output);
   CHECK(written == Json::parse(SHEET_SCHEDULE).dump(2) + "\n");
   CHECK(Json::parse(written) == Json::parse(SHEET_SCHEDULE));
+}
+
+TEST_CASE("what vcu schedule import writes loads with the schedule loader vcu-can-tx and vcu check use (#20)") {
+  const std::filesystem::path folder = scratchFolder("schedule-import-loads");
+  std::filesystem::copy_file(dataPath("schedule/schedule.dbc"), folder / "schedule.dbc");
+  const RunResult imported = runVcu({"schedule", "import", dataPath("schedule/sheet.csv"), "--dbc",
+                                     dataPath("schedule/schedule.dbc"), "--node", THIS_NODE, "-o",
+                                     (folder / "schedule.json").string()});
+  REQUIRE_MESSAGE(imported.exitCode == EXIT_OK, imported.err);
+  // the send groups' signals, declared as the import's note asks
+  const std::string vehiclePath = writeScratchFile("schedule-import-loads/vehicle.json", R"({
+  "instance": "importtest",
+  "node": "Vehicle_Control_Unit",
+  "dbc": ["schedule.dbc"],
+  "buses": [{"name": "vehicle", "link": "sim:vehicle", "messages": "all"}],
+  "internalSignals": [{"name": "tx.Battery"}, {"name": "tx.Inverter"}],
+  "schedule": "schedule.json",
+  "lcm": "memq://"
+})");
+  auto vehicle = openvcu::config::loadVehicleConfig(vehiclePath);
+  REQUIRE_MESSAGE(vehicle, vehicle.error().toString());
+  auto catalog = openvcu::config::buildCatalog(*vehicle);
+  REQUIRE_MESSAGE(catalog, catalog.error().toString());
+
+  const auto sut = openvcu::schedule::loadSchedule(*vehicle, *catalog);
+
+  REQUIRE_MESSAGE(sut, sut.error().toString());
+  CHECK(sut->messages.size() == 3);
+  const auto s1 = openvcu::schedule::findScheduled(*sut, *vehicle, "S1_ES_PGN61427");
+  REQUIRE(s1);
+  const openvcu::schedule::ScheduledMessage& entry = sut->messages[*s1];
+  CHECK(entry.cycleNs == 20'000'000);
+  REQUIRE(entry.safetyDeltaNs);
+  CHECK(*entry.safetyDeltaNs == 292'000);
+  REQUIRE(entry.group);
+  CHECK(sut->groups[*entry.group].name == "Battery");
+  CHECK(sut->groups.size() == 2);
 }
 
 TEST_CASE("vcu schedule import without -o prints the JSON on stdout") {

@@ -6,14 +6,18 @@
 #include <memory>
 #include <optional>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "diagnostics.hpp"
 #include "machine.hpp"
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/config/dashboard.hpp"
 #include "openvcu/config/json.hpp"
-#include "openvcu/config/transmit_limits.hpp"
+#include "openvcu/config/receive.hpp"
+#include "openvcu/config/simulation.hpp"
 #include "openvcu/config/vehicle.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
 
 namespace openvcu::cli {
 namespace {
@@ -22,32 +26,17 @@ namespace fs = std::filesystem;
 
 constexpr const char* DESCRIPTION = "Check every file of a vehicle configuration, as the services load them";
 constexpr const char* FOOTER =
-    "Checks vehicle.json and through it the DBC files, the GPIO map and the FSM file with\n"
-    "the loaders the services use; the schedule, simulation and receive files and the HMI\n"
-    "dashboard (dashboard.json beside vehicle.json, if present) for JSON syntax: their\n"
-    "content is checked by vcu-can-tx, vcu-ecu-sim, vcu-can-rx and vcu-hmi when they start\n"
-    "(a note says so for each). Diagnostics on stderr, one per line with file:line:column\n"
-    "or the JSON path; then one summary line per file and a total on stdout.\n"
+    "Checks vehicle.json and through it the DBC files, the GPIO map, the FSM file, the\n"
+    "schedule, simulation and receive files and the HMI dashboard (dashboard.json beside\n"
+    "vehicle.json, if present) with the loaders the services use when they start.\n"
+    "While vehicle.json itself does not load, the files it names get the JSON syntax check\n"
+    "only (a note says so). Diagnostics on stderr, one per line with file:line:column or\n"
+    "the JSON path; then one summary line per file and a total on stdout.\n"
     "The configuration: --config FILE, else $OPENVCU_CONFIG, else the running stack's.\n"
     "\n"
     "Example:\n"
     "  vcu check --config config/hhea/vehicle.json\n"
     "Exit: 0 no errors (warnings allowed), 1 errors, 2 usage error.\n";
-
-/// The service that checks a file kind's content, and where its loader lives.
-struct ContentOwner {
-  std::string_view key;      ///< the vehicle.json key ("schedule"); "dashboard" for the HMI's
-  std::string_view service;  ///< "vcu-can-tx"
-  std::string_view loader;   ///< "services/can-tx/src/schedule_config.cpp"
-  std::string_view checked;  ///< what vcu check itself checks of it
-};
-
-constexpr ContentOwner CONTENT_OWNERS[] = {
-    {"schedule", "vcu-can-tx", "services/can-tx/src/schedule_config.cpp", "JSON syntax and cycles"},
-    {"simulation", "vcu-ecu-sim", "services/ecu-sim/src/sim_config.cpp", "JSON syntax"},
-    {"receive", "vcu-can-rx", "services/can-rx/src/receive_config.cpp", "JSON syntax"},
-    {"dashboard", "vcu-hmi", "services/hmi/src/display_logic.cpp", "JSON syntax"},
-};
 
 std::string plural(std::size_t count, const std::string& word) {
   return std::to_string(count) + " " + word + (count == 1 ? "" : "s");
@@ -131,38 +120,15 @@ std::optional<Error> jsonObjectError(const std::string& path) {
   return std::nullopt;
 }
 
-/// JSON check of a file whose content a service checks, and the note that says so.
-void checkJsonOnly(const std::string& path, const ContentOwner& owner, FileTally& tally, bool quiet, Sink& err) {
+/// Checks `path` with `load`, the loader of the service that reads it, after the JSON
+/// check (syntax with line:column, a top-level object): its first error is reported.
+template <typename Loader>
+void checkWithLoader(const std::string& path, Loader&& load, FileTally& tally, bool quiet, Sink& err) {
   if (const auto error = jsonObjectError(path)) {
     tally.report(*error, quiet, err);
     return;
   }
-  if (!quiet) {
-    report(err, Error{std::string(owner.checked) + " checked; the rest of its content is checked by " +
-                          std::string(owner.service) + " when it starts (its loader, " + std::string(owner.loader) + ", is not linked into vcu)",
-                      Location{path, 0, 0, {}}, Severity::Note});
-  }
-}
-
-/// The schedule's cycles under the one rule of shared/config (config::checkCycleMs: whole
-/// ms within limits; 0 means not cyclic), the part of vcu-can-tx's schedule check whose
-/// rule lives in shared/. Reported at /messages/<name>/cycleMs.
-void checkScheduleCycles(const std::string& path, FileTally& tally, bool quiet, Sink& err) {
-  auto json = config::readJsonFile(path);
-  if (!json || !json->is_object()) return;
-  const auto messages = json->find("messages");
-  if (messages == json->end() || !messages->is_object()) return;
-  for (const auto& [name, settings] : messages->items()) {
-    if (!settings.is_object()) continue;
-    const auto cycle = settings.find("cycleMs");
-    if (cycle == settings.end() || !cycle->is_number()) continue;
-    const double cycleMs = cycle->get<double>();
-    if (cycleMs == 0) continue;
-    if (const auto problem = config::checkCycleMs(cycleMs)) {
-      tally.report(Error{*problem + " (0: not cyclic)", Location::json(path, "/messages/" + name + "/cycleMs")}, quiet,
-                   err);
-    }
-  }
+  if (auto loadResult = load(); !loadResult) tally.report(loadResult.error(), quiet, err);
 }
 
 /// dashboard.json beside vehicle.json, where vcu-hmi looks for it; empty when absent.
@@ -172,9 +138,9 @@ std::string dashboardBeside(const std::string& vehiclePath) {
   return fs::exists(beside, error) ? beside.string() : std::string();
 }
 
-/// The files vehicle.json names, read from its JSON alone (used when it does not load).
-std::vector<std::pair<std::string, std::string>> namedFiles(const std::string& vehiclePath) {
-  std::vector<std::pair<std::string, std::string>> files;  // key, resolved path
+/// The files vehicle.json names, resolved, read from its JSON alone (used when it does not load).
+std::vector<std::string> namedFiles(const std::string& vehiclePath) {
+  std::vector<std::string> files;
   auto json = config::readJsonFile(vehiclePath);
   if (!json || !json->is_object()) return files;
   const fs::path directory = fs::path(vehiclePath).parent_path();
@@ -182,16 +148,9 @@ std::vector<std::pair<std::string, std::string>> namedFiles(const std::string& v
     const auto it = json->find(key);
     if (it == json->end() || !it->is_string()) continue;
     const fs::path file(it->get<std::string>());
-    files.emplace_back(key, (file.is_absolute() ? file : directory / file).lexically_normal().string());
+    files.push_back((file.is_absolute() ? file : directory / file).lexically_normal().string());
   }
   return files;
-}
-
-const ContentOwner* ownerOf(std::string_view key) {
-  for (const ContentOwner& owner : CONTENT_OWNERS) {
-    if (owner.key == key) return &owner;
-  }
-  return nullptr;
 }
 
 bool isSendGroupDiagnostic(const Error& diagnostic) {
@@ -279,36 +238,40 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
       tally.count(vehicle.fsmFile, fsmCounts);
     }
     if (!vehicle.scheduleFile.empty() && !(scheduleBroken && !vehicle.fsmFile.empty())) {
-      checkJsonOnly(vehicle.scheduleFile, *ownerOf("schedule"), tally, options.quiet, streams.err);
+      checkWithLoader(
+          vehicle.scheduleFile, [&] { return schedule::loadSchedule(vehicle, stack->catalog); }, tally, options.quiet,
+          streams.err);
     }
-    if (!vehicle.scheduleFile.empty() && !scheduleBroken) {
-      checkScheduleCycles(vehicle.scheduleFile, tally, options.quiet, streams.err);
+    if (!vehicle.simulationFile.empty()) {
+      tally.add(vehicle.simulationFile);
+      checkWithLoader(
+          vehicle.simulationFile, [&] { return config::loadSimConfig(vehicle.simulationFile, vehicle); }, tally,
+          options.quiet, streams.err);
     }
-    for (const auto& [key, path] : {std::pair<std::string_view, const std::string*>{"simulation", &vehicle.simulationFile},
-                                    {"receive", &vehicle.receiveFile}}) {
-      if (path->empty()) continue;
-      tally.add(*path);
-      checkJsonOnly(*path, *ownerOf(key), tally, options.quiet, streams.err);
+    if (!vehicle.receiveFile.empty()) {
+      tally.add(vehicle.receiveFile);
+      checkWithLoader(
+          vehicle.receiveFile, [&] { return config::loadReceiveConfig(vehicle); }, tally, options.quiet, streams.err);
+    }
+    if (!dashboard.empty()) {
+      tally.add(dashboard);
+      checkWithLoader(
+          dashboard, [&] { return config::loadDashboardConfig(dashboard, stack->catalog); }, tally, options.quiet,
+          streams.err);
     }
   } else {
     if (!options.quiet) {
-      report(streams.err, Error{"the files it names get the JSON check only until it loads",
+      report(streams.err, Error{"the files it names and the dashboard get the JSON syntax check only until it loads",
                                 Location{vehiclePath, 0, 0, {}}, Severity::Note});
     }
-    for (const auto& [key, path] : namedFiles(vehiclePath)) {
+    std::vector<std::string> files = namedFiles(vehiclePath);
+    if (!dashboard.empty()) files.push_back(dashboard);
+    for (const std::string& path : files) {
       std::error_code error;
       if (!fs::exists(path, error)) continue;  // vehicle.json's own error says so
       tally.add(path);
-      if (const ContentOwner* owner = ownerOf(key)) {
-        checkJsonOnly(path, *owner, tally, options.quiet, streams.err);
-      } else if (const auto syntax = jsonObjectError(path)) {
-        tally.report(*syntax, options.quiet, streams.err);
-      }
+      if (const auto syntax = jsonObjectError(path)) tally.report(*syntax, options.quiet, streams.err);
     }
-  }
-  if (!dashboard.empty()) {
-    tally.add(dashboard);
-    checkJsonOnly(dashboard, *ownerOf("dashboard"), tally, options.quiet, streams.err);
   }
 
   tally.writeSummary(vehicleName, streams.out);

@@ -14,15 +14,15 @@
 //   the loader every service starts with), then config::buildCatalog;
 // - the FSM file: fsm::checkMachine (the openvcu_fsm library vcu-fsm runs, already linked
 //   by `vcu fsm`), after the schedule's JSON (the machine's send groups come from it);
-// - schedule, simulation, receive and the HMI dashboard (dashboard.json beside vehicle.json,
-//   as vcu-hmi finds it): read with config::readJsonFile (JSON syntax, with line:column)
-//   and required to be a JSON object. Their content is checked by the service that loads
-//   them (vcu-can-tx, vcu-ecu-sim, vcu-can-rx, vcu-hmi) at its start: those loaders live in
-//   the services' own src/ folders, which `vcu` does not link (STYLE.md 16); a note on
-//   stderr says so for each such file.
-//   The schedule's cycles ("messages": {NAME: {"cycleMs": N}}) are checked here as well,
-//   with config::checkCycleMs (shared/config/transmit_limits.hpp, the rule vcu-can-tx uses).
-// When vehicle.json itself has errors, the other files named in it get the JSON check only.
+// - the schedule, simulation and receive files and the HMI dashboard (dashboard.json beside
+//   vehicle.json, as vcu-hmi finds it): read with config::readJsonFile (JSON syntax, with
+//   line:column) and required to be a JSON object, then loaded with the loader the service
+//   starts with: schedule::loadSchedule (shared/schedule; vcu-can-tx), config::loadSimConfig
+//   (vcu-ecu-sim), config::loadReceiveConfig (vcu-can-rx) and config::loadDashboardConfig
+//   (vcu-hmi), all in shared/ (STYLE.md 16). Each reports its first error, with the file
+//   and the JSON path.
+// When vehicle.json itself has errors, the other files named in it and the dashboard get the
+// JSON check only (the loaders need the vehicle and its catalog).
 
 #include <cstddef>
 #include <string>

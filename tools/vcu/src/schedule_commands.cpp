@@ -22,7 +22,7 @@
 #include "diagnostics.hpp"
 #include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/core/text.hpp"
-#include "schedule_import.hpp"
+#include "openvcu/schedule/schedule_import.hpp"
 
 namespace openvcu::cli {
 namespace {
@@ -324,7 +324,7 @@ void addDefault(CLI::App& group, CommandContext& context) {
 ExitCode runScheduleImport(const ScheduleImportOptions& options, Streams streams) {
   const auto maybeGroupSignals = parseGroupSignals(options.groupSignals, streams.err);
   if (!maybeGroupSignals) return ExitCode::Usage;
-  ImportOptions importOptions;
+  schedule::ImportOptions importOptions;
   importOptions.groupSignals = *maybeGroupSignals;
   importOptions.node = options.node;
 
@@ -355,7 +355,7 @@ ExitCode runScheduleImport(const ScheduleImportOptions& options, Streams streams
     return ExitCode::Failure;
   }
   std::vector<Error> diagnostics;
-  auto importResult = importScheduleCsv(*readResult, options.csvFile, database, importOptions, &diagnostics);
+  auto importResult = schedule::importScheduleCsv(*readResult, options.csvFile, database, importOptions, &diagnostics);
   std::size_t errors = 0;
   for (const Error& diagnostic : diagnostics) {
     report(streams.err, diagnostic);
@@ -417,7 +417,8 @@ ExitCode runScheduleCommand(const ScheduleCommandOptions& options, Streams strea
       const auto maybeMs = parseMilliseconds(options.value);
       if (!maybeMs) {
         reportError(streams.err,
-                    "cycle time '" + options.value + "': expected milliseconds, 1.." + std::to_string(MAX_CYCLE_MS));
+                    "cycle time '" + options.value + "': expected milliseconds, 1.." +
+                        std::to_string(config::MAX_CYCLE_MS));
         return ExitCode::Failure;
       }
       if (const auto problem = config::checkCycleMs(*maybeMs)) {  // whole ms, the limits every reader uses

@@ -6,10 +6,10 @@
 //   vcu schedule disable CMD_MOT_9               stop sending a message (enable: again)
 //   vcu schedule default Vehicle_Control_Unit.HC1_Demands.ControlWord 6   value sent while nothing commands it
 //
-// import works offline (schedule_import.hpp has the sheet's rules). The others are checked
-// commands answered by vcu-can-tx ("accepted" / "refused: reason"), effective at the next
-// frame and kept across restarts in its overlay; an unknown message or key is refused here,
-// with a "did you mean", before anything is sent.
+// import works offline (openvcu/schedule/schedule_import.hpp has the sheet's rules). The
+// others are checked commands answered by vcu-can-tx ("accepted" / "refused: reason"),
+// effective at the next frame and kept across restarts in its overlay; an unknown message
+// or key is refused here, with a "did you mean", before anything is sent.
 
 #include <cstdint>
 #include <string>

@@ -11,7 +11,7 @@
 
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/transmit_limits.hpp"
-#include "schedule_config.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
 
 using namespace openvcu;
 
@@ -39,10 +39,10 @@ struct Fixture {
     std::error_code ignored;
     std::filesystem::remove_all(folder, ignored);
   }
-  Result<cantx::Schedule> load(const std::string& json) {
+  Result<schedule::Schedule> load(const std::string& json) {
     vehicle.scheduleFile = (folder / "schedule.json").string();
     std::ofstream(vehicle.scheduleFile) << json;
-    return cantx::loadSchedule(vehicle, catalog);
+    return schedule::loadSchedule(vehicle, catalog);
   }
   std::string error(const std::string& json) {
     auto result = load(json);
@@ -76,8 +76,8 @@ TEST_CASE("#19 a fractional or too short cycle in the schedule file is refused, 
 
   const auto whole = f.load(R"({"messages": {"PDU_Rx_1": {"cycleMs": 20}, "HC1_Demands": {"cycleMs": 0}}})");
   REQUIRE_MESSAGE(whole, whole.error().toString());
-  const auto pdu = cantx::findScheduled(*whole, f.vehicle, "PDU_Rx_1");
-  const auto hc1 = cantx::findScheduled(*whole, f.vehicle, "HC1_Demands");
+  const auto pdu = schedule::findScheduled(*whole, f.vehicle, "PDU_Rx_1");
+  const auto hc1 = schedule::findScheduled(*whole, f.vehicle, "HC1_Demands");
   REQUIRE(pdu);
   REQUIRE(hc1);
   CHECK(whole->messages[*pdu].cycleNs == 20 * NS_PER_MS);
@@ -88,14 +88,14 @@ TEST_CASE("#19 runtime cycle changes and added messages take whole milliseconds 
   Fixture f;
   const auto schedule = f.load("{}");
   REQUIRE(schedule);
-  const auto pdu = cantx::findScheduled(*schedule, f.vehicle, "PDU_Rx_1");
+  const auto pdu = schedule::findScheduled(*schedule, f.vehicle, "PDU_Rx_1");
   REQUIRE(pdu);
-  const cantx::ScheduledMessage& entry = schedule->messages[*pdu];
+  const schedule::ScheduledMessage& entry = schedule->messages[*pdu];
 
-  CHECK(cantx::checkCycle(entry, 0.5) == "the cycle must be a whole number of ms from 1 to 3600000, not 0.5");
-  CHECK(cantx::checkCycle(entry, 1.5).has_value());
-  CHECK_FALSE(cantx::checkCycle(entry, config::MIN_CYCLE_MS).has_value());
-  const auto added = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 0.5);
+  CHECK(schedule::checkCycle(entry, 0.5) == "the cycle must be a whole number of ms from 1 to 3600000, not 0.5");
+  CHECK(schedule::checkCycle(entry, 1.5).has_value());
+  CHECK_FALSE(schedule::checkCycle(entry, config::MIN_CYCLE_MS).has_value());
+  const auto added = schedule::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 0.5);
   REQUIRE_FALSE(added);
   CHECK(added.error().message.find("not 0.5") != std::string::npos);
 }
@@ -104,7 +104,7 @@ TEST_CASE("#19 a schedule whose cyclic frames would take over half the bus is re
   Fixture f;
   const auto hhea = f.load("{}");  // every transmitted message at its DBC cycle
   REQUIRE(hhea);
-  CHECK_FALSE(cantx::checkBusLoad(*hhea, f.vehicle).has_value());
+  CHECK_FALSE(schedule::checkBusLoad(*hhea, f.vehicle).has_value());
 
   // one 8-byte extended frame every ms is about 30 % of 500 kbit/s: two are over 50 %
   const std::string sut = f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 1}, "HC1_Demands": {"cycleMs": 1}}})");
@@ -121,8 +121,8 @@ TEST_CASE("#19 a message added at run time is refused when the schedule with it 
   const auto schedule = f.load("{}");  // HHEA: about a third of the bus
   REQUIRE(schedule);
 
-  const auto sut = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 1);
-  const auto slower = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 100);
+  const auto sut = schedule::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 1);
+  const auto slower = schedule::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 100);
 
   REQUIRE_FALSE(sut);
   CHECK(sut.error().message.find("the cyclic frames on bus 'vehicle' would take") != std::string::npos);

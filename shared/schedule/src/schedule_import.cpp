@@ -1,6 +1,6 @@
 // The schedule sheet import: CSV text -> records -> per-message rows (checked against the
 // DBC as they come) -> per-message checks -> the schedule JSON. The rules are in the header.
-#include "schedule_import.hpp"
+#include "openvcu/schedule/schedule_import.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -15,10 +15,7 @@
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/signals/catalog.hpp"
 
-namespace openvcu::cli {
-
-const std::uint32_t MIN_CYCLE_MS = config::MIN_CYCLE_MS;
-const std::uint32_t MAX_CYCLE_MS = config::MAX_CYCLE_MS;
+namespace openvcu::schedule {
 
 namespace {
 
@@ -530,8 +527,9 @@ class Importer {
     if (isEmptyCell(text)) return;
     const auto maybeMs = parseWholeNumber(text);
     if (!maybeMs || config::checkCycleMs(static_cast<double>(*maybeMs))) {
-      m_diagnostics.error(m_line, "CycleTime '" + text + "' is not whole milliseconds " + std::to_string(MIN_CYCLE_MS) +
-                                      ".." + std::to_string(MAX_CYCLE_MS));
+      m_diagnostics.error(m_line, "CycleTime '" + text + "' is not whole milliseconds " +
+                                      std::to_string(config::MIN_CYCLE_MS) + ".." +
+                                      std::to_string(config::MAX_CYCLE_MS));
       return;
     }
     const auto ms = static_cast<std::uint32_t>(*maybeMs);
@@ -561,7 +559,7 @@ class Importer {
       return;
     }
     const double us = std::round(*maybeMs * 1000.0);
-    if (us > static_cast<double>(MAX_CYCLE_MS) * 1000.0) {
+    if (us > static_cast<double>(config::MAX_CYCLE_MS) * 1000.0) {
       m_diagnostics.error(m_line, "DeltaTime '" + text + "' ms is longer than any cycle time");
       return;
     }
@@ -770,4 +768,4 @@ Result<nlohmann::ordered_json> importScheduleCsv(std::string_view text, const st
   return schedule;
 }
 
-}  // namespace openvcu::cli
+}  // namespace openvcu::schedule

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "sim_config.hpp"
+#include "openvcu/config/simulation.hpp"
 
 using namespace openvcu;
 namespace fs = std::filesystem;
@@ -17,12 +17,12 @@ namespace {
 
 const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
 
-Result<ecusim::SimConfig> loadText(const std::string& text) {
+Result<config::SimConfig> loadText(const std::string& text) {
   auto vehicle = config::loadVehicleConfig(HHEA);
   REQUIRE_MESSAGE(vehicle, (vehicle ? "" : vehicle.error().toString()));
   const fs::path file = fs::temp_directory_path() / ("openvcu-sim-input-" + std::to_string(::getpid()) + ".json");
   std::ofstream(file) << text;
-  auto result = ecusim::loadSimConfig(file.string(), *vehicle);
+  auto result = config::loadSimConfig(file.string(), *vehicle);
   fs::remove(file);
   return result;
 }

@@ -1,6 +1,7 @@
 #pragma once
-// can-rx's own settings: the file named by "receive" in the vehicle configuration
-// (config/hhea/receive.json). Every key is optional; without the file the defaults hold.
+// The receive settings of vcu-can-rx: the file named by "receive" in the vehicle
+// configuration (config/hhea/receive.json), loaded by vcu-can-rx and checked by `vcu check`.
+// Every key is optional; without the file the defaults hold.
 //
 //   {
 //     "timeoutFactor": 3,                                  // timeout = 3 x the DBC cycle
@@ -22,7 +23,7 @@
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 
-namespace openvcu::canrx {
+namespace openvcu::config {
 
 /// A J1939-76 safety data group another node sends us: the SDM (a DBC message) and the
 /// receiver's time limits. The SHM identifier follows from the SDM's.
@@ -64,4 +65,4 @@ ReceiveConfig defaultReceiveConfig(const config::VehicleConfig& vehicle);
 /// JSON path ("receive.json: /messages/HVESS1: unknown message; did you mean ...").
 Result<ReceiveConfig> loadReceiveConfig(const config::VehicleConfig& vehicle);
 
-}  // namespace openvcu::canrx
+}  // namespace openvcu::config

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "display_logic.hpp"
+#include "openvcu/config/dashboard.hpp"
 
 using namespace openvcu;
-using namespace openvcu::hmi;
+using namespace openvcu::config;
 
 TEST_CASE("#19 a dashboard file with a key given twice is refused with both places") {
   std::vector<signals::SignalInfo> infos;

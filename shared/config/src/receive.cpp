@@ -1,4 +1,4 @@
-#include "receive_config.hpp"
+#include "openvcu/config/receive.hpp"
 
 #include <cmath>
 #include <optional>
@@ -7,7 +7,7 @@
 #include "openvcu/core/text.hpp"
 #include "openvcu/j1939/id.hpp"
 
-namespace openvcu::canrx {
+namespace openvcu::config {
 namespace {
 
 constexpr std::int64_t NS_PER_MS = 1'000'000;
@@ -286,4 +286,4 @@ Result<ReceiveConfig> loadReceiveConfig(const config::VehicleConfig& vehicle) {
   return std::move(loader.config());
 }
 
-}  // namespace openvcu::canrx
+}  // namespace openvcu::config

@@ -1,6 +1,7 @@
 #pragma once
-// `vcu schedule import`: the thesis' schedule sheet (its Excel workbook exported as CSV)
-// converted into the schedule JSON of docs/design/can-tx.md, checked against the DBC.
+// The writer of schedule.json behind `vcu schedule import`: the thesis' schedule sheet (its
+// Excel workbook exported as CSV) converted into the schedule JSON of docs/design/can-tx.md,
+// checked against the DBC; loadSchedule (schedule_config.hpp) reads what it writes.
 //
 //   NodeName,SheetName,UniqueID,Message,Signal,DeltaTime,IsSHM,CycleTime,Value
 //   Battery,shm,61427,S1_ES_PGN61427,Control_Es_Relay,0.292,1,20,3
@@ -71,7 +72,7 @@ namespace openvcu::signals {
 class Catalog;
 }
 
-namespace openvcu::cli {
+namespace openvcu::schedule {
 
 /// The sheet's columns, in the original workbook's order.
 inline constexpr std::array<std::string_view, 9> SCHEDULE_CSV_COLUMNS = {
@@ -79,12 +80,6 @@ inline constexpr std::array<std::string_view, 9> SCHEDULE_CSV_COLUMNS = {
 
 /// Prefix of the default send-group keys: NodeName "Battery" -> "internal.tx.Battery".
 inline constexpr std::string_view GROUP_SIGNAL_PREFIX = "internal.tx.";
-
-/// The cycle limits of every schedule reader, ms: config::MIN_CYCLE_MS and MAX_CYCLE_MS
-/// (openvcu/config/transmit_limits.hpp), given here because vcu's library keeps
-/// openvcu::config private; defined from them in schedule_import.cpp.
-extern const std::uint32_t MIN_CYCLE_MS;
-extern const std::uint32_t MAX_CYCLE_MS;
 
 struct ImportOptions {
   /// This VCU's DBC node: a message it does not transmit gets a warning. Empty: no check.
@@ -104,4 +99,4 @@ Result<nlohmann::ordered_json> importScheduleCsv(std::string_view text, const st
                                                  const dbc::Database& database, const ImportOptions& options,
                                                  std::vector<Error>* diagnostics);
 
-}  // namespace openvcu::cli
+}  // namespace openvcu::schedule

@@ -1,8 +1,9 @@
 #pragma once
 // The simulation parameters ("simulation" in vehicle.json; HHEA: config/hhea/simulation.json):
 // the battery, the loads, the timing of the simulated nodes, the J1939-76 pairs the
-// simulated VIC checks. Every key optional (defaults below); unknown keys and bad values are
-// errors with file and JSON path. Reference: services/ecu-sim/README.md.
+// simulated VIC checks; loaded by vcu-ecu-sim and checked by `vcu check`. Every key optional
+// (defaults below); unknown keys and bad values are errors with file and JSON path.
+// Reference: services/ecu-sim/README.md.
 
 #include <cstdint>
 #include <string>
@@ -11,7 +12,7 @@
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 
-namespace openvcu::ecusim {
+namespace openvcu::config {
 
 struct SafetyCheckConfig {
   std::string message;          ///< the SDM's DBC message name ("S1_ES_PGN61427")
@@ -51,4 +52,4 @@ struct SimConfig {
 /// Loads `path` (empty: the defaults and the S1_ES pair of the HHEA DBC when present).
 Result<SimConfig> loadSimConfig(const std::string& path, const config::VehicleConfig& vehicle);
 
-}  // namespace openvcu::ecusim
+}  // namespace openvcu::config

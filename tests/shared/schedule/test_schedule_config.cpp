@@ -10,7 +10,7 @@
 #include <string>
 
 #include "openvcu/config/catalog.hpp"
-#include "schedule_config.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
 
 using namespace openvcu;
 
@@ -42,17 +42,17 @@ struct Fixture {
     std::ofstream(path) << text;
     return path;
   }
-  Result<cantx::Schedule> load(const std::string& json) {
+  Result<schedule::Schedule> load(const std::string& json) {
     vehicle.scheduleFile = write("schedule.json", json);
-    return cantx::loadSchedule(vehicle, catalog);
+    return schedule::loadSchedule(vehicle, catalog);
   }
   std::string error(const std::string& json) {
     auto result = load(json);
     REQUIRE_MESSAGE(!result, json);
     return result.error().toString();
   }
-  const cantx::ScheduledMessage& entry(const cantx::Schedule& schedule, const std::string& name) {
-    auto found = cantx::findScheduled(schedule, vehicle, name);
+  const schedule::ScheduledMessage& entry(const schedule::Schedule& schedule, const std::string& name) {
+    auto found = schedule::findScheduled(schedule, vehicle, name);
     REQUIRE_MESSAGE(found, name);
     return schedule.messages[*found];
   }
@@ -63,20 +63,20 @@ struct Fixture {
 TEST_CASE("without a file: every message the node transmits, at its DBC cycle, safety headers left out") {
   Fixture f;
   f.vehicle.scheduleFile.clear();
-  auto schedule = cantx::loadSchedule(f.vehicle, f.catalog);
+  auto schedule = schedule::loadSchedule(f.vehicle, f.catalog);
   REQUIRE_MESSAGE(schedule, (schedule ? "" : schedule.error().toString()));
   CHECK(schedule->messages.size() == 36);  // 38 VCU messages minus the two SHM definitions
   CHECK(f.entry(*schedule, "S1_ES_PGN61427").cycleNs == 20'000'000);
   CHECK(f.entry(*schedule, "CMD_SYS_1").cycleNs == 10'000'000);
   CHECK(f.entry(*schedule, "TD_PGN65254").cycleNs == 0);  // on request only
   CHECK(!f.entry(*schedule, "S1_ES_PGN61427").safetyDeltaNs);
-  CHECK(!cantx::findScheduled(*schedule, f.vehicle, "SHM_VCU_to_VIC"));
+  CHECK(!schedule::findScheduled(*schedule, f.vehicle, "SHM_VCU_to_VIC"));
   CHECK(schedule->overlay == f.vehicle.directory + "/schedule.overlay.json");
 }
 
 TEST_CASE("the HHEA schedule: keep-alive group, five safety pairs, HVLP computed fields, writer and safe values") {
   Fixture f;
-  auto schedule = cantx::loadSchedule(f.vehicle, f.catalog);
+  auto schedule = schedule::loadSchedule(f.vehicle, f.catalog);
   REQUIRE_MESSAGE(schedule, (schedule ? "" : schedule.error().toString()));
   const auto& s1 = f.entry(*schedule, "S1_ES_PGN61427");
   REQUIRE(s1.safetyDeltaNs);
@@ -84,7 +84,7 @@ TEST_CASE("the HHEA schedule: keep-alive group, five safety pairs, HVLP computed
   REQUIRE(s1.group);
   CHECK(schedule->groups[*s1.group].name == "keepAlive");
   CHECK(f.entry(*schedule, "HC3_Battery_Demands_4").computed.size() == 2);
-  CHECK(f.entry(*schedule, "HC3_Battery_Demands_4").computed[0].algorithm == cantx::FieldAlgorithm::Counter);
+  CHECK(f.entry(*schedule, "HC3_Battery_Demands_4").computed[0].algorithm == schedule::FieldAlgorithm::Counter);
   CHECK(f.entry(*schedule, "PDU_Rx_1").onChange);
   REQUIRE(schedule->writers.size() == 1);
   CHECK(schedule->writers[0].service == "fsm");
@@ -145,21 +145,21 @@ TEST_CASE("the overlay: applied over the schedule all or nothing, saved atomical
   auto schedule = f.load(R"({"overlay": "runtime.json"})");
   REQUIRE(schedule);
   CHECK(schedule->overlay == (f.folder / "runtime.json").string());
-  auto missing = cantx::loadOverlay(schedule->overlay);
+  auto missing = schedule::loadOverlay(schedule->overlay);
   REQUIRE(missing);
   CHECK(missing->empty());
 
-  cantx::Overlay overlay;
+  schedule::Overlay overlay;
   overlay.messages.push_back({"CCVS1_PGN65265", 50.0, false});
   overlay.defaults.emplace_back("Vehicle_Control_Unit.CCVS1_PGN65265.Wheel_Based_Veh_Spd", 12.5);
   overlay.overrides.emplace_back("Vehicle_Control_Unit.HC1_Demands.ControlWord", 6);
-  REQUIRE(cantx::saveOverlay(schedule->overlay, overlay));
+  REQUIRE(schedule::saveOverlay(schedule->overlay, overlay));
   for (const auto& item : std::filesystem::directory_iterator(f.folder)) {
     CHECK(item.path().filename().string().find(".tmp") == std::string::npos);  // no temporary left
   }
-  auto loaded = cantx::loadOverlay(schedule->overlay);
+  auto loaded = schedule::loadOverlay(schedule->overlay);
   REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
-  auto applied = cantx::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
+  auto applied = schedule::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
   REQUIRE_MESSAGE(applied, (applied ? "" : applied.error().toString()));
   const auto& ccvs = f.entry(*applied, "CCVS1_PGN65265");
   CHECK(ccvs.cycleNs == 50'000'000);
@@ -169,33 +169,33 @@ TEST_CASE("the overlay: applied over the schedule all or nothing, saved atomical
 
   // one bad entry refuses the whole overlay, naming it
   loaded->defaults.emplace_back("Vehicle_Control_Unit.HC1_Demands.ControlWord", 1e9);
-  auto refused = cantx::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
+  auto refused = schedule::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
   REQUIRE(!refused);
   CHECK(refused.error().message.find("/defaults/Vehicle_Control_Unit.HC1_Demands.ControlWord: value") !=
         std::string::npos);
   CHECK(f.entry(*schedule, "CCVS1_PGN65265").cycleNs == 100'000'000);  // the original is untouched
 
   f.write("runtime.json", R"({"format": 1, "messages": {"CCVS1_PGN65265": {"cycle": 5}}})");
-  auto unknownKey = cantx::loadOverlay(schedule->overlay);
+  auto unknownKey = schedule::loadOverlay(schedule->overlay);
   REQUIRE(!unknownKey);
   CHECK(unknownKey.error().toString().find("/messages/CCVS1_PGN65265") != std::string::npos);
 }
 
 TEST_CASE("checkCycle: whole ms 1..3600000 and longer than the safety delta") {
-  cantx::ScheduledMessage message;
+  schedule::ScheduledMessage message;
   message.safetyDeltaNs = 2'000'000;
-  CHECK(cantx::checkCycle(message, 0.5));
-  CHECK(cantx::checkCycle(message, 2.0));
-  CHECK(cantx::checkCycle(message, 2.5));  // #19: whole milliseconds only
-  CHECK(!cantx::checkCycle(message, 3.0));
-  CHECK(cantx::checkCycle(message, 4e6));
+  CHECK(schedule::checkCycle(message, 0.5));
+  CHECK(schedule::checkCycle(message, 2.0));
+  CHECK(schedule::checkCycle(message, 2.5));  // #19: whole milliseconds only
+  CHECK(!schedule::checkCycle(message, 3.0));
+  CHECK(schedule::checkCycle(message, 4e6));
 }
 
 TEST_CASE("runtimeMessage: any DBC message on a bus joins at a checked cycle, and the overlay keeps it across restarts") {
   Fixture f;
   auto schedule = f.load(R"({"overlay": "runtime.json"})");
   REQUIRE(schedule);
-  auto added = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 100);
+  auto added = schedule::runtimeMessage(*schedule, f.vehicle, f.catalog, "HVESSD2_PGN61585", 100);
   REQUIRE_MESSAGE(added, (added ? "" : added.error().toString()));
   CHECK(added->added);
   CHECK(added->cycleNs == 100'000'000);
@@ -203,7 +203,7 @@ TEST_CASE("runtimeMessage: any DBC message on a bus joins at a checked cycle, an
   CHECK(added->keys.size() == added->defaults.size());
   CHECK(!added->group);
   auto refusal = [&](const std::string& name, double cycleMs) {
-    auto result = cantx::runtimeMessage(*schedule, f.vehicle, f.catalog, name, cycleMs);
+    auto result = schedule::runtimeMessage(*schedule, f.vehicle, f.catalog, name, cycleMs);
     REQUIRE_MESSAGE(!result, name);
     return result.error().message;
   };
@@ -212,15 +212,15 @@ TEST_CASE("runtimeMessage: any DBC message on a bus joins at a checked cycle, an
   CHECK(refusal("SHM_VCU_to_VIC", 100).find("safety header") != std::string::npos);
   CHECK(refusal("HVESSD2_PGN61585", 0).find("whole number of ms from 1 to 3600000") != std::string::npos);
 
-  cantx::Overlay overlay;
+  schedule::Overlay overlay;
   overlay.messages.push_back({"HVESSD2_PGN61585", 100.0, std::nullopt, true});
   overlay.defaults.emplace_back("VIC.HVESSD2_PGN61585.HS_FastUpdSOC", 55);
-  REQUIRE(cantx::saveOverlay(schedule->overlay, overlay));
-  auto loaded = cantx::loadOverlay(schedule->overlay);
+  REQUIRE(schedule::saveOverlay(schedule->overlay, overlay));
+  auto loaded = schedule::loadOverlay(schedule->overlay);
   REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
   REQUIRE(loaded->messages.size() == 1);
   CHECK(loaded->messages[0].added);
-  auto applied = cantx::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
+  auto applied = schedule::applyOverlay(*schedule, *loaded, f.vehicle, f.catalog);
   REQUIRE_MESSAGE(applied, (applied ? "" : applied.error().toString()));
   CHECK(applied->messages.size() == schedule->messages.size() + 1);
   const auto& hvessd2 = f.entry(*applied, "HVESSD2_PGN61585");
@@ -230,43 +230,43 @@ TEST_CASE("runtimeMessage: any DBC message on a bus joins at a checked cycle, an
 
   // an added message without its cycle, or one the schedule already has, refuses the overlay
   f.write("runtime.json", R"({"format": 1, "messages": {"HVESSD2_PGN61585": {"added": true}}})");
-  auto noCycle = cantx::loadOverlay(schedule->overlay);
+  auto noCycle = schedule::loadOverlay(schedule->overlay);
   REQUIRE(!noCycle);
   CHECK(noCycle.error().toString().find("/messages/HVESSD2_PGN61585/cycleMs") != std::string::npos);
   f.write("runtime.json", R"({"format": 1, "messages": {"CCVS1_PGN65265": {"added": true, "cycleMs": 50}}})");
-  auto twice = cantx::loadOverlay(schedule->overlay);
+  auto twice = schedule::loadOverlay(schedule->overlay);
   REQUIRE(twice);
-  auto refused = cantx::applyOverlay(*schedule, *twice, f.vehicle, f.catalog);
+  auto refused = schedule::applyOverlay(*schedule, *twice, f.vehicle, f.catalog);
   REQUIRE(!refused);
   CHECK(refused.error().message.find("/messages/CCVS1_PGN65265: 'CCVS1_PGN65265' is already") != std::string::npos);
 }
 
 TEST_CASE("issue 18: an SDM and another message of equal PGN, SA and DA are warned about, naming both") {
   Fixture f;
-  auto schedule = cantx::loadSchedule(f.vehicle, f.catalog);
+  auto schedule = schedule::loadSchedule(f.vehicle, f.catalog);
   REQUIRE_MESSAGE(schedule, (schedule ? "" : schedule.error().toString()));
-  const auto warnings = cantx::safetyIdentityWarnings(*schedule, f.vehicle);
+  const auto warnings = schedule::safetyIdentityWarnings(*schedule, f.vehicle);
   REQUIRE(warnings.size() == 1);
   CHECK_MESSAGE(warnings[0].starts_with("S1_ES_PGN61427 (0x0CEFF321, J1939-76 SDM) and PropA_C4_PGN61184 (0x18EFF321) "
                                         "have the same PGN 0xEF00, source 0x21 and destination 0xF3 on bus vehicle"),
                 warnings[0]);
   // the pairs that include one message: PropA_C4 has one, CMD_SYS_1 none
-  const auto propA = cantx::findScheduled(*schedule, f.vehicle, "PropA_C4_PGN61184");
-  const auto sys1 = cantx::findScheduled(*schedule, f.vehicle, "CMD_SYS_1");
+  const auto propA = schedule::findScheduled(*schedule, f.vehicle, "PropA_C4_PGN61184");
+  const auto sys1 = schedule::findScheduled(*schedule, f.vehicle, "CMD_SYS_1");
   REQUIRE(propA);
   REQUIRE(sys1);
-  CHECK(cantx::safetyIdentityWarnings(*schedule, f.vehicle, *propA).size() == 1);
-  CHECK(cantx::safetyIdentityWarnings(*schedule, f.vehicle, *sys1).empty());
+  CHECK(schedule::safetyIdentityWarnings(*schedule, f.vehicle, *propA).size() == 1);
+  CHECK(schedule::safetyIdentityWarnings(*schedule, f.vehicle, *sys1).empty());
 }
 
 TEST_CASE("issue 18: equal PGN, SA and DA without an SDM, or the SDM alone, is not warned about") {
   Fixture f;
   f.vehicle.scheduleFile.clear();  // defaults: S1_ES and PropA_C4 both plain messages
-  auto plain = cantx::loadSchedule(f.vehicle, f.catalog);
+  auto plain = schedule::loadSchedule(f.vehicle, f.catalog);
   REQUIRE(plain);
-  CHECK(cantx::safetyIdentityWarnings(*plain, f.vehicle).empty());
+  CHECK(schedule::safetyIdentityWarnings(*plain, f.vehicle).empty());
   auto alone = f.load(R"({"exclude": ["PropA_C4_PGN61184"],
                           "messages": {"S1_ES_PGN61427": {"safety": {"deltaUs": 292}}}})");
   REQUIRE_MESSAGE(alone, (alone ? "" : alone.error().toString()));
-  CHECK(cantx::safetyIdentityWarnings(*alone, f.vehicle).empty());
+  CHECK(schedule::safetyIdentityWarnings(*alone, f.vehicle).empty());
 }

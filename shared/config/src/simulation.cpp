@@ -1,8 +1,8 @@
-#include "sim_config.hpp"
+#include "openvcu/config/simulation.hpp"
 
 #include "openvcu/config/json.hpp"
 
-namespace openvcu::ecusim {
+namespace openvcu::config {
 namespace {
 
 using config::Json;
@@ -139,4 +139,4 @@ Result<SimConfig> loadSimConfig(const std::string& path, const config::VehicleCo
   return std::move(loader.config());
 }
 
-}  // namespace openvcu::ecusim
+}  // namespace openvcu::config

@@ -1,9 +1,10 @@
 #pragma once
-// can-tx's schedule: the file named by "schedule" in the vehicle configuration
+// The transmit schedule: the file named by "schedule" in the vehicle configuration
 // (config/hhea/schedule.json), resolved against the DBC, plus the overlay of runtime changes.
-// Format and rules: docs/design/can-tx.md.
+// vcu-can-tx sends by it and `vcu check` checks it with this loader. Format and rules:
+// docs/design/can-tx.md.
 //
-//   auto scheduleResult = cantx::loadSchedule(vehicle, catalog);
+//   auto scheduleResult = schedule::loadSchedule(vehicle, catalog);
 //   if (!scheduleResult) return scheduleResult.error();   // "schedule.json: /messages/X/cycleMs: ..."
 
 #include <cstdint>
@@ -15,7 +16,7 @@
 #include "openvcu/core/result.hpp"
 #include "openvcu/signals/catalog.hpp"
 
-namespace openvcu::cantx {
+namespace openvcu::schedule {
 
 enum class FieldAlgorithm : std::uint8_t { Counter, Sum8, Xor8, Crc8SaeJ1850, J1939Checksum4 };
 
@@ -156,4 +157,4 @@ struct SignalRef {
 Result<SignalRef> findScheduledSignal(const Schedule& schedule, const config::VehicleConfig& vehicle,
                                       const signals::Catalog& catalog, std::string_view key);
 
-}  // namespace openvcu::cantx
+}  // namespace openvcu::schedule

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "receive_config.hpp"
+#include "openvcu/config/receive.hpp"
 
 using namespace openvcu;
 namespace fs = std::filesystem;
@@ -17,13 +17,13 @@ namespace {
 
 const std::string DATA = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/can-rx/";
 
-Result<canrx::ReceiveConfig> loadText(const std::string& text) {
+Result<config::ReceiveConfig> loadText(const std::string& text) {
   auto loaded = config::loadVehicleConfig(DATA + "vehicle.json");
   REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
   const fs::path file = fs::temp_directory_path() / ("receive-input-" + std::to_string(::getpid()) + ".json");
   std::ofstream(file) << text;
   loaded->receiveFile = file.string();
-  auto result = canrx::loadReceiveConfig(*loaded);
+  auto result = config::loadReceiveConfig(*loaded);
   fs::remove(file);
   return result;
 }

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "receive_config.hpp"
+#include "openvcu/config/receive.hpp"
 
 using namespace openvcu;
 namespace fs = std::filesystem;
@@ -30,12 +30,12 @@ std::size_t messageIndex(const config::VehicleConfig& v, std::string_view name) 
 }
 
 /// Loads `text` as the receive file of the test vehicle.
-Result<canrx::ReceiveConfig> loadText(const std::string& text) {
+Result<config::ReceiveConfig> loadText(const std::string& text) {
   config::VehicleConfig v = vehicle();
   const fs::path file = fs::temp_directory_path() / ("receive-" + std::to_string(::getpid()) + ".json");
   std::ofstream(file) << text;
   v.receiveFile = file.string();
-  auto result = canrx::loadReceiveConfig(v);
+  auto result = config::loadReceiveConfig(v);
   fs::remove(file);
   return result;
 }
@@ -51,7 +51,7 @@ std::string errorOf(const std::string& text) {
 TEST_CASE("without a receive file the timeout is three DBC cycles for messages others send") {
   config::VehicleConfig v = vehicle();
   v.receiveFile.clear();
-  const canrx::ReceiveConfig sut = canrx::defaultReceiveConfig(v);
+  const config::ReceiveConfig sut = config::defaultReceiveConfig(v);
   CHECK(sut.timeoutNs[messageIndex(v, "ECU1_Status")] == 60'000'000);
   CHECK(sut.timeoutNs[messageIndex(v, "BMS_Safe")] == 150'000'000);
   CHECK(sut.timeoutNs[messageIndex(v, "VCU_Cmd")] == 0);  // sent by this node
@@ -63,7 +63,7 @@ TEST_CASE("without a receive file the timeout is three DBC cycles for messages o
 
 TEST_CASE("the test receive file sets a factor, a per-message timeout, a safety group and forwarding") {
   const config::VehicleConfig v = vehicle();
-  auto result = canrx::loadReceiveConfig(v);
+  auto result = config::loadReceiveConfig(v);
   REQUIRE_MESSAGE(result, (result ? "" : result.error().toString()));
   CHECK(result->timeoutNs[messageIndex(v, "Std_Msg")] == 0);
   REQUIRE(result->safety.size() == 1);

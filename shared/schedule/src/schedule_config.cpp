@@ -1,4 +1,4 @@
-#include "schedule_config.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -16,7 +16,7 @@
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/j1939/safety.hpp"
 
-namespace openvcu::cantx {
+namespace openvcu::schedule {
 namespace {
 
 constexpr std::int64_t NS_PER_MS = 1'000'000;
@@ -751,4 +751,4 @@ Result<SignalRef> findScheduledSignal(const Schedule& schedule, const config::Ve
   return Error{std::move(text)};
 }
 
-}  // namespace openvcu::cantx
+}  // namespace openvcu::schedule

@@ -9,9 +9,9 @@
 #include <filesystem>
 
 #include "openvcu/config/json.hpp"
-#include "schedule_config.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
 
-namespace openvcu::cantx {
+namespace openvcu::schedule {
 namespace {
 
 constexpr std::int64_t NS_PER_MS = 1'000'000;
@@ -160,4 +160,4 @@ Status saveOverlay(const std::string& path, const Overlay& overlay) {
   return {};
 }
 
-}  // namespace openvcu::cantx
+}  // namespace openvcu::schedule
