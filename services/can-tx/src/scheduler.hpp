@@ -35,6 +35,7 @@
 
 #include "openvcu/can/frame.hpp"
 #include "openvcu/can/link.hpp"
+#include "openvcu/config/services.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/codec.hpp"
@@ -69,7 +70,7 @@ using schedule::SendGroup;
 using schedule::SignalRef;
 using schedule::WatchedWriter;
 
-inline constexpr signals::WriterId CAN_TX_WRITER = 2;
+inline constexpr signals::WriterId CAN_TX_WRITER = config::writerOf(config::ServiceId::CanTx);
 /// After the table lost its values (issue 18), how long a signal or send group whose command
 /// reads as never written keeps the command it last had: until the FSM (which notices within
 /// its 250 ms sleep) has written its commands again, with margin; then the defaults apply.
