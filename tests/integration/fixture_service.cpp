@@ -12,6 +12,7 @@
 
 #include <deque>
 
+#include "openvcu/config/services.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/service/service.hpp"
 
@@ -46,7 +47,11 @@ int main(int argc, char** argv) {
   commandLine.addOption("--as", as, "heartbeat as this service (e.g. fsm: a stand-in command writer)");
   if (const auto maybeExit = commandLine.parseOrExit(argc, argv)) return *maybeExit;
   info.usesFrameStreams = !noFrames;
-  if (!as.empty()) info.name = as;
+  if (!as.empty()) {
+    info.name = as;
+    // a stand-in writes as the service it stands in for (config/services.hpp)
+    if (const auto* known = openvcu::config::findService(as)) info.writerId = known->writer;
+  }
 
   auto serviceResult = service::Service::open(info, commandLine.options());
   if (!serviceResult) return service::reportStartupError(info, serviceResult.error());
