@@ -145,6 +145,28 @@ LogRecord fromLcm(const openvcu_lcm::log_record_t& in) {
   return LogRecord{in.timestamp_ns, in.service, static_cast<LogLevel>(in.level), in.text};
 }
 
+/// Counters as the IDL's parallel arrays (heartbeat_t, stats_t), and back.
+template <typename LcmType>
+void countersToLcm(const std::vector<Counter>& counters, LcmType& out) {
+  out.num_counters = static_cast<std::int32_t>(counters.size());
+  out.counter_names.clear();
+  out.counter_values.clear();
+  out.counter_names.reserve(counters.size());
+  out.counter_values.reserve(counters.size());
+  for (const Counter& counter : counters) {
+    out.counter_names.push_back(counter.name);
+    out.counter_values.push_back(counter.value);
+  }
+}
+template <typename LcmType>
+std::vector<Counter> countersFromLcm(const LcmType& in) {
+  std::vector<Counter> counters;
+  const std::size_t count = std::min(in.counter_names.size(), in.counter_values.size());
+  counters.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) counters.push_back(Counter{in.counter_names[i], in.counter_values[i]});
+  return counters;
+}
+
 bool toLcm(const Heartbeat& in, openvcu_lcm::heartbeat_t& out) {
   if (!fitsArray(in.counters.size())) return false;
   out.timestamp_ns = stampOrNow(in.timestampNs);
@@ -152,25 +174,12 @@ bool toLcm(const Heartbeat& in, openvcu_lcm::heartbeat_t& out) {
   out.instance = in.instance;
   out.pid = in.pid;
   out.uptime_ms = in.uptimeMs;
-  out.num_counters = static_cast<std::int32_t>(in.counters.size());
-  out.counter_names.clear();
-  out.counter_values.clear();
-  out.counter_names.reserve(in.counters.size());
-  out.counter_values.reserve(in.counters.size());
-  for (const Counter& counter : in.counters) {
-    out.counter_names.push_back(counter.name);
-    out.counter_values.push_back(counter.value);
-  }
+  countersToLcm(in.counters, out);
   out.status = in.status;
   return true;
 }
 Heartbeat fromLcm(const openvcu_lcm::heartbeat_t& in) {
-  Heartbeat out{in.timestamp_ns, in.service, in.instance, in.pid, in.uptime_ms, {}, in.status};
-  out.counters.reserve(in.counter_names.size());
-  for (std::size_t i = 0; i < in.counter_names.size() && i < in.counter_values.size(); ++i) {
-    out.counters.push_back(Counter{in.counter_names[i], in.counter_values[i]});
-  }
-  return out;
+  return Heartbeat{in.timestamp_ns, in.service, in.instance, in.pid, in.uptime_ms, countersFromLcm(in), in.status};
 }
 
 bool toLcm(const Stats& in, openvcu_lcm::stats_t& out) {
@@ -181,23 +190,11 @@ bool toLcm(const Stats& in, openvcu_lcm::stats_t& out) {
   out.pid = in.pid;
   out.part = in.part;
   out.parts = in.parts;
-  out.num_counters = static_cast<std::int32_t>(in.counters.size());
-  out.counter_names.clear();
-  out.counter_values.clear();
-  out.counter_names.reserve(in.counters.size());
-  out.counter_values.reserve(in.counters.size());
-  for (const Counter& counter : in.counters) {
-    out.counter_names.push_back(counter.name);
-    out.counter_values.push_back(counter.value);
-  }
+  countersToLcm(in.counters, out);
   return true;
 }
 Stats fromLcm(const openvcu_lcm::stats_t& in) {
-  Stats out{in.timestamp_ns, in.service, in.instance, in.pid, in.part, in.parts, {}};
-  const std::size_t count = std::min(in.counter_names.size(), in.counter_values.size());
-  out.counters.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) out.counters.push_back(Counter{in.counter_names[i], in.counter_values[i]});
-  return out;
+  return Stats{in.timestamp_ns, in.service, in.instance, in.pid, in.part, in.parts, countersFromLcm(in)};
 }
 
 bool toLcm(const TxSchedule& in, openvcu_lcm::tx_schedule_t& out) {
