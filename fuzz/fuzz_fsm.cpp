@@ -7,7 +7,7 @@
 
 #include <vector>
 
-#include "machine.hpp"
+#include "openvcu/fsm/machine.hpp"
 
 using namespace openvcu;
 

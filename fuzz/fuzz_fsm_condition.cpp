@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "engine.hpp"
-#include "machine.hpp"
+#include "openvcu/fsm/engine.hpp"
+#include "openvcu/fsm/machine.hpp"
 
 using namespace openvcu;
 

@@ -2,8 +2,8 @@
 // commands signals, publishes transitions with their cause, resumes after a restart and
 // reloads on command. README.md; the file format: docs/fsm.md.
 
-#include "engine.hpp"
 #include "fsm_app.hpp"
+#include "openvcu/fsm/engine.hpp"
 #include "openvcu/service/main.hpp"
 
 namespace service = openvcu::service;

@@ -13,10 +13,10 @@
 #include <mutex>
 #include <thread>
 
-#include "engine.hpp"
-#include "machine.hpp"
 #include "reload_file.hpp"
 #include "reload_worker.hpp"
+#include "openvcu/fsm/engine.hpp"
+#include "openvcu/fsm/machine.hpp"
 
 namespace openvcu::fsm {
 namespace {

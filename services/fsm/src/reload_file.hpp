@@ -26,9 +26,9 @@
 #include <string>
 #include <vector>
 
-#include "machine.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/signals/catalog.hpp"
 
 namespace openvcu::fsm {

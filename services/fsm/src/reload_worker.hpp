@@ -17,8 +17,8 @@
 #include <string>
 #include <thread>
 
-#include "machine.hpp"
 #include "openvcu/core/result.hpp"
+#include "openvcu/fsm/machine.hpp"
 
 namespace openvcu::fsm {
 

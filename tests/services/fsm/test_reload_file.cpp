@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "fsm_test_support.hpp"
 #include "reload_file.hpp"
 #include "reload_worker.hpp"
+#include "shared/fsm/fsm_test_support.hpp"
 
 using namespace openvcu;
 namespace fs = std::filesystem;

@@ -10,13 +10,13 @@
 #include <vector>
 
 #include "diagnostics.hpp"
-#include "machine.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/dashboard.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/config/receive.hpp"
 #include "openvcu/config/simulation.hpp"
 #include "openvcu/config/vehicle.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
 
 namespace openvcu::cli {

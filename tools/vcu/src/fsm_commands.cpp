@@ -10,14 +10,14 @@
 
 #include "check_commands.hpp"
 #include "diagnostics.hpp"
-#include "engine.hpp"
-#include "machine.hpp"
 #include "openvcu/can/log_reader.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/matcher.hpp"
+#include "openvcu/fsm/engine.hpp"
+#include "openvcu/fsm/machine.hpp"
 
 namespace openvcu::cli {
 namespace {

@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "machine.hpp"
 #include "openvcu/config/services.hpp"
 #include "openvcu/core/result.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/ipc/events.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"

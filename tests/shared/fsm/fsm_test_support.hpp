@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "machine.hpp"
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/fsm/machine.hpp"
 
 namespace fsmtest {
 

@@ -11,8 +11,8 @@
 #include <optional>
 #include <string>
 
-#include "engine.hpp"
 #include "fsm_test_support.hpp"
+#include "openvcu/fsm/engine.hpp"
 
 using namespace openvcu;
 

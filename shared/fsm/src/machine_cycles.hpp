@@ -24,8 +24,8 @@
 // guard (engine.hpp, MAX_FIRINGS) bounds what it cannot prove, cycles of more than 64 states
 // and whatever lies beyond the work limits (each reported as a warning).
 
-#include "machine.hpp"
 #include "openvcu/config/json.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/signals/catalog.hpp"
 
 namespace openvcu::fsm {

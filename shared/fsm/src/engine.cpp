@@ -1,4 +1,4 @@
-#include "engine.hpp"
+#include "openvcu/fsm/engine.hpp"
 
 #include <algorithm>
 #include <cmath>

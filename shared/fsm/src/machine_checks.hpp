@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <string>
 
-#include "machine.hpp"
 #include "openvcu/config/json.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/signals/catalog.hpp"
 
 namespace openvcu::fsm {

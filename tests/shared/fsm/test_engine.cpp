@@ -6,8 +6,8 @@
 
 #include <optional>
 
-#include "engine.hpp"
 #include "fsm_test_support.hpp"
+#include "openvcu/fsm/engine.hpp"
 
 using namespace openvcu;
 

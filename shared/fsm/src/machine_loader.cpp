@@ -8,12 +8,12 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "machine.hpp"
 #include "machine_checks.hpp"
 #include "machine_cycles.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/core/text.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/signals/table.hpp"
 
 namespace openvcu::fsm {
