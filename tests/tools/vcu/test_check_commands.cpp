@@ -97,15 +97,19 @@ class FakeService {
       ::execv("/bin/sh", const_cast<char* const*>(argv.data()));
       ::_exit(5);
     }
-    // listening once the socket accepts a connection
-    for (int attempt = 0; attempt < 200; ++attempt) {
+    // ready once the socket accepts a connection and the child has exec'd the script (the
+    // socket listens before execv: a look at /proc/PID/cmdline in between sees the test's)
+    const std::string cmdline = "/proc/" + std::to_string(m_pid) + "/cmdline";
+    for (int attempt = 0; attempt < 500; ++attempt) {
       const int probe = ::socket(AF_UNIX, SOCK_SEQPACKET, 0);
       sockaddr_un address{};
       address.sun_family = AF_UNIX;
       std::strncpy(address.sun_path, socketPath.c_str(), sizeof(address.sun_path) - 1);
       const bool up = ::connect(probe, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0;
       ::close(probe);
-      if (up) return;
+      std::ifstream arguments(cmdline, std::ios::binary);
+      const std::string text((std::istreambuf_iterator<char>(arguments)), std::istreambuf_iterator<char>());
+      if (up && text.find(script) != std::string::npos) return;
       ::usleep(10'000);
     }
     FAIL("the stand-in service did not listen");
