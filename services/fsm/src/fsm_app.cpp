@@ -28,11 +28,6 @@ constexpr std::chrono::milliseconds LONGEST_SLEEP{250};
 constexpr std::uint32_t RELOAD_LOG_BURST = 200;
 /// Keys vcu-fsm answers commands for: the internal signals except can-tx's send groups and
 /// vcu-gpio's keys (internal.gpio.* and the signals of input lines).
-constexpr std::string_view OWNED_PREFIX = "internal.";
-constexpr std::string_view CAN_TX_PREFIX = "internal.tx.";
-constexpr std::string_view GPIO_PREFIX = "internal.gpio.";
-constexpr std::string_view STATUS_PREFIXES[] = {"internal.fsm.", "internal.service.", "internal.bus.",
-                                                "internal.dm1."};
 
 std::int64_t realtimeNs() noexcept {
   timespec now{};
@@ -284,18 +279,9 @@ struct FsmAppImpl {
   // ---- commands (loop thread) -------------------------------------------------------------
 
   service::CommandPolicy commandPolicy() {
-    service::CommandPolicy policy;
-    const config::GpioMap& gpio = runtime.config().gpio;
-    policy.owns = [&gpio](std::string_view key) {
-      return key.starts_with(OWNED_PREFIX) && !key.starts_with(CAN_TX_PREFIX) && !key.starts_with(GPIO_PREFIX) &&
-             gpio.inputBoundTo(key) == nullptr;
-    };
-    policy.veto = [](const ipc::CommandRequest&, const signals::SignalInfo& info) -> std::optional<std::string> {
-      for (const std::string_view prefix : STATUS_PREFIXES) {
-        if (info.key.starts_with(prefix)) return "'" + info.key + "' is a status the stack reports; it cannot be commanded";
-      }
-      return std::nullopt;
-    };
+    // The internal signals the catalog gives vcu-fsm (shared/config/catalog.hpp).
+    service::CommandPolicy policy = service::CommandPolicy::byOwner(runtime.catalog(), FSM_WRITER);
+    policy.veto = [](const ipc::CommandRequest&, const signals::SignalInfo& info) { return service::statusRefusal(info); };
     policy.deferredKinds = {ipc::CommandKind::FsmReload};
     policy.defer = [this](const ipc::CommandRequest& request, service::CommandReply reply) {
       startReload(request.key, std::move(reply));

@@ -19,14 +19,11 @@ namespace {
 /// The longest the output thread sleeps without a table change or a deadline: it also
 /// bounds how long stopping waits for it.
 constexpr std::int64_t LONGEST_SLEEP_NS = 250'000'000;
-constexpr std::string_view OWNED_PREFIX = "internal.gpio.";
-constexpr std::string_view SIM_PREFIX = "internal.gpio.sim.";
 
 }  // namespace
 
-service::CommandPolicy gpioCommandPolicy(const config::GpioMap& map) {
-  service::CommandPolicy policy;
-  policy.owns = [&map](std::string_view key) { return key.starts_with(OWNED_PREFIX) || map.inputBoundTo(key) != nullptr; };
+service::CommandPolicy gpioCommandPolicy(const signals::Catalog& catalog, const config::GpioMap& map) {
+  service::CommandPolicy policy = service::CommandPolicy::byOwner(catalog, GPIO_WRITER);
   policy.veto = [&map](const ipc::CommandRequest& request,
                        const signals::SignalInfo& info) -> std::optional<std::string> {
     const bool setting = request.kind == ipc::CommandKind::SetSignal || request.kind == ipc::CommandKind::OperatorSwitch;
@@ -36,14 +33,15 @@ service::CommandPolicy gpioCommandPolicy(const config::GpioMap& map) {
       }
       return std::nullopt;
     }
-    if (info.key.starts_with(SIM_PREFIX)) {
-      if (map.backend != config::GpioBackend::Sim) {
-        return "the GPIO back end is " + std::string(config::gpioBackendName(map.backend)) +
-               ": the real line sets this input";
-      }
-      return std::nullopt;
+    if (info.reported) {
+      return "'" + info.key + "' is the level vcu-gpio reports for its line; command the bound signal instead";
     }
-    return "'" + info.key + "' is the level vcu-gpio reports for its line; command the bound signal instead";
+    // The rest of vcu-gpio's keys: the simulated input levels "internal.gpio.sim.<line>".
+    if (map.backend != config::GpioBackend::Sim) {
+      return "the GPIO back end is " + std::string(config::gpioBackendName(map.backend)) +
+             ": the real line sets this input";
+    }
+    return std::nullopt;
   };
   return policy;
 }
@@ -94,7 +92,7 @@ struct GpioAppImpl {
     controller = std::move(*controllerResult);
     if (Status started = controller->start(signals::monotonicNowNs()); !started) return started;
     controller->updateOutputs(signals::monotonicNowNs());
-    if (Status answering = runtime.answerCommands(gpioCommandPolicy(map)); !answering) return answering.error();
+    if (Status answering = runtime.answerCommands(gpioCommandPolicy(runtime.catalog(), map)); !answering) return answering.error();
     registerCounters(map);
     runtime.setStatus(std::to_string(map.lines.size()) + " lines on the " + std::string(chip->kind()) + " back end");
     outputThread = std::thread([this] { runOutputs(); });

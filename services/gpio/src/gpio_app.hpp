@@ -30,10 +30,10 @@ class GpioApp {
   std::unique_ptr<GpioAppImpl> m_impl;
 };
 
-/// The command policy of vcu-gpio: it answers for "internal.gpio.*" and for the signals its
-/// input lines are bound to. Accepted: the simulated input levels (sim back end only) and
+/// The command policy of vcu-gpio: it answers for the keys the catalog gives it (its lines'
+/// levels "internal.gpio.*" and the signals its input lines are bound to). Accepted: the simulated input levels (sim back end only) and
 /// overrides of input-bound signals; refused: the line status keys and plain commands of
 /// input-bound signals (vcu-gpio writes those from the line).
-service::CommandPolicy gpioCommandPolicy(const config::GpioMap& map);
+service::CommandPolicy gpioCommandPolicy(const signals::Catalog& catalog, const config::GpioMap& map);
 
 }  // namespace openvcu::gpio

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <optional>
 
+#include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/j1939/id.hpp"
@@ -41,7 +42,7 @@ std::vector<std::int64_t> timeoutsFor(const config::VehicleConfig& vehicle, doub
   std::vector<std::int64_t> timeouts(vehicle.database.messages.size(), 0);
   for (std::size_t m = 0; m < timeouts.size(); ++m) {
     const dbc::Message& message = vehicle.database.messages[m];
-    if (message.transmitter == vehicle.node) continue;
+    if (config::sentBy(message, vehicle.node)) continue;  // the VCU's own: never stale
     if (const auto cycle = cycleMs(vehicle, message)) {
       timeouts[m] = static_cast<std::int64_t>(std::llround(*cycle * factor * static_cast<double>(NS_PER_MS)));
     }
@@ -142,7 +143,7 @@ class Loader {
         m_check.error(path + "/timeoutMs", "must be between 0 (never stale) and 3600000");
         continue;
       }
-      if (m_vehicle.database.messages[*index].transmitter == m_vehicle.node && *timeout > 0) {
+      if (config::sentBy(m_vehicle.database.messages[*index], m_vehicle.node) && *timeout > 0) {
         m_check.error(path, "message '" + name + "' is sent by this node (" + m_vehicle.node +
                                 "); receive timeouts are for messages other nodes send");
         continue;
@@ -171,7 +172,7 @@ class Loader {
                                              "' is not");
         continue;
       }
-      if (sdm.transmitter == m_vehicle.node) {
+      if (config::sentBy(sdm, m_vehicle.node)) {
         m_check.error(path + "/message", "'" + *name + "' is sent by this node; can-rx checks groups other nodes send");
         continue;
       }

@@ -3,7 +3,9 @@
 #include "openvcu/core/input_file.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <utility>
 
@@ -142,6 +144,13 @@ bool globMatch(std::string_view pattern, std::string_view text) noexcept {
   }
   while (p < pattern.size() && pattern[p] == '*') ++p;
   return p == pattern.size();
+}
+
+std::string number(double value) {
+  std::array<char, 32> text{};
+  const auto [end, ec] = std::to_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc{}) return "?";  // 32 characters hold every double: not reached
+  return std::string(text.data(), end);
 }
 
 }  // namespace openvcu::text

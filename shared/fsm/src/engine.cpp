@@ -1,3 +1,4 @@
+#include "openvcu/core/text.hpp"
 #include "openvcu/fsm/engine.hpp"
 
 #include <algorithm>
@@ -9,11 +10,7 @@ namespace {
 
 constexpr double NS_PER_S = 1e9;
 
-std::string number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
+using text::number;
 
 bool compare(CompareOp op, double value, double constant) noexcept {
   switch (op) {

@@ -1,4 +1,5 @@
 #include "machine_checks.hpp"
+#include "openvcu/core/text.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,11 +12,7 @@ namespace {
 
 using config::JsonChecker;
 
-std::string number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
+using text::number;
 
 bool isLeaf(const ConditionNode& node) {
   return node.kind == NodeKind::Compare || node.kind == NodeKind::Quality || node.kind == NodeKind::Age;

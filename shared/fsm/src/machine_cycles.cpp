@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "openvcu/core/text.hpp"
 #include "openvcu/signals/table.hpp"
 
 namespace openvcu::fsm {
@@ -49,11 +50,7 @@ Truth negate(Truth a) {
   return a == Truth::True ? Truth::False : Truth::True;
 }
 
-std::string number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
+using text::number;
 
 /// One signal as a condition sees it (engine.cpp's Sample, with the age instead of a time).
 struct Value {

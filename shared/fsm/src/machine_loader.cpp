@@ -25,9 +25,6 @@ using config::JsonChecker;
 constexpr int MAX_DEPTH = 32;
 constexpr std::string_view OPERATORS[] = {"eq", "ne", "neq", "lt", "gt", "le", "ge", "in"};
 /// Internal signals the stack reports; a machine may read them but never command them.
-constexpr std::string_view STATUS_PREFIXES[] = {"internal.fsm.", "internal.service.", "internal.bus.",
-                                                "internal.dm1.", "internal.gpio."};
-
 std::string inQuotes(std::string_view text) {
   std::string result = "'";
   result += text;
@@ -35,11 +32,7 @@ std::string inQuotes(std::string_view text) {
   return result;
 }
 
-std::string number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
+using text::number;
 
 std::optional<CompareOp> parseOp(std::string_view name) {
   if (name == "eq") return CompareOp::Eq;
@@ -69,7 +62,6 @@ class Loader {
  public:
   Loader(JsonChecker& check, const config::VehicleConfig& vehicle, const signals::Catalog& catalog)
       : m_check(check), m_vehicle(vehicle), m_catalog(catalog) {
-    for (const dbc::Message& message : vehicle.database.messages) m_messages.emplace(message.name, &message);
   }
 
   void load(const Json& root) {
@@ -424,7 +416,10 @@ class Loader {
     const signals::SignalIndex index = *found;
     if (const auto it = m_slots.find(index); it != m_slots.end()) return it->second;
     const auto slot = static_cast<std::uint32_t>(m_machine.signals.size());
-    SignalRef ref{index, (transmitted(index) || internal(index)) ? ReadPlane::Command : ReadPlane::Bus, {}};
+    // What the stack commands (transmitted and internal signals) is read as commanded; what
+    // other nodes send, from the bus.
+    const bool received = m_catalog[index].direction == signals::SignalDirection::Received;
+    SignalRef ref{index, received ? ReadPlane::Bus : ReadPlane::Command, {}};
     for (const config::InternalSignal& declared : m_vehicle.internalSignals) {
       if (key.size() == config::INTERNAL_PREFIX.size() + declared.name.size() && key.ends_with(declared.name) &&
           key.starts_with(config::INTERNAL_PREFIX)) {
@@ -434,19 +429,6 @@ class Loader {
     m_machine.signals.push_back(ref);
     m_slots.emplace(index, slot);
     return slot;
-  }
-
-  [[nodiscard]] bool internal(signals::SignalIndex index) const {
-    return m_catalog[index].kind == signals::SignalKind::Internal;
-  }
-
-  [[nodiscard]] bool transmitted(signals::SignalIndex index) const {
-    const signals::SignalInfo& info = m_catalog[index];
-    if (info.kind != signals::SignalKind::Bus) return false;
-    const auto it = m_messages.find(info.message);
-    if (it == m_messages.end()) return false;
-    const auto senders = it->second->transmitters();
-    return std::find(senders.begin(), senders.end(), m_vehicle.node) != senders.end();
   }
 
   std::optional<double> signalValue(const signals::SignalInfo& info, const Json& value, const std::string& path) {
@@ -592,20 +574,22 @@ class Loader {
       m_check.error(keyPath, found.error().message);
       return std::nullopt;
     }
-    if (internal(*found)) {
-      for (const std::string_view prefix : STATUS_PREFIXES) {
-        if (key.starts_with(prefix)) {
-          m_check.error(keyPath, key + " is a status the stack reports; an action cannot command it");
-          return std::nullopt;
-        }
-      }
-      if (const config::GpioLine* line = m_vehicle.gpio.inputBoundTo(key)) {
-        m_check.error(keyPath, key + " is read from GPIO input line " + line->name + "; an action cannot command it");
-        return std::nullopt;
-      }
-    } else if (!transmitted(*found)) {
+    // An action commands what vcu-fsm or can-tx owns (shared/config/catalog.hpp): its internal
+    // signals, the send groups and the signals this VCU transmits.
+    const signals::SignalInfo& info = m_catalog[*found];
+    if (info.direction == signals::SignalDirection::Received) {
       m_check.error(keyPath, key + " is not transmitted by " + m_vehicle.node +
                                  ": an action can only command signals this VCU sends or internal signals");
+      return std::nullopt;
+    }
+    if (const config::GpioLine* line = m_vehicle.gpio.inputBoundTo(key)) {
+      m_check.error(keyPath, key + " is read from GPIO input line " + line->name + "; an action cannot command it");
+      return std::nullopt;
+    }
+    const bool commandable = info.owner == config::writerOf(config::ServiceId::Fsm) ||
+                             info.owner == config::writerOf(config::ServiceId::CanTx);
+    if (info.reported || !commandable) {
+      m_check.error(keyPath, key + " is a status the stack reports; an action cannot command it");
       return std::nullopt;
     }
     return *found;
@@ -683,7 +667,6 @@ class Loader {
   const signals::Catalog& m_catalog;
   Machine m_machine;
   std::unordered_map<std::string, std::uint32_t> m_stateIndex;  ///< state name -> its first index
-  std::unordered_map<std::string, const dbc::Message*> m_messages;
   std::unordered_map<signals::SignalIndex, std::uint32_t> m_slots;
   std::vector<std::pair<std::string, std::string>> m_groups;
   std::vector<std::string> m_targetPaths;

@@ -65,11 +65,6 @@ std::vector<std::string> messageNames(const config::VehicleConfig& vehicle) {
   return names;
 }
 
-bool transmittedBy(const dbc::Message& message, const std::string& node) {
-  const auto senders = message.transmitters();
-  return std::find(senders.begin(), senders.end(), node) != senders.end();
-}
-
 bool isSafetyHeader(const dbc::Message& message) {
   return message.extended && j1939::pgnOf(message.id) == j1939::PGN_SAFETY_HEADER;
 }
@@ -203,7 +198,7 @@ class Loader {
     const Json* include = root != nullptr ? m_check.member(*root, "", "include", false) : nullptr;
     if (include == nullptr || (include->is_string() && include->get<std::string>() == "transmitted")) {
       for (std::size_t m = 0; m < messages.size(); ++m) {
-        if (!messages[m].pseudo && transmittedBy(messages[m], m_vehicle.node) && m_vehicle.busOf(m) != nullptr &&
+        if (!messages[m].pseudo && config::sentBy(messages[m], m_vehicle.node) && m_vehicle.busOf(m) != nullptr &&
             !isSafetyHeader(messages[m])) {
           addMessage(schedule, m);
         }

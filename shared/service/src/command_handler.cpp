@@ -1,4 +1,5 @@
 #include "openvcu/service/command_handler.hpp"
+#include "openvcu/core/text.hpp"
 
 #include <algorithm>
 #include <array>
@@ -81,12 +82,7 @@ bool carriesValue(ipc::CommandKind kind) noexcept {
 }
 
 /// Shortest text that reads back as the same double ("0.1", "100", "1e+20").
-std::string number(double value) {
-  std::array<char, 32> text{};
-  const auto [end, ec] = std::to_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc{}) return "?";
-  return std::string(text.data(), end);
-}
+using text::number;
 
 CommandVerdict refuse(std::string reason, std::optional<signals::SignalIndex> index = {}) {
   return CommandVerdict{CommandDecision::Refused, std::move(reason), index};
@@ -106,6 +102,20 @@ CommandPolicy CommandPolicy::byPrefix(std::string prefix) {
   CommandPolicy policy;
   policy.owns = [prefix = std::move(prefix)](std::string_view key) { return key.starts_with(prefix); };
   return policy;
+}
+
+CommandPolicy CommandPolicy::byOwner(const signals::Catalog& catalog, signals::WriterId owner) {
+  CommandPolicy policy;
+  policy.owns = [&catalog, owner](std::string_view key) {
+    const auto index = catalog.indexOf(key);
+    return index && catalog[*index].owner == owner;
+  };
+  return policy;
+}
+
+std::optional<std::string> statusRefusal(const signals::SignalInfo& info) {
+  if (!info.reported) return std::nullopt;
+  return "'" + info.key + "' is a status the stack reports; it cannot be commanded";
 }
 
 std::string commandKindName(ipc::CommandKind kind) {

@@ -59,6 +59,18 @@ std::string_view signalKindName(SignalKind kind) noexcept {
   return "?";
 }
 
+std::string_view signalDirectionName(SignalDirection direction) noexcept {
+  switch (direction) {
+    case SignalDirection::Received:
+      return "received";
+    case SignalDirection::Transmitted:
+      return "transmitted";
+    case SignalDirection::Internal:
+      return "internal";
+  }
+  return "?";
+}
+
 std::uint64_t computeLayoutHash(std::span<const SignalInfo> signals) noexcept {
   Fnv1a hash;
   hash.addBytes("openvcu.signals");

@@ -196,7 +196,7 @@ TEST_CASE("vcu-gpio answers for its keys: simulated levels and overrides yes, st
     request.key = key;
     request.kind = kind;
     request.value = 1;
-    return service::checkCommand(request, f.catalog, gpio::gpioCommandPolicy(f.vehicle.gpio));
+    return service::checkCommand(request, f.catalog, gpio::gpioCommandPolicy(f.catalog, f.vehicle.gpio));
   };
   CHECK(decide(FAULT_SIM, ipc::CommandKind::SetSignal).decision == service::CommandDecision::Accepted);
   const auto plain = decide(FAULT, ipc::CommandKind::SetSignal);

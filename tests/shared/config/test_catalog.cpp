@@ -71,3 +71,93 @@ TEST_CASE("the services of a stack have unique names and writer ids, found both 
   CHECK_FALSE(config::serviceOfWriter(240).has_value());
   CHECK(config::findService("vcu-fsm") == nullptr);
 }
+
+namespace {
+
+const signals::SignalInfo& signalOf(const signals::Catalog& catalog, std::string_view key) {
+  const auto index = catalog.indexOf(key);
+  REQUIRE_MESSAGE(index.has_value(), key);
+  return catalog[*index];
+}
+
+std::string_view ownerOf(const signals::Catalog& catalog, std::string_view key) {
+  return serviceOfWriter(signalOf(catalog, key).owner).value_or("none");
+}
+
+}  // namespace
+
+TEST_CASE("each signal of the catalog says its direction and the one service that owns it (#20)") {
+  const auto config = loadVehicleConfig(CONFIG_DATA_DIR + "/small.json");
+  REQUIRE(config.ok());
+  const auto sut = buildCatalog(*config);
+  REQUIRE(sut.ok());
+
+  CHECK(signalOf(*sut, "VCU.Command.Enable").direction == signals::SignalDirection::Transmitted);
+  CHECK(ownerOf(*sut, "VCU.Command.Enable") == "can-tx");
+  CHECK(signalOf(*sut, "BMS.Status.SOC").direction == signals::SignalDirection::Received);
+  CHECK(ownerOf(*sut, "BMS.Status.SOC") == "can-rx");
+  CHECK(signalOf(*sut, "internal.operator.Start").direction == signals::SignalDirection::Internal);
+  CHECK(ownerOf(*sut, "internal.operator.Start") == "fsm");
+  CHECK_FALSE(signalOf(*sut, "internal.operator.Start").reported);
+  CHECK(ownerOf(*sut, "internal.fsm.state") == "fsm");
+  CHECK(signalOf(*sut, "internal.fsm.state").reported);
+  CHECK(ownerOf(*sut, "internal.service.gpio.heartbeat") == "gpio");
+  CHECK(signalOf(*sut, "internal.service.gpio.heartbeat").reported);
+  CHECK(ownerOf(*sut, "internal.bus.vehicle.load") == "can-rx");
+  CHECK(signalOf(*sut, "internal.bus.vehicle.state").reported);
+}
+
+TEST_CASE("a send group belongs to can-tx and an input-bound signal to vcu-gpio (#20)") {
+  auto config = loadVehicleConfig(CONFIG_DATA_DIR + "/small.json");
+  REQUIRE(config.ok());
+  config->internalSignals.push_back(InternalSignal{"tx.Pump", "", 0, 1, 0, "", {}});
+  config->internalSignals.push_back(InternalSignal{"relay.Key", "", 0, 1, 0, "", {}});
+  GpioLine key;
+  key.name = "Key";
+  key.direction = LineDirection::Input;
+  key.signal = "internal.relay.Key";
+  config->gpio.lines.push_back(key);
+
+  const auto sut = buildCatalog(*config);
+
+  REQUIRE_MESSAGE(sut.ok(), (sut.ok() ? "" : sut.error().toString()));
+  CHECK(ownerOf(*sut, "internal.tx.Pump") == "can-tx");
+  CHECK(ownerOf(*sut, "internal.relay.Key") == "gpio");
+  CHECK(ownerOf(*sut, "internal.gpio.Key") == "gpio");
+  CHECK(signalOf(*sut, "internal.gpio.Key").reported);
+  CHECK(ownerOf(*sut, "internal.gpio.sim.Key") == "gpio");
+  CHECK_FALSE(signalOf(*sut, "internal.gpio.sim.Key").reported);
+}
+
+TEST_CASE("a key two services would own is refused, naming the key and both owners (#20)") {
+  auto config = loadVehicleConfig(CONFIG_DATA_DIR + "/small.json");
+  REQUIRE(config.ok());
+  config->internalSignals.push_back(InternalSignal{"tx.Pump", "", 0, 1, 0, "", {}});
+  GpioLine pump;
+  pump.name = "PumpSwitch";
+  pump.direction = LineDirection::Input;
+  pump.signal = "internal.tx.Pump";
+  config->gpio.lines.push_back(pump);
+
+  const auto sut = buildCatalog(*config);
+
+  REQUIRE_FALSE(sut.ok());
+  CHECK(sut.error().message ==
+        "'internal.tx.Pump' has two owners: can-tx (a send group: the namespace internal.tx.) and gpio (input line "
+        "'PumpSwitch' is bound to it); bind the line to another signal");
+}
+
+TEST_CASE("every signal of the HHEA loader has exactly one owning service (#20)") {
+  const auto config = loadVehicleConfig(std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json");
+  REQUIRE(config.ok());
+  const auto sut = buildCatalog(*config);
+  REQUIRE(sut.ok());
+
+  std::size_t owned = 0;
+  for (const signals::SignalInfo& signal : sut->signals()) {
+    if (serviceOfWriter(signal.owner).has_value()) ++owned;
+    else MESSAGE("no owner: " << signal.key);
+  }
+  CHECK(owned == sut->size());
+  CHECK(ownerOf(*sut, "internal.operator.StartStop") != "none");
+}

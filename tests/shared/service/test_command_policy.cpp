@@ -10,6 +10,7 @@
 
 namespace ipc = openvcu::ipc;
 namespace service = openvcu::service;
+namespace signals = openvcu::signals;
 using service::CommandDecision;
 
 namespace {
@@ -173,4 +174,28 @@ TEST_CASE("a value table that names only special values of a continuous signal d
 
   CHECK(service::checkCommand(request("internal.test.pressure", 101.5), *catalog, sut).decision ==
         CommandDecision::Accepted);
+}
+
+TEST_CASE("a policy by owner answers exactly for the keys the catalog gives its writer id (#20)") {
+  constexpr signals::WriterId FSM = 3;
+  constexpr signals::WriterId CAN_TX = 2;
+  std::vector<signals::SignalInfo> infos(3);
+  infos[0].key = "internal.operator.Start";
+  infos[0].owner = FSM;
+  infos[1].key = "VCU.Command.Enable";
+  infos[1].owner = CAN_TX;
+  infos[2].key = "internal.fsm.state";
+  infos[2].owner = FSM;
+  infos[2].reported = true;
+  auto catalog = signals::Catalog::create(std::move(infos));
+  REQUIRE(catalog.ok());
+  const auto sut = service::CommandPolicy::byOwner(*catalog, FSM);
+
+  CHECK(sut.owns("internal.operator.Start"));
+  CHECK(sut.owns("internal.fsm.state"));
+  CHECK_FALSE(sut.owns("VCU.Command.Enable"));
+  CHECK_FALSE(sut.owns("internal.operator.Strat"));  // unknown: nobody's
+  CHECK(service::statusRefusal((*catalog)[2]) ==
+        std::optional<std::string>("'internal.fsm.state' is a status the stack reports; it cannot be commanded"));
+  CHECK_FALSE(service::statusRefusal((*catalog)[0]).has_value());
 }

@@ -22,11 +22,7 @@ std::string hex(std::uint32_t value, int digits) {
   return text;
 }
 
-std::string number(double value) {
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof text, value);
-  return std::string(text, result.ptr);
-}
+using text::number;
 
 std::string joined(const std::vector<std::string>& items, std::string_view separator) {
   std::string text;

@@ -85,11 +85,7 @@ constexpr const char* RELOAD_FOOTER =
 
 constexpr std::uint64_t MAX_REPORTED_LOG_ERRORS = 10;
 
-std::string number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
+using text::number;
 
 std::string plural(std::size_t count, const std::string& word) {
   return std::to_string(count) + " " + word + (count == 1 ? "" : "s");

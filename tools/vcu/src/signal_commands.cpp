@@ -140,6 +140,12 @@ std::string writerText(signals::WriterId writer) {
   return std::to_string(writer);
 }
 
+/// The owning service by name ("can-tx"), "-" when no service owns the signal.
+std::string ownerText(const signals::SignalInfo& signal) {
+  if (const auto service = config::serviceOfWriter(signal.owner)) return std::string(*service);
+  return "-";
+}
+
 std::optional<signals::SignalTable> openTable(const Stack& stack, Sink& err) {
   auto tableResult = signals::SignalTable::open(stack.catalog, stack.config.instance, signals::OpenMode::AttachOnly);
   if (!tableResult) {
@@ -308,11 +314,13 @@ ExitCode runSignalList(const SignalListOptions& options, Streams streams) {
   const signals::Catalog& catalog = maybeStack->catalog;
   const auto matches = matchSignals(catalog, options.pattern, streams.err);
   if (matches.empty()) return ExitCode::Failure;
-  TextTable table({"KEY", "UNIT", "RANGE", "KIND", "BUS"});
+  TextTable table({"KEY", "UNIT", "RANGE", "KIND", "BUS", "DIRECTION", "OWNER"});
   for (const signals::SignalIndex index : matches) {
     const signals::SignalInfo& signal = catalog[index];
     table.addRow({signal.key, signal.unit.empty() ? "-" : signal.unit, rangeText(signal),
-                  std::string(signals::signalKindName(signal.kind)), signal.bus.empty() ? "-" : signal.bus});
+                  std::string(signals::signalKindName(signal.kind)), signal.bus.empty() ? "-" : signal.bus,
+                  std::string(signals::signalDirectionName(signal.direction)) + (signal.reported ? " status" : ""),
+                  ownerText(signal)});
   }
   std::string out;
   table.appendTo(out);
@@ -343,7 +351,9 @@ ExitCode runSignalGet(const SignalGetOptions& options, Streams streams) {
   for (const signals::SignalIndex index : indices) {
     const signals::SignalInfo& signal = catalog[index];
     out += signal.key + "  [" + rangeText(signal) + (signal.unit.empty() ? "" : " " + signal.unit) + "]  " +
-           std::string(signals::signalKindName(signal.kind)) + (signal.bus.empty() ? "" : " on " + signal.bus) + "\n";
+           std::string(signals::signalKindName(signal.kind)) + (signal.bus.empty() ? "" : " on " + signal.bus) + ", " +
+           std::string(signals::signalDirectionName(signal.direction)) + (signal.reported ? " status" : "") +
+           ", owner " + ownerText(signal) + "\n";
     if (const auto maybeSlot = maybeTable->read(index)) {
       appendPlanes(out, signal, *maybeSlot);
     } else {
@@ -356,14 +366,20 @@ ExitCode runSignalGet(const SignalGetOptions& options, Streams streams) {
 
 namespace {
 
-/// Why nobody answers for a bus signal of a message this VCU does not send; empty otherwise.
-std::string receivedSignalHint(const config::VehicleConfig& config, const signals::SignalInfo& signal) {
-  if (signal.kind != signals::SignalKind::Bus) return {};
-  for (const dbc::Message& message : config.database.messages) {
-    if (message.name != signal.message || message.transmitter == config.node) continue;
-    return "'" + signal.key + "' is received from the bus (sent by " + message.transmitter + " in " + message.name +
-           "): only signals of messages this VCU sends can be commanded (`vcu schedule add " + message.name +
+/// Why no service may answer for `signal` (a received signal or a status), empty otherwise.
+std::string notCommandableHint(const config::VehicleConfig& config, const signals::SignalInfo& signal) {
+  if (signal.direction == signals::SignalDirection::Received) {
+    std::string sender;
+    for (const dbc::Message& message : config.database.messages) {
+      if (message.name == signal.message) sender = message.transmitter;
+    }
+    return "'" + signal.key + "' is received from the bus (sent by " + sender + " in " + signal.message +
+           "): only signals of messages this VCU sends can be commanded (`vcu schedule add " + signal.message +
            " MS` makes this bench send it)";
+  }
+  if (signal.reported) {
+    return "'" + signal.key + "' is a status " + (signal.owner == signals::NO_OWNER ? "" : ownerText(signal) + " ") +
+           "reports; it cannot be commanded";
   }
   return {};
 }
@@ -406,7 +422,7 @@ ExitCode runSignalSet(const SignalSetOptions& options, Streams streams) {
   request.value = value;
   request.text = options.note;
   return sendCommandRequest(stack.config, std::move(request), options.timeoutSeconds, streams,
-                            receivedSignalHint(stack.config, stack.catalog[*found]));
+                            notCommandableHint(stack.config, stack.catalog[*found]));
 }
 
 ExitCode runSignalWatch(const SignalWatchOptions& options, Streams streams) {

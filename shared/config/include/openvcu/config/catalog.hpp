@@ -8,6 +8,17 @@
 // signals: the declared ones ("internal.<name>") in file order, then the built-in ones:
 // the FSM's state and timers, one heartbeat per service, the health of each bus (BUS_HEALTH_FIELDS)
 // and the DM1 summary of each addressed node (DM1_FIELDS).
+//
+// Ownership (SignalInfo::direction, owner, reported), decided here and nowhere else:
+//   - a bus signal is Transmitted and owned by can-tx when this VCU's node is among its
+//     message's transmitters (sentBy), else Received and owned by can-rx;
+//   - a declared internal signal is owned by can-tx in the send-group namespace
+//     "internal.tx." (SEND_GROUP_NAMESPACE), by vcu-gpio when an input line is bound to it,
+//     else by vcu-fsm; one claimed by two services is refused, naming the key and both;
+//   - the built-in statuses (reported: no command sets them) belong to their writer:
+//     "internal.fsm.*" vcu-fsm, "internal.service.<name>.heartbeat" that service,
+//     "internal.bus.*" and "internal.dm1.*" can-rx, "internal.gpio.<line>" vcu-gpio;
+//     "internal.gpio.sim.<line>" (a simulated input's level) is vcu-gpio's and commandable.
 
 #include "openvcu/config/services.hpp"
 #include "openvcu/config/vehicle.hpp"
@@ -40,11 +51,22 @@ inline constexpr std::array<std::string_view, 2> BUS_HEALTH_FIELDS = {"load", "s
 inline constexpr std::array<std::string_view, 7> DM1_FIELDS = {
     "activeDtcs", "protectLamp", "amberWarningLamp", "redStopLamp", "malfunctionLamp", "firstSpn", "firstFmi"};
 
+/// Declared internal signals named "internal.tx.<name>" are send groups: can-tx owns them.
+inline constexpr std::string_view SEND_GROUP_NAMESPACE = "internal.tx.";
+
+/// true when `node` is among the transmitters of `message` (BO_ and BO_TX_BU_): this is
+/// what makes a message the VCU's to send.
+bool sentBy(const dbc::Message& message, std::string_view node);
+
+/// Transmitted when the configuration's node sends `message`, else Received.
+signals::SignalDirection directionOf(const VehicleConfig& config, const dbc::Message& message);
+
 /// Table key of a DBC signal.
 std::string signalKey(const dbc::Message& message, const dbc::Signal& signal);
 
-/// The catalog of a loaded configuration. Fails only on duplicate keys (e.g. an internal
-/// signal named like a built-in one), naming both.
+/// The catalog of a loaded configuration, with each signal's direction and owner. Fails on
+/// duplicate keys (e.g. an internal signal named like a built-in one), naming both, and on
+/// a key two services would own, naming the key and both owners.
 Result<signals::Catalog> buildCatalog(const VehicleConfig& config);
 
 }  // namespace openvcu::config

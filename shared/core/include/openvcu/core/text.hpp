@@ -29,6 +29,11 @@ std::string cp1252ToUtf8(std::string_view bytes);
 /// nullopt and the reason in *errorMessage ("not a regular file (directory)").
 std::optional<std::string> readFile(const std::string& path, std::string* errorMessage);
 
+/// A number as people read it in messages: the shortest text that reads back as the same
+/// double ("0.1", "3600000", "1.8e+19"); "nan", "inf", "-inf" for the non-finite ones.
+/// @note noexcept apart from the string's allocation.
+std::string number(double value);
+
 /// Glob-style match with `*` and `?` (used for signal patterns like "VIC.*SOC*").
 bool globMatch(std::string_view pattern, std::string_view text) noexcept;
 

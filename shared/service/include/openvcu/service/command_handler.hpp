@@ -9,8 +9,9 @@
 //   0. the request carries a deadline (CLOCK_MONOTONIC), it has not passed and it is at most
 //      30 s ahead: a request that waited past its deadline is refused "expired", never applied;
 //   1. the key is owned by this service (policy.owns); otherwise the request is IGNORED:
-//      the answer says owner = false, another service decides. Ownership goes by key text, so the owner of
-//      "internal." also answers for a mistyped "internal.operator.Strat";
+//      the answer says owner = false, another service decides. The services own what the
+//      catalog says they own (CommandPolicy::byOwner); a policy by prefix (the test fixture's
+//      "internal.") also answers for a mistyped "internal.operator.Strat";
 //   2. the key exists in the catalog ("unknown signal 'X' (did you mean 'Y'?)");
 //   3. the kind is one this service accepts (policy.kinds; unknown kind numbers are refused);
 //   4. the value is finite and inside the signal's [min, max] when min < max
@@ -110,9 +111,18 @@ struct CommandPolicy {
   /// Called after an accepted table command was applied (e.g. to persist it). Optional.
   std::function<void(const ipc::CommandRequest&, signals::SignalIndex)> applied;
 
-  /// Owns every key that starts with `prefix` ("internal.operator.").
+  /// Owns every key that starts with `prefix` ("internal.operator."; the test fixtures).
   static CommandPolicy byPrefix(std::string prefix);
+  /// Owns the keys whose catalog owner (signals::SignalInfo::owner, decided by shared/config)
+  /// is `owner`: what every service of the stack answers for. A key the catalog does not know
+  /// is nobody's (`vcu signal set` answers it itself, with a did-you-mean). `catalog` must
+  /// outlive the policy.
+  static CommandPolicy byOwner(const signals::Catalog& catalog, signals::WriterId owner);
 };
+
+/// The refusal for a status the stack reports (SignalInfo::reported): "'K' is a status the
+/// stack reports; it cannot be commanded"; empty for any other signal. Vetoes call it first.
+[[nodiscard]] std::optional<std::string> statusRefusal(const signals::SignalInfo& info);
 
 enum class CommandDecision : std::uint8_t {
   Ignored,   ///< not ours: no ack

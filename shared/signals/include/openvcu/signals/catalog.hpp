@@ -45,8 +45,26 @@ enum class SignalKind : std::uint8_t {
 /// "Bus" / "Internal".
 [[nodiscard]] std::string_view signalKindName(SignalKind kind) noexcept;
 
+/// Which way a signal flows, seen from this VCU (shared/config derives it: a bus signal is
+/// Transmitted when the VCU's DBC node is among its message's transmitters).
+enum class SignalDirection : std::uint8_t {
+  Received,     ///< a signal of a message other nodes send; can-rx writes it from the bus
+  Transmitted,  ///< a signal of a message this VCU sends; can-tx sends it
+  Internal,     ///< not on a bus: operator switches, send groups, GPIO levels, statuses
+};
+
+/// "received" / "transmitted" / "internal".
+[[nodiscard]] std::string_view signalDirectionName(SignalDirection direction) noexcept;
+
+/// Who wrote a value: each service's writer id (config::SERVICES), stamped on its writes.
+using WriterId = std::uint16_t;
+/// The owner of a signal no service owns (and "never written" in a command plane).
+inline constexpr WriterId NO_OWNER = 0;
+
 /// What the configuration says about one signal. Only `key` and `kind` (and the order of
 /// the signals) shape the shared table; the rest is metadata for display and checks.
+/// `direction`, `owner` and `reported` are the ownership contract (docs/design/contracts.md):
+/// the owner is the one service that decides the signal's value and answers commands for it.
 struct SignalInfo {
   std::string key;   ///< "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", "internal.operator.start"
   std::string unit;  ///< "%", "V"; empty when none
@@ -57,6 +75,11 @@ struct SignalInfo {
   std::string bus;      ///< logical bus name ("vehicle"); empty for internal signals
   SignalKind kind{SignalKind::Bus};
   std::vector<std::pair<std::int64_t, std::string>> valueTexts;  ///< VAL_ table: 0 "Open", 1 "Closed"
+  SignalDirection direction{SignalDirection::Received};
+  WriterId owner{NO_OWNER};  ///< writer id of the owning service (config::serviceOfWriter names it)
+  /// A status the stack reports (FSM state, heartbeats, bus health, DM1, GPIO levels): it is
+  /// written by its owner alone and no command may set it.
+  bool reported{false};
 };
 
 /// The value-table text of `value` ("Closed" for 1), when `value` is an integer the table names.

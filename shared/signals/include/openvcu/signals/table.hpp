@@ -50,9 +50,6 @@ enum class Quality : std::uint8_t {
 /// "NeverReceived", "Valid", "Stale", "OutOfRange" ("?" for anything else).
 [[nodiscard]] std::string_view qualityName(Quality quality) noexcept;
 
-/// Who wrote a command or an override (a small number per process, from the configuration).
-using WriterId = std::uint16_t;
-
 /// The bus plane. `updates` is the number of the write returned (writes started on this
 /// plane up to and including it); 0 with NeverReceived when the plane was never written.
 struct BusValue {
