@@ -200,18 +200,22 @@ TEST_CASE("vcu signal get without a running stack says that no table exists yet"
   CHECK_MESSAGE(contains(get.err, "no signal table 'openvcu-itest'"), get.err);
 }
 
-TEST_CASE("vcu signal list prints key, unit, range, kind and bus of the matching signals") {
+TEST_CASE("vcu signal list prints key, unit, range, kind, bus, direction and owner of the matching signals") {
   SKIP_UNLESS_ISOLATED();
   harness::Harness sut;
 
   const auto list = vcu(sut, {"signal", "list", "*.test.*"});
+  const auto bus = vcu(sut, {"signal", "list", "*.*.Enable"});
+  const auto soc = vcu(sut, {"signal", "list", "BMS.Status.SOC"});
   const auto typo = vcu(sut, {"signal", "list", "BMS.Status.Soc"});
 
   CHECK_MESSAGE(list.exitCode() == 0, list.describe());
   CHECK(list.out ==
-        "KEY                  UNIT  RANGE   KIND      BUS\n"
-        "internal.test.level  %     0..100  Internal  -\n"
-        "internal.test.free   -     -       Internal  -\n");
+        "KEY                  UNIT  RANGE   KIND      BUS  DIRECTION  OWNER\n"
+        "internal.test.level  %     0..100  Internal  -    internal   fsm\n"
+        "internal.test.free   -     -       Internal  -    internal   fsm\n");
+  CHECK_MESSAGE(contains(bus.out, "VCU.Command.Enable  -     0..3   Bus   vehicle  transmitted  can-tx\n"), bus.out);
+  CHECK_MESSAGE(contains(soc.out, "vehicle  received   can-rx\n"), soc.out);
   CHECK(typo.exitCode() == 1);
   CHECK_MESSAGE(contains(typo.err, "did you mean 'BMS.Status.SOC'?"), typo.err);
 }
