@@ -30,17 +30,8 @@ set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="$(cd "${1:-$repo/build}" && pwd)"
 
-if [[ "${OPENVCU_ISOLATED:-}" != 1 ]]; then
-  for binary in bin/vcu bin/vcu-can-rx bench/bench_receiver bench/bench_sim_sender; do
-    if [[ ! -x "$build/$binary" ]]; then
-      echo "error: $build/$binary not built (ninja -C $build vcu vcu-can-rx bench_receiver bench_sim_sender)" >&2
-      exit 1
-    fi
-  done
-  keep=()
-  case "$build" in /tmp/*) keep=(--keep "$build") ;; esac
-  exec "$repo/tests/harness/run_isolated.sh" "${keep[@]}" -- "$0" "$build"
-fi
+source "$repo/bench/bench_lib.sh"
+bench_isolate "$build" "vcu vcu-can-rx bench_receiver bench_sim_sender" bin/vcu bin/vcu-can-rx bench/bench_receiver bench/bench_sim_sender -- "$0" "$build"
 
 # ---- inside the sandbox ---------------------------------------------------------------
 idleSeconds="${IDLE_SECONDS:-10}"
@@ -55,29 +46,6 @@ tick="$(getconf CLK_TCK)"
 vcu="$build/bin/vcu"
 summary=()
 
-machine() {
-  echo "== machine"
-  lscpu | grep -E '^(Model name|CPU family|Model|CPU\(s\)|Core\(s\) per socket|Thread\(s\) per core|Hypervisor vendor):' |
-    sed 's/  */ /g'
-  echo "RAM $(free -h | awk '/^Mem:/ {print $2}'), kernel $(uname -r), load $(cut -d' ' -f1-3 /proc/loadavg)"
-  grep -E '^CMAKE_(BUILD_TYPE|CXX_COMPILER|CXX_FLAGS_RELEASE):' "$build/CMakeCache.txt" 2>/dev/null || true
-  local compiler
-  compiler="$(sed -n 's/^CMAKE_CXX_COMPILER:FILEPATH=//p' "$build/CMakeCache.txt" 2>/dev/null)"
-  [[ -n "$compiler" ]] && "$compiler" --version | head -n 1
-  return 0
-}
-
-# Polls `test` (a command) every 50 ms for up to `seconds`; 1 on timeout.
-wait_until() {
-  local seconds="$1"; shift
-  local deadline=$(( $(date +%s%N) + seconds * 1000000000 ))
-  until "$@"; do
-    (( $(date +%s%N) < deadline )) || return 1
-    sleep 0.05
-  done
-}
-
-alive() { kill -0 "$1" 2>/dev/null; }
 
 # CPU of process $1: "<ticks> <schedstat ns> <switches>" (ticks: utime+stime of every thread
 # that lived; schedstat ns and context switches, voluntary + not, summed over live threads).

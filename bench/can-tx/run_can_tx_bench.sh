@@ -44,17 +44,8 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="$(cd "${1:-$repo/build}" && pwd)"
 seconds="${2:-60}"
 
-if [[ "${OPENVCU_ISOLATED:-}" != 1 ]]; then
-  for binary in bin/vcu bin/vcu-can-tx bench/bench_tx_listener; do
-    if [[ ! -x "$build/$binary" ]]; then
-      echo "error: $build/$binary not built (ninja -C $build vcu vcu-can-tx bench_tx_listener)" >&2
-      exit 1
-    fi
-  done
-  keep=()
-  case "$build" in /tmp/*) keep=(--keep "$build") ;; esac
-  exec "$repo/tests/harness/run_isolated.sh" "${keep[@]}" -- "$0" "$build" "$seconds"
-fi
+source "$repo/bench/bench_lib.sh"
+bench_isolate "$build" "vcu vcu-can-tx bench_tx_listener" bin/vcu bin/vcu-can-tx bench/bench_tx_listener -- "$0" "$build" "$seconds"
 
 # ---- inside the sandbox ---------------------------------------------------------------
 config="${CONFIG:-$repo/config/hhea/vehicle.json}"
@@ -67,51 +58,6 @@ work=/tmp/can-tx-bench
 mkdir -p "$work"
 tick="$(getconf CLK_TCK)"
 vcu="$build/bin/vcu"
-started=()  # PIDs this script started and has not reaped yet, ended in reverse order
-
-cleanup() {
-  local i
-  for (( i = ${#started[@]} - 1; i >= 0; i-- )); do
-    kill -TERM "${started[$i]}" 2>/dev/null || true
-    wait "${started[$i]}" 2>/dev/null || true
-  done
-}
-trap cleanup EXIT
-# forget PID: it has been reaped; cleanup must not signal that number again.
-forget() {
-  local pid kept=()
-  for pid in "${started[@]}"; do [[ "$pid" == "$1" ]] || kept+=("$pid"); done
-  started=("${kept[@]}")
-}
-
-machine() {
-  echo "== machine"
-  lscpu | grep -E '^(Model name|CPU family|Model|CPU\(s\)|Core\(s\) per socket|Thread\(s\) per core|Hypervisor vendor):' |
-    sed 's/  */ /g'
-  echo "RAM $(free -h | awk '/^Mem:/ {print $2}'), kernel $(uname -r), load $(cut -d' ' -f1-3 /proc/loadavg)"
-  grep -E '^CMAKE_(BUILD_TYPE|CXX_COMPILER|CXX_FLAGS_RELEASE):' "$build/CMakeCache.txt" 2>/dev/null || true
-  local compiler
-  compiler="$(sed -n 's/^CMAKE_CXX_COMPILER:FILEPATH=//p' "$build/CMakeCache.txt" 2>/dev/null)"
-  [[ -n "$compiler" ]] && "$compiler" --version | head -n 1
-  return 0
-}
-
-# Polls `test` (a command) every 50 ms for up to `seconds`; 1 on timeout.
-wait_until() {
-  local seconds="$1"; shift
-  local deadline=$(( $(date +%s%N) + seconds * 1000000000 ))
-  until "$@"; do
-    (( $(date +%s%N) < deadline )) || return 1
-    sleep 0.05
-  done
-}
-
-# pinned CPU COMMAND...: COMMAND under `taskset -c CPU`, or as is when CPU is empty.
-pinned() {
-  local cpu="$1"; shift
-  if [[ -n "$cpu" ]]; then exec taskset -c "$cpu" "$@"; else exec "$@"; fi
-}
-
 # CPU of process $1: "<ticks> <schedstat ns> <switches>" (ticks: utime+stime of every thread
 # that lived; schedstat ns and context switches, voluntary + not, summed over live threads).
 cpu_sample() {

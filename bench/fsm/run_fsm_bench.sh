@@ -40,17 +40,8 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="$(cd "${1:-$repo/build}" && pwd)"
 seconds="${2:-30}"
 
-if [[ "${OPENVCU_ISOLATED:-}" != 1 ]]; then
-  for binary in bin/vcu bin/vcu-fsm bench/bench_fsm_latency; do
-    if [[ ! -x "$build/$binary" ]]; then
-      echo "error: $build/$binary not built (ninja -C $build vcu vcu-fsm bench_fsm_latency)" >&2
-      exit 1
-    fi
-  done
-  keep=()
-  case "$build" in /tmp/*) keep=(--keep "$build") ;; esac
-  exec "$repo/tests/harness/run_isolated.sh" "${keep[@]}" -- "$0" "$build" "$seconds"
-fi
+source "$repo/bench/bench_lib.sh"
+bench_isolate "$build" "vcu vcu-fsm bench_fsm_latency" bin/vcu bin/vcu-fsm bench/bench_fsm_latency -- "$0" "$build" "$seconds"
 
 # ---- inside the sandbox ---------------------------------------------------------------
 fsmCpu="${FSM_CPU-0}"
@@ -64,34 +55,6 @@ mkdir -p "$work"
 tick="$(getconf CLK_TCK)"
 vcu="$build/bin/vcu"
 bench="$build/bench/bench_fsm_latency"
-started=()  # PIDs this script started and has not reaped yet, ended in reverse order
-
-cleanup() {
-  local i
-  for (( i = ${#started[@]} - 1; i >= 0; i-- )); do
-    kill -TERM "${started[$i]}" 2>/dev/null || true
-    wait "${started[$i]}" 2>/dev/null || true
-  done
-}
-trap cleanup EXIT
-forget() {
-  local pid kept=()
-  for pid in "${started[@]}"; do [[ "$pid" == "$1" ]] || kept+=("$pid"); done
-  started=("${kept[@]}")
-}
-
-wait_until() {
-  local seconds="$1"; shift
-  local deadline=$(( $(date +%s%N) + seconds * 1000000000 ))
-  until "$@"; do
-    (( $(date +%s%N) < deadline )) || return 1
-    sleep 0.05
-  done
-}
-pinned() {
-  local cpu="$1"; shift
-  if [[ -n "$cpu" ]]; then exec taskset -c "$cpu" "$@"; else exec "$@"; fi
-}
 # "<ticks> <schedstat ns> <switches> <voluntary switches>" of process $1 (all threads).
 cpu_sample() {
   local pid="$1" ticks ns switches voluntary
@@ -118,7 +81,7 @@ grep -E '^CMAKE_(BUILD_TYPE|CXX_COMPILER):' "$build/CMakeCache.txt" 2>/dev/null 
 
 # 0. the configuration
 source="$repo/config/hhea"
-cp "$source/hhea.dbc" "$source/schedule.json" "$work/"
+cp "$source/hhea.dbc" "$source/schedule.json" "$source/gpio.json" "$source/simulation.json" "$source/dashboard.json" "$work/"
 jq --arg fsm "$repo/bench/fsm/bench_fsm.json" '.fsm = $fsm' "$source/vehicle.json" >"$work/vehicle.json"
 config="$work/vehicle.json"
 echo "== machine file: $("$vcu" fsm check "$repo/bench/fsm/bench_fsm.json" --config "$config" 2>&1 | tail -n 1)"

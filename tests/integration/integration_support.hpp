@@ -151,3 +151,10 @@ struct ConfiguredStack {
   do {                          \
     if (!openvcu::harness::isolated()) OPENVCU_SKIP(openvcu::harness::NOT_ISOLATED); \
   } while (false)
+
+// The names every integration case uses.
+namespace harness = openvcu::harness;
+namespace fs = std::filesystem;
+using namespace openvcu;
+using namespace openvcu::integration;
+using namespace std::chrono_literals;

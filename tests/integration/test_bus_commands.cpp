@@ -12,10 +12,6 @@
 
 #include "integration_support.hpp"
 
-namespace harness = openvcu::harness;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 /// An extended frame that small.dbc does not define.

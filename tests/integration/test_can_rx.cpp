@@ -28,12 +28,6 @@
 #include "openvcu/j1939/safety.hpp"
 #include "openvcu/signals/table.hpp"
 
-namespace harness = openvcu::harness;
-namespace fs = std::filesystem;
-using namespace openvcu;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 const std::string CAN_RX = CAN_RX_BINARY;

@@ -33,12 +33,6 @@
 #include "openvcu/j1939/time_date.hpp"
 #include "openvcu/signals/table.hpp"
 
-namespace harness = openvcu::harness;
-namespace fs = std::filesystem;
-using namespace openvcu;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 const std::string CAN_TX = CAN_TX_BINARY;

@@ -35,12 +35,6 @@
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/signals/table.hpp"
 
-namespace harness = openvcu::harness;
-namespace fs = std::filesystem;
-using namespace openvcu;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 const std::string FSM = FSM_BINARY;

@@ -23,17 +23,10 @@
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 
-namespace harness = openvcu::harness;
-namespace fs = std::filesystem;
-using namespace openvcu;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 const std::string FSM = FSM_BINARY;
 const std::string GPIO = GPIO_BINARY;
-
 
 struct Fixture : ConfiguredStack {
   Fixture() : ConfiguredStack(copyHheaConfig(fs::temp_directory_path() / "hhea")) { openTable(); }

@@ -23,12 +23,6 @@
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 
-namespace harness = openvcu::harness;
-namespace fs = std::filesystem;
-using namespace openvcu;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 const std::string CONNECTION = "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts";
@@ -37,7 +31,6 @@ const char* const INVERTERS[] = {"HVLP_SA71.HS2_Status_Feedback.InverterStatus",
                                  "HVLP_SA72.HS2_Status_Feedback_2.InverterStatus",
                                  "HVLP_SA73.HS2_Status_Feedback_3.InverterStatus",
                                  "HVLP_SA74.HS2_Status_Feedback_4.InverterStatus"};
-
 
 struct Stack : ConfiguredStack {
   std::optional<ipc::EventBus> events;

@@ -26,12 +26,6 @@
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/ipc/runtime.hpp"
 
-namespace harness = openvcu::harness;
-namespace fs = std::filesystem;
-using namespace openvcu;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 const std::string CAN_TX = CAN_TX_BINARY;

@@ -28,12 +28,6 @@
 #include "openvcu/can/sim_link.hpp"
 #include "openvcu/ipc/runtime.hpp"
 
-namespace harness = openvcu::harness;
-namespace fs = std::filesystem;
-using namespace openvcu;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 constexpr std::int64_t MS = 1'000'000;

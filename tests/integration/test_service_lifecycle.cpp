@@ -9,10 +9,6 @@
 
 #include "integration_support.hpp"
 
-namespace harness = openvcu::harness;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
-
 namespace {
 
 /// The bus value of the fixture's heartbeat slot as `vcu signal get` prints it, or -1.

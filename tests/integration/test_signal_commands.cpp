@@ -7,10 +7,7 @@
 #include "integration_support.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 
-namespace harness = openvcu::harness;
 namespace ipc = openvcu::ipc;
-using namespace openvcu::integration;
-using namespace std::chrono_literals;
 
 TEST_CASE("vcu signal set on an internal key is accepted by the fixture service and vcu signal get reads it back") {
   SKIP_UNLESS_ISOLATED();

@@ -2,9 +2,6 @@
 
 #include "integration_support.hpp"
 
-namespace harness = openvcu::harness;
-using namespace openvcu::integration;
-
 TEST_CASE("vcu status lists the fixture service with its pid, status and counters") {
   SKIP_UNLESS_ISOLATED();
   harness::Harness sut;
