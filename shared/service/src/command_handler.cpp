@@ -1,13 +1,13 @@
 #include "openvcu/service/command_handler.hpp"
-#include "openvcu/core/text.hpp"
 
 #include <algorithm>
-#include <array>
-#include <charconv>
 #include <cmath>
 #include <exception>
+#include <iterator>
 #include <limits>
+#include <utility>
 
+#include "openvcu/core/text.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/service/logger.hpp"
 
@@ -15,22 +15,19 @@ namespace openvcu::service {
 
 namespace {
 
+/// Every command kind with its name (ipc::CommandKind, 1..11 in order).
+constexpr std::pair<ipc::CommandKind, std::string_view> COMMAND_KINDS[] = {
+    {ipc::CommandKind::SetSignal, "SetSignal"},         {ipc::CommandKind::SetOverride, "SetOverride"},
+    {ipc::CommandKind::ClearOverride, "ClearOverride"}, {ipc::CommandKind::OperatorSwitch, "OperatorSwitch"},
+    {ipc::CommandKind::FaultReset, "FaultReset"},       {ipc::CommandKind::ScheduleCycle, "ScheduleCycle"},
+    {ipc::CommandKind::ScheduleEnable, "ScheduleEnable"}, {ipc::CommandKind::ScheduleDefault, "ScheduleDefault"},
+    {ipc::CommandKind::FsmReload, "FsmReload"},         {ipc::CommandKind::SimFault, "SimFault"},
+    {ipc::CommandKind::ScheduleAdd, "ScheduleAdd"},
+};
+
 bool knownKind(ipc::CommandKind kind) noexcept {
-  switch (kind) {
-    case ipc::CommandKind::SetSignal:
-    case ipc::CommandKind::SetOverride:
-    case ipc::CommandKind::ClearOverride:
-    case ipc::CommandKind::OperatorSwitch:
-    case ipc::CommandKind::FaultReset:
-    case ipc::CommandKind::ScheduleCycle:
-    case ipc::CommandKind::ScheduleEnable:
-    case ipc::CommandKind::ScheduleDefault:
-    case ipc::CommandKind::FsmReload:
-    case ipc::CommandKind::SimFault:
-    case ipc::CommandKind::ScheduleAdd:
-      return true;
-  }
-  return false;
+  return std::any_of(std::begin(COMMAND_KINDS), std::end(COMMAND_KINDS),
+                     [kind](const auto& entry) { return entry.first == kind; });
 }
 
 bool isCustom(const CommandPolicy& policy, ipc::CommandKind kind) noexcept {
@@ -119,29 +116,8 @@ std::optional<std::string> statusRefusal(const signals::SignalInfo& info) {
 }
 
 std::string commandKindName(ipc::CommandKind kind) {
-  switch (kind) {
-    case ipc::CommandKind::SetSignal:
-      return "SetSignal";
-    case ipc::CommandKind::SetOverride:
-      return "SetOverride";
-    case ipc::CommandKind::ClearOverride:
-      return "ClearOverride";
-    case ipc::CommandKind::OperatorSwitch:
-      return "OperatorSwitch";
-    case ipc::CommandKind::FaultReset:
-      return "FaultReset";
-    case ipc::CommandKind::ScheduleCycle:
-      return "ScheduleCycle";
-    case ipc::CommandKind::ScheduleEnable:
-      return "ScheduleEnable";
-    case ipc::CommandKind::ScheduleDefault:
-      return "ScheduleDefault";
-    case ipc::CommandKind::FsmReload:
-      return "FsmReload";
-    case ipc::CommandKind::SimFault:
-      return "SimFault";
-    case ipc::CommandKind::ScheduleAdd:
-      return "ScheduleAdd";
+  for (const auto& [known, name] : COMMAND_KINDS) {
+    if (known == kind) return std::string(name);
   }
   return "kind " + std::to_string(static_cast<int>(kind));
 }
