@@ -58,7 +58,7 @@ std::string formatUtc(std::int64_t realtimeNs) {
   const auto time = static_cast<time_t>(seconds);
   tm parts{};
   ::gmtime_r(&time, &parts);
-  std::array<char, 40> text{};
+  std::array<char, 96> text{};  // room for any int the compiler imagines (-Wformat-truncation)
   std::snprintf(text.data(), text.size(), "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", parts.tm_year + 1900, parts.tm_mon + 1,
                 parts.tm_mday, parts.tm_hour, parts.tm_min, parts.tm_sec, static_cast<int>(milliseconds));
   return text.data();

@@ -265,19 +265,6 @@ std::int64_t monotonicToRealtimeNs(std::int64_t monotonicNs) noexcept {
   return realtimeNowNs() - (signals::monotonicNowNs() - monotonicNs);
 }
 
-std::string formatUtc(std::int64_t realtimeNs) {
-  const std::int64_t seconds =
-      realtimeNs >= 0 ? realtimeNs / 1'000'000'000 : (realtimeNs - 999'999'999) / 1'000'000'000;
-  const std::int64_t milliseconds = (realtimeNs - seconds * 1'000'000'000) / 1'000'000;
-  const auto time = static_cast<time_t>(seconds);
-  tm parts{};
-  ::gmtime_r(&time, &parts);
-  std::array<char, 96> text{};  // room for any int the compiler imagines
-  std::snprintf(text.data(), text.size(), "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", parts.tm_year + 1900, parts.tm_mon + 1,
-                parts.tm_mday, parts.tm_hour, parts.tm_min, parts.tm_sec, static_cast<int>(milliseconds));
-  return text.data();
-}
-
 std::string formatDuration(std::int64_t nanoseconds) {
   const double seconds = static_cast<double>(nanoseconds) / 1e9;
   std::array<char, 48> text{};

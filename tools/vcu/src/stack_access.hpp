@@ -27,6 +27,7 @@
 #include "cli.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
+#include "openvcu/service/logger.hpp"
 #include "openvcu/signals/catalog.hpp"
 
 namespace CLI {
@@ -83,8 +84,8 @@ using signals::valueText;
 /// A number, or a value text of the signal ("Start"); else an error naming the choices.
 Result<double> parseValue(const signals::SignalInfo& signal, std::string_view text);
 
-/// "2026-11-21T06:00:01.234Z" for CLOCK_REALTIME ns.
-std::string formatUtc(std::int64_t realtimeNs);
+/// "2026-11-21T06:00:01.234Z" for CLOCK_REALTIME ns (the log's time format).
+using service::formatUtc;
 /// CLOCK_REALTIME ns now.
 std::int64_t realtimeNowNs() noexcept;
 /// A table time stamp (CLOCK_MONOTONIC ns) as CLOCK_REALTIME ns, through the current offset.
