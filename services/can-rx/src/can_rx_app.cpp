@@ -13,6 +13,7 @@
 
 #include "openvcu/can/open_link.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/ipc/request_stream.hpp"
 #include "receiver.hpp"
 
 namespace openvcu::canrx {
@@ -39,7 +40,7 @@ struct BusIo {
   std::unique_ptr<can::Link> link;
   std::optional<ipc::FramePublisher> received;
   std::optional<ipc::FramePublisher> sent;
-  std::optional<ipc::FramePublisher> requests;
+  std::optional<ipc::RequestPublisher> requests;
   std::optional<ipc::FramePublisher> sendRequests;  ///< only for forwarding targets
   std::uint64_t publishFailures{};
   std::uint64_t forwardFailures{};
@@ -92,8 +93,16 @@ struct CanRxAppImpl final : ReceiverOutputs {
   void received(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
     if (!publish(buses[bus].received, frame.frame, frame.monotonicNs, bus)) ++buses[bus].publishFailures;
   }
-  void request(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
-    if (!publish(buses[bus].requests, frame.frame, frame.monotonicNs, bus)) ++buses[bus].publishFailures;
+  void request(std::size_t bus, const j1939::Request& request, std::int64_t monotonicNs) noexcept override {
+    ipc::RequestPublisher& publisher = *buses[bus].requests;
+    if (!publisher.hasSubscribers()) return;  // no can-tx: iceoryx would drop it
+    ipc::RequestSample sample{};
+    sample.monotonicNs = monotonicNs;
+    sample.pgn = request.pgn;
+    sample.bus = static_cast<std::uint16_t>(bus);
+    sample.requester = request.requester;
+    sample.global = request.global;
+    if (!publisher.publish(sample)) ++buses[bus].publishFailures;
   }
   void forward(std::size_t toBus, const can::Frame& frame) noexcept override {
     if (!publish(buses[toBus].sendRequests, frame, signals::monotonicNowNs(), toBus)) ++buses[toBus].forwardFailures;
@@ -182,12 +191,14 @@ struct CanRxAppImpl final : ReceiverOutputs {
       io.link = std::move(*linkResult);
       for (auto [stream, slot] : {std::pair{ipc::FrameStream::Received, &io.received},
                                   std::pair{ipc::FrameStream::Sent, &io.sent},
-                                  std::pair{ipc::FrameStream::Request, &io.requests},
                                   std::pair{ipc::FrameStream::SendRequest, &io.sendRequests}}) {
         auto publisherResult = ipc::FramePublisher::create({instance, bus.name, stream});
         if (!publisherResult) return Error{"bus '" + bus.name + "': " + publisherResult.error().message};
         slot->emplace(std::move(*publisherResult));
       }
+      auto requestsResult = ipc::RequestPublisher::create(instance, bus.name);
+      if (!requestsResult) return Error{"bus '" + bus.name + "': " + requestsResult.error().message};
+      io.requests.emplace(std::move(*requestsResult));
     }
     for (std::size_t b = 0; b < buses.size(); ++b) {
       const can::WaitHandle handle = buses[b].link->waitHandle();

@@ -143,7 +143,7 @@ Waiter::Waiter(Waiter&& other) noexcept = default;
 Waiter& Waiter::operator=(Waiter&& other) noexcept = default;
 Waiter::~Waiter() = default;
 
-Status Waiter::attach(FrameSubscriber& subscriber, std::uint64_t id) {
+Status Waiter::attach(SampleSubscriber& subscriber, std::uint64_t id) {
   if (m_impl->subscriberCount + m_impl->fds.size() >= CAPACITY) {
     return Error{"Waiter is full (" + std::to_string(CAPACITY) + " attachments)"};
   }
@@ -157,7 +157,7 @@ Status Waiter::attach(FrameSubscriber& subscriber, std::uint64_t id) {
   return {};
 }
 
-void Waiter::detach(FrameSubscriber& subscriber) noexcept {
+void Waiter::detach(SampleSubscriber& subscriber) noexcept {
   if (m_impl->subscriberCount == 0) return;
   const auto before = m_impl->waitSet.size();
   m_impl->waitSet.detachState(subscriber.m_impl->port, iox::popo::SubscriberState::HAS_DATA);

@@ -25,7 +25,7 @@
 #include "openvcu/service/timer.hpp"
 
 namespace openvcu::ipc {
-class FrameSubscriber;
+class SampleSubscriber;
 }
 
 namespace openvcu::service {
@@ -59,7 +59,7 @@ class Loop {
   /// Calls `onData` while `subscriber` holds samples (level-triggered: take them all).
   /// Needs an initialised ipc::Runtime; switches the loop to the ipc::Waiter back end.
   /// The subscriber must outlive the loop.
-  Status addSubscriber(ipc::FrameSubscriber& subscriber, std::function<void()> onData);
+  Status addSubscriber(ipc::SampleSubscriber& subscriber, std::function<void()> onData);
 
   /// Waits and dispatches until stop(); returns the code given to stop().
   int run();
