@@ -9,10 +9,10 @@
 #include <filesystem>
 #include <optional>
 
-#include "openvcu/can/open_link.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/j1939/request.hpp"
+#include "openvcu/service/bus_ports.hpp"
 #include "openvcu/service/timer.hpp"
 #include "schedule_commands.hpp"
 #include "scheduler.hpp"
@@ -34,11 +34,8 @@ std::string number(double value) {
 
 }  // namespace
 
-struct BusIo {
-  std::unique_ptr<can::Link> link;
-  std::optional<ipc::FramePublisher> sent;
-  std::optional<ipc::FrameSubscriber> sendRequests;
-  std::optional<ipc::RequestSubscriber> requests;
+/// One bus: its link and streams (service::BusPorts, Transmitter role) and their counters.
+struct BusIo : service::BusPorts {
   std::atomic<std::uint64_t> publishFailures{};
   std::atomic<std::uint64_t> framesSent{};
 };
@@ -145,19 +142,9 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
 
     const std::string& instance = runtime.instance();
     for (const config::BusConfig& bus : vehicle.buses) {
-      BusIo& io = buses.emplace_back();
-      auto linkResult = can::openLink(bus.link.kind, bus.link.target, bus.linkOptions());
-      if (!linkResult) return Error{"bus '" + bus.name + "': " + linkResult.error().message};
-      io.link = std::move(*linkResult);
-      auto sentResult = ipc::FramePublisher::create({instance, bus.name, ipc::FrameStream::Sent});
-      if (!sentResult) return Error{"bus '" + bus.name + "': " + sentResult.error().message};
-      io.sent.emplace(std::move(*sentResult));
-      auto sendRequestsResult = ipc::FrameSubscriber::create({instance, bus.name, ipc::FrameStream::SendRequest});
-      if (!sendRequestsResult) return Error{"bus '" + bus.name + "': " + sendRequestsResult.error().message};
-      io.sendRequests.emplace(std::move(*sendRequestsResult));
-      auto requestsResult = ipc::RequestSubscriber::create(instance, bus.name);
-      if (!requestsResult) return Error{"bus '" + bus.name + "': " + requestsResult.error().message};
-      io.requests.emplace(std::move(*requestsResult));
+      auto portsResult = service::openBusPorts(instance, bus, bus.linkOptions(), service::BusRole::Transmitter);
+      if (!portsResult) return portsResult.error();
+      static_cast<service::BusPorts&>(buses.emplace_back()) = std::move(*portsResult);
     }
     startNs = signals::monotonicNowNs();
     auto schedulerResult = Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *this, *this,
@@ -167,10 +154,10 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
     commands.emplace(vehicle, runtime.catalog(), schedule, overlay, *scheduler, *this);
 
     for (std::size_t b = 0; b < buses.size(); ++b) {
-      ipc::FrameSubscriber& sendRequests = *buses[b].sendRequests;
+      ipc::FrameSubscriber& sendRequests = *buses[b].sendRequestsIn;
       if (Status added = runtime.loop().addSubscriber(sendRequests, [this, b] { takeSendRequests(b); }); !added)
         return added.error();
-      ipc::RequestSubscriber& requests = *buses[b].requests;
+      ipc::RequestSubscriber& requests = *buses[b].requestsIn;
       if (Status added = runtime.loop().addSubscriber(requests, [this, b] { takeRequests(b); }); !added)
         return added.error();
     }
@@ -208,7 +195,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   // ---- streams in (loop thread) -----------------------------------------------------------
 
   void takeSendRequests(std::size_t bus) {
-    while (const auto maybeSample = buses[bus].sendRequests->take()) {
+    while (const auto maybeSample = buses[bus].sendRequestsIn->take()) {
       (void)thread->post(SendOnce{bus, maybeSample->frame});
     }
   }
@@ -216,7 +203,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   /// The requests can-rx parsed for this node (j1939::parseRequest); answered on the bus
   /// they came from.
   void takeRequests(std::size_t bus) {
-    while (const auto maybeSample = buses[bus].requests->take()) {
+    while (const auto maybeSample = buses[bus].requestsIn->take()) {
       const j1939::Request request{maybeSample->pgn, maybeSample->requester, maybeSample->global};
       (void)thread->post(AnswerRequest{bus, request});
     }

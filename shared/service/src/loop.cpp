@@ -215,6 +215,14 @@ Status Loop::addSubscriber(ipc::SampleSubscriber& subscriber, std::function<void
   return impl.add(std::move(source));
 }
 
+Status Loop::addLink(can::Link& link, std::function<void()> onReadable) {
+  const can::WaitHandle handle = link.waitHandle();
+  if (handle.source == nullptr) return addFd(handle.fd, std::move(onReadable));
+  auto* subscriber = dynamic_cast<ipc::SampleSubscriber*>(handle.source);
+  if (subscriber == nullptr) return Error{"link " + link.name() + ": its wait source is not an iceoryx subscriber"};
+  return addSubscriber(*subscriber, std::move(onReadable));
+}
+
 int Loop::run() {
   while (!m_impl->stopRequested) {
     m_impl->waitAndDispatch(std::nullopt);

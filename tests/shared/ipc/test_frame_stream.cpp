@@ -362,3 +362,39 @@ TEST_CASE("a frame subscriber on the req topic rejects request samples instead o
   CHECK_FALSE(frames->take());
   CHECK(frames->rejectedSamples() == 1);
 }
+
+TEST_CASE("the waiter takes a link's wait handle whole: a subscriber source or an fd") {
+  if (!startRoudiAndRuntime()) return;
+  constexpr std::uint64_t LINK_ID = 5;
+  constexpr std::uint64_t FD_ID = 6;
+  auto subscriber = ipc::FrameSubscriber::create({"test", "handles", ipc::FrameStream::Received});
+  auto publisher = ipc::FramePublisher::create({"test", "handles", ipc::FrameStream::Received});
+  REQUIRE((subscriber.ok() && publisher.ok()));
+  auto waiterResult = ipc::Waiter::create();
+  REQUIRE(waiterResult.ok());
+  ipc::Waiter& sut = *waiterResult;
+  int pipeFds[2] = {-1, -1};
+  REQUIRE(::pipe(pipeFds) == 0);
+
+  REQUIRE(sut.attachLink(openvcu::can::WaitHandle{-1, &*subscriber}, LINK_ID).ok());
+  REQUIRE(sut.attachLink(openvcu::can::WaitHandle{pipeFds[0], nullptr}, FD_ID).ok());
+  CHECK_FALSE(sut.attachLink(openvcu::can::WaitHandle{}, FD_ID).ok());  // neither set
+  requireConnected(*publisher);
+
+  REQUIRE(publisher->publish(sampleWithId(1)));
+  auto ready = sut.waitFor(5s);
+  REQUIRE(ready.size() == 1);
+  CHECK(ready[0] == LINK_ID);
+  REQUIRE(subscriber->take());
+
+  const char byte = 1;
+  REQUIRE(::write(pipeFds[1], &byte, 1) == 1);
+  ready = sut.waitFor(5s);
+  REQUIRE(ready.size() == 1);
+  CHECK(ready[0] == FD_ID);
+
+  sut.detachLink(openvcu::can::WaitHandle{pipeFds[0], nullptr});
+  sut.detachLink(openvcu::can::WaitHandle{-1, &*subscriber});
+  ::close(pipeFds[0]);
+  ::close(pipeFds[1]);
+}

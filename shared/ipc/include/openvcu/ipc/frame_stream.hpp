@@ -20,6 +20,7 @@
 #include <memory>
 #include <optional>
 
+#include "openvcu/can/link.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/ipc/topics.hpp"
 
@@ -125,7 +126,7 @@ struct FrameSubscriberOptions {
 /// type (FrameSubscriber: FrameSample; RequestSubscriber, request_stream.hpp: RequestSample).
 /// Movable; a moved-from subscriber is empty.
 /// @note restricted thread-safe: one thread at a time.
-class SampleSubscriber {
+class SampleSubscriber : public can::WaitSource {
  public:
   SampleSubscriber(SampleSubscriber&& other) noexcept;
   SampleSubscriber& operator=(SampleSubscriber&& other) noexcept;
@@ -147,7 +148,7 @@ class SampleSubscriber {
 
  protected:
   explicit SampleSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept;
-  ~SampleSubscriber();
+  ~SampleSubscriber() override;
   /// Copies the oldest queued sample of exactly `size` bytes into `out`; samples of
   /// another size are released and counted (rejectedSamples). false when none is queued.
   bool takeInto(void* out, std::size_t size) noexcept;

@@ -22,6 +22,7 @@
 #include <memory>
 #include <span>
 
+#include "openvcu/can/link.hpp"
 #include "openvcu/core/result.hpp"
 
 namespace openvcu::ipc {
@@ -51,6 +52,12 @@ class Waiter {
   /// (destroying an attached subscriber detaches it). Fails when full or already attached.
   Status attach(SampleSubscriber& subscriber, std::uint64_t id);
   void detach(SampleSubscriber& subscriber) noexcept;
+
+  /// A link's wait handle (can::Link::waitHandle()): its fd (attachFd) or its subscriber
+  /// (attach). Fails like those, or for a handle with neither or a source that is no
+  /// ipc::SampleSubscriber. Detach with detachLink before the link goes away.
+  Status attachLink(const can::WaitHandle& handle, std::uint64_t id);
+  void detachLink(const can::WaitHandle& handle) noexcept;
 
   /// Reports `id` from wait when `fd` is readable. After it is reported, the fd is watched
   /// again from the next wait call on: handle it before waiting again, or it is reported

@@ -27,6 +27,9 @@
 namespace openvcu::ipc {
 class SampleSubscriber;
 }
+namespace openvcu::can {
+class Link;
+}
 
 namespace openvcu::service {
 
@@ -60,6 +63,11 @@ class Loop {
   /// Needs an initialised ipc::Runtime; switches the loop to the ipc::Waiter back end.
   /// The subscriber must outlive the loop.
   Status addSubscriber(ipc::SampleSubscriber& subscriber, std::function<void()> onData);
+
+  /// Calls `onReadable` whenever `link` has something to do: its wait handle is an fd
+  /// (addFd) or, for a sim link, an iceoryx subscriber (addSubscriber). The link must
+  /// outlive the loop (or its fd be removed).
+  Status addLink(can::Link& link, std::function<void()> onReadable);
 
   /// Waits and dispatches until stop(); returns the code given to stop().
   int run();
