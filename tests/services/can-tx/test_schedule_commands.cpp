@@ -161,7 +161,7 @@ TEST_CASE("a cycle that overloads the bus is refused") {
   CHECK(refusal->find("%") != std::string::npos);
 }
 
-TEST_CASE("enable takes 1 or 0 only; disabling is posted and saved") {
+TEST_CASE("enable takes 1 or 0 only, and disabling is posted and saved") {
   Fixture f;
   const std::size_t sys1 = f.scheduledIndex(CMD_SYS_1);
 
