@@ -38,7 +38,7 @@
 #include <string>
 #include <vector>
 
-#include "openvcu/can/open_link.hpp"
+#include "openvcu/can_links/open_link.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/ipc/runtime.hpp"
 

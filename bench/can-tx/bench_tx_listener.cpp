@@ -77,7 +77,7 @@
 #include <string>
 #include <vector>
 
-#include "openvcu/can/open_link.hpp"
+#include "openvcu/can_links/open_link.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/dbc/matcher.hpp"

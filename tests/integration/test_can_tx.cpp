@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "integration_support.hpp"
-#include "openvcu/can/sim_link.hpp"
+#include "openvcu/can_links/sim_link.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/runtime.hpp"

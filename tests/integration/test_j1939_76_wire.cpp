@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "integration_support.hpp"
-#include "openvcu/can/sim_link.hpp"
+#include "openvcu/can_links/sim_link.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/ipc/runtime.hpp"
 

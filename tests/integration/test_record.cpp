@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "integration_support.hpp"
-#include "openvcu/can/sim_link.hpp"
+#include "openvcu/can_links/sim_link.hpp"
 #include "openvcu/ipc/runtime.hpp"
 
 namespace {

@@ -11,8 +11,9 @@
 #include <climits>
 #include <cstring>
 
-#include "openvcu/can/open_link.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/ipc/request_stream.hpp"
+#include "openvcu/service/bus_ports.hpp"
 #include "receiver.hpp"
 
 namespace openvcu::canrx {
@@ -35,12 +36,8 @@ void fill(ipc::FrameSample& sample, const can::Frame& frame, std::int64_t monoto
 
 }  // namespace
 
-struct BusIo {
-  std::unique_ptr<can::Link> link;
-  std::optional<ipc::FramePublisher> received;
-  std::optional<ipc::FramePublisher> sent;
-  std::optional<ipc::FramePublisher> requests;
-  std::optional<ipc::FramePublisher> sendRequests;  ///< only for forwarding targets
+/// One bus: its link and streams (service::BusPorts, Receiver role) and their counters.
+struct BusIo : service::BusPorts {
   std::uint64_t publishFailures{};
   std::uint64_t forwardFailures{};
   std::uint64_t transmitFailures{};
@@ -92,11 +89,19 @@ struct CanRxAppImpl final : ReceiverOutputs {
   void received(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
     if (!publish(buses[bus].received, frame.frame, frame.monotonicNs, bus)) ++buses[bus].publishFailures;
   }
-  void request(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
-    if (!publish(buses[bus].requests, frame.frame, frame.monotonicNs, bus)) ++buses[bus].publishFailures;
+  void request(std::size_t bus, const j1939::Request& request, std::int64_t monotonicNs) noexcept override {
+    ipc::RequestPublisher& publisher = *buses[bus].requestsOut;
+    if (!publisher.hasSubscribers()) return;  // no can-tx: iceoryx would drop it
+    ipc::RequestSample sample{};
+    sample.monotonicNs = monotonicNs;
+    sample.pgn = request.pgn;
+    sample.bus = static_cast<std::uint16_t>(bus);
+    sample.requester = request.requester;
+    sample.global = request.global;
+    if (!publisher.publish(sample)) ++buses[bus].publishFailures;
   }
   void forward(std::size_t toBus, const can::Frame& frame) noexcept override {
-    if (!publish(buses[toBus].sendRequests, frame, signals::monotonicNowNs(), toBus)) ++buses[toBus].forwardFailures;
+    if (!publish(buses[toBus].sendRequestsOut, frame, signals::monotonicNowNs(), toBus)) ++buses[toBus].forwardFailures;
   }
   bool transmit(std::size_t bus, const can::Frame& frame) noexcept override {
     BusIo& io = buses[bus];
@@ -176,25 +181,13 @@ struct CanRxAppImpl final : ReceiverOutputs {
     const std::string& instance = runtime.instance();
     for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
       const config::BusConfig& bus = vehicle.buses[b];
-      BusIo& io = buses.emplace_back();
-      auto linkResult = can::openLink(bus.link.kind, bus.link.target, linkOptions(bus, receiver->filters(b)));
-      if (!linkResult) return Error{"bus '" + bus.name + "': " + linkResult.error().message};
-      io.link = std::move(*linkResult);
-      for (auto [stream, slot] : {std::pair{ipc::FrameStream::Received, &io.received},
-                                  std::pair{ipc::FrameStream::Sent, &io.sent},
-                                  std::pair{ipc::FrameStream::Request, &io.requests},
-                                  std::pair{ipc::FrameStream::SendRequest, &io.sendRequests}}) {
-        auto publisherResult = ipc::FramePublisher::create({instance, bus.name, stream});
-        if (!publisherResult) return Error{"bus '" + bus.name + "': " + publisherResult.error().message};
-        slot->emplace(std::move(*publisherResult));
-      }
+      auto portsResult =
+          service::openBusPorts(instance, bus, linkOptions(bus, receiver->filters(b)), service::BusRole::Receiver);
+      if (!portsResult) return portsResult.error();
+      static_cast<service::BusPorts&>(buses.emplace_back()) = std::move(*portsResult);
     }
     for (std::size_t b = 0; b < buses.size(); ++b) {
-      const can::WaitHandle handle = buses[b].link->waitHandle();
-      Status added = handle.subscriber != nullptr
-                         ? runtime.loop().addSubscriber(*handle.subscriber, [this, b] { drain(b); })
-                         : runtime.loop().addFd(handle.fd, [this, b] { drain(b); });
-      if (!added) return added.error();
+      if (Status added = runtime.loop().addLink(*buses[b].link, [this, b] { drain(b); }); !added) return added.error();
     }
     deadlineFd = ::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
     if (deadlineFd < 0) return Error{std::string("timerfd_create: ") + std::strerror(errno)};

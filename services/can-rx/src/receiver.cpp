@@ -105,7 +105,7 @@ struct ReceiverImpl {
   std::vector<std::size_t> trackedIndices;
   std::vector<SafetyState> safety;
   std::array<std::unique_ptr<Dm1State>, 256> dm1;  ///< by source address
-  std::array<bool, 256> ownAddress{};              ///< addresses this node answers requests on
+  j1939::AddressSet ownAddress{};                  ///< addresses this node answers requests on
   std::uint8_t tpAddress{j1939::NULL_ADDRESS};
   MessageCounters noCounters;
   std::int64_t startNs{};
@@ -145,10 +145,9 @@ struct ReceiverImpl {
         return;
       }
       if (pgn == j1939::PGN_REQUEST) {
-        const std::uint8_t destination = id.destination();
-        if (destination == j1939::GLOBAL_ADDRESS || ownAddress[destination]) {
+        if (const auto maybeRequest = j1939::parseRequest(frame.id, true, frame.payload(), ownAddress)) {
           ++bus.counters.requests;
-          outputs.request(busIndex, received);
+          outputs.request(busIndex, *maybeRequest, received.monotonicNs);
         }
         // and decoded below when the DBC defines it (HHEA: RQST_VIC_PGN59904)
       }

@@ -28,6 +28,7 @@
 #include "openvcu/can/link.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/ipc/events.hpp"
+#include "openvcu/j1939/request.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
 #include "openvcu/config/receive.hpp"
@@ -41,8 +42,9 @@ class ReceiverOutputs {
   virtual ~ReceiverOutputs() = default;
   /// Every frame read from bus `bus` ("rx" stream).
   virtual void received(std::size_t bus, const can::ReceivedFrame& frame) noexcept = 0;
-  /// A J1939 Request addressed to this node (or global): for can-tx ("req" stream).
-  virtual void request(std::size_t bus, const can::ReceivedFrame& frame) noexcept = 0;
+  /// A J1939 Request for this node (or global), parsed (j1939::parseRequest): for can-tx
+  /// ("req" stream). `monotonicNs`: when its frame was received.
+  virtual void request(std::size_t bus, const j1939::Request& request, std::int64_t monotonicNs) noexcept = 0;
   /// A frame to forward onto bus `toBus` (can-tx's "send" stream).
   virtual void forward(std::size_t toBus, const can::Frame& frame) noexcept = 0;
   /// A TP control frame to send on bus `bus` now (CTS, EndOfMsgAck, Abort). false: not sent.
@@ -59,7 +61,7 @@ struct BusCounters {
   std::uint64_t unknownIds{};     ///< frames matching no DBC message of this bus
   std::uint64_t decodeErrors{};   ///< frames shorter than their message (signals missing)
   std::uint64_t outOfRange{};     ///< signal values outside their DBC range
-  std::uint64_t requests{};       ///< J1939 requests for this node handed to can-tx
+  std::uint64_t requests{};       ///< J1939 requests for this node handed to can-tx (well-formed ones)
   std::uint64_t tpSessions{};     ///< transport sessions started
   std::uint64_t tpCompleted{};    ///< ... reassembled
   std::uint64_t tpAborted{};      ///< ... aborted (either side) or timed out

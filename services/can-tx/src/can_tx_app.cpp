@@ -9,11 +9,12 @@
 #include <filesystem>
 #include <optional>
 
-#include "openvcu/can/open_link.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
-#include "openvcu/j1939/id.hpp"
+#include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/j1939/request.hpp"
+#include "openvcu/service/bus_ports.hpp"
 #include "openvcu/service/timer.hpp"
+#include "schedule_commands.hpp"
 #include "scheduler.hpp"
 #include "tx_thread.hpp"
 #include "writer_watch.hpp"
@@ -33,16 +34,13 @@ std::string number(double value) {
 
 }  // namespace
 
-struct BusIo {
-  std::unique_ptr<can::Link> link;
-  std::optional<ipc::FramePublisher> sent;
-  std::optional<ipc::FrameSubscriber> sendRequests;
-  std::optional<ipc::FrameSubscriber> requests;
+/// One bus: its link and streams (service::BusPorts, Transmitter role) and their counters.
+struct BusIo : service::BusPorts {
   std::atomic<std::uint64_t> publishFailures{};
   std::atomic<std::uint64_t> framesSent{};
 };
 
-struct CanTxAppImpl final : TxPort, Clock {
+struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   service::Service& runtime;
   const config::VehicleConfig& vehicle;
   Schedule schedule;  ///< the loop thread's view: checks and persistence
@@ -50,6 +48,7 @@ struct CanTxAppImpl final : TxPort, Clock {
   std::deque<BusIo> buses;  // deque: stable addresses (atomics, the loop's callbacks)
   std::unique_ptr<Scheduler> scheduler;
   std::optional<TxThread> thread;
+  std::optional<ScheduleCommands> commands;  ///< the schedule commands and overrides (loop thread)
   std::optional<service::PeriodicTimer> watchTimer;
   std::vector<WriterWatch> writers;  ///< per schedule.writers entry
   std::int64_t startNs{};
@@ -143,31 +142,22 @@ struct CanTxAppImpl final : TxPort, Clock {
 
     const std::string& instance = runtime.instance();
     for (const config::BusConfig& bus : vehicle.buses) {
-      BusIo& io = buses.emplace_back();
-      auto linkResult = can::openLink(bus.link.kind, bus.link.target, bus.linkOptions());
-      if (!linkResult) return Error{"bus '" + bus.name + "': " + linkResult.error().message};
-      io.link = std::move(*linkResult);
-      auto sentResult = ipc::FramePublisher::create({instance, bus.name, ipc::FrameStream::Sent});
-      if (!sentResult) return Error{"bus '" + bus.name + "': " + sentResult.error().message};
-      io.sent.emplace(std::move(*sentResult));
-      for (auto [stream, slot] : {std::pair{ipc::FrameStream::SendRequest, &io.sendRequests},
-                                  std::pair{ipc::FrameStream::Request, &io.requests}}) {
-        auto subscriberResult = ipc::FrameSubscriber::create({instance, bus.name, stream});
-        if (!subscriberResult) return Error{"bus '" + bus.name + "': " + subscriberResult.error().message};
-        slot->emplace(std::move(*subscriberResult));
-      }
+      auto portsResult = service::openBusPorts(instance, bus, bus.linkOptions(), service::BusRole::Transmitter);
+      if (!portsResult) return portsResult.error();
+      static_cast<service::BusPorts&>(buses.emplace_back()) = std::move(*portsResult);
     }
     startNs = signals::monotonicNowNs();
     auto schedulerResult = Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *this, *this,
                                              startNs);
     if (!schedulerResult) return schedulerResult.error();
     scheduler = std::move(*schedulerResult);
+    commands.emplace(vehicle, runtime.catalog(), schedule, overlay, *scheduler, *this);
 
     for (std::size_t b = 0; b < buses.size(); ++b) {
-      ipc::FrameSubscriber& sendRequests = *buses[b].sendRequests;
+      ipc::FrameSubscriber& sendRequests = *buses[b].sendRequestsIn;
       if (Status added = runtime.loop().addSubscriber(sendRequests, [this, b] { takeSendRequests(b); }); !added)
         return added.error();
-      ipc::FrameSubscriber& requests = *buses[b].requests;
+      ipc::RequestSubscriber& requests = *buses[b].requestsIn;
       if (Status added = runtime.loop().addSubscriber(requests, [this, b] { takeRequests(b); }); !added)
         return added.error();
     }
@@ -205,30 +195,17 @@ struct CanTxAppImpl final : TxPort, Clock {
   // ---- streams in (loop thread) -----------------------------------------------------------
 
   void takeSendRequests(std::size_t bus) {
-    while (const auto maybeSample = buses[bus].sendRequests->take()) {
-      TxCommand command;
-      command.kind = TxCommand::Kind::OneShot;
-      command.bus = bus;
-      command.frame = maybeSample->frame;
-      (void)thread->post(command);
+    while (const auto maybeSample = buses[bus].sendRequestsIn->take()) {
+      (void)thread->post(SendOnce{bus, maybeSample->frame});
     }
   }
 
+  /// The requests can-rx parsed for this node (j1939::parseRequest); answered on the bus
+  /// they came from.
   void takeRequests(std::size_t bus) {
-    while (const auto maybeSample = buses[bus].requests->take()) {
-      const can::Frame& frame = maybeSample->frame;
-      if (!frame.extended()) continue;
-      const j1939::Id id = j1939::Id::fromCanId(frame.id);
-      if (id.pduFormat != (j1939::PGN_REQUEST >> 8)) continue;
-      const auto pgn = j1939::decodeRequest(frame.payload());
-      if (!pgn) continue;
-      TxCommand command;
-      command.kind = TxCommand::Kind::Request;
-      command.bus = bus;
-      command.pgn = *pgn;
-      command.requester = id.sourceAddress;
-      command.global = id.destination() == j1939::GLOBAL_ADDRESS;
-      (void)thread->post(command);
+    while (const auto maybeSample = buses[bus].requestsIn->take()) {
+      const j1939::Request request{maybeSample->pgn, maybeSample->requester, maybeSample->global};
+      (void)thread->post(AnswerRequest{bus, request});
     }
   }
 
@@ -248,125 +225,33 @@ struct CanTxAppImpl final : TxPort, Clock {
         return "transmitted signals are commanded by the FSM; an operator sets an override (vcu signal set "
                "--override) or the schedule default (vcu schedule default)";
       }
-      Overlay changed = overlay;
-      std::erase_if(changed.overrides, [&](const auto& item) { return item.first == info.key; });
-      if (request.kind == ipc::CommandKind::SetOverride) changed.overrides.emplace_back(info.key, request.value);
-      return persist(std::move(changed));
+      return commands->recordOverride(info.key, request.kind == ipc::CommandKind::SetOverride
+                                                    ? std::optional<double>(request.value)
+                                                    : std::nullopt);
     };
     policy.customKinds = {ipc::CommandKind::ScheduleCycle, ipc::CommandKind::ScheduleEnable,
                           ipc::CommandKind::ScheduleDefault, ipc::CommandKind::ScheduleAdd};
     policy.custom = [this](const ipc::CommandRequest& request) {
-      auto refusal = scheduleCommand(request);
+      auto refusal = commands->apply(request);
       if (!refusal) publishSchedule();  // watchers see the change at once, not at the next beat
       return refusal;
     };
     return policy;
   }
 
-  /// Saves `changed` as the overlay; the reason when that failed (nothing changed then).
-  std::optional<std::string> persist(Overlay changed) {
-    if (Status saved = saveOverlay(schedule.overlay, changed); !saved) {
-      return "not applied: " + saved.error().message;
-    }
-    overlay = std::move(changed);
-    return std::nullopt;
-  }
+  // ---- ScheduleChangeSink (loop thread) ------------------------------------------------------
 
-  MessageChange& changeOf(Overlay& target, const std::string& name) {
-    for (MessageChange& change : target.messages) {
-      if (change.message == name) return change;
-    }
-    return target.messages.emplace_back(MessageChange{name, std::nullopt, std::nullopt, false});
-  }
+  bool post(TxCommand&& command) noexcept override { return thread->post(std::move(command)); }
 
-  /// ScheduleAdd: a DBC message joins the running schedule (at the end, first frame now).
-  std::optional<std::string> addCommand(const ipc::CommandRequest& request) {
-    auto built = runtimeMessage(schedule, vehicle, runtime.catalog(), request.key, request.value);
-    if (!built) return built.error().message;
-    if (schedule.messages.size() >= scheduler->capacity()) return "the schedule is full";
-    auto prepared = scheduler->prepare(*built);
-    if (!prepared) return prepared.error().message;
-    const Overlay previous = overlay;
-    Overlay changed = overlay;
-    MessageChange& change = changeOf(changed, request.key);
-    change.added = true;
-    change.cycleMs = request.value;
-    if (auto refusal = persist(std::move(changed))) return refusal;
-    const MessageStats& stats = Scheduler::statsOf(**prepared);
-    TxCommand command{.kind = TxCommand::Kind::Add, .added = prepared->get()};
-    if (!thread->post(command)) {
-      (void)persist(previous);
-      return "the transmit thread's inbox is full; try again";
-    }
-    (void)prepared->release();  // the command owns it now
-    schedule.messages.push_back(std::move(*built));
-    registerMessageCounters(schedule.messages.size() - 1, stats);
-    for (const std::string& warning : safetyIdentityWarnings(schedule, vehicle, schedule.messages.size() - 1)) {
+  void added(std::size_t scheduled, const MessageStats& stats) override {
+    registerMessageCounters(scheduled, stats);
+    for (const std::string& warning : safetyIdentityWarnings(schedule, vehicle, scheduled)) {
       runtime.log().warning(warning);
     }
-    runtime.log().info("message " + request.key + " added to the transmit schedule, every " + number(request.value) +
-                       " ms");
-    return std::nullopt;
-  }
-
-  std::optional<std::string> scheduleCommand(const ipc::CommandRequest& request) {
-    if (!std::isfinite(request.value)) return "the value must be a finite number";
-    if (request.kind == ipc::CommandKind::ScheduleAdd) return addCommand(request);
-    const Overlay previous = overlay;
-    TxCommand command;
-    if (request.kind == ipc::CommandKind::ScheduleDefault) {
-      auto found = findScheduledSignal(schedule, vehicle, runtime.catalog(), request.key);
-      if (!found) return found.error().message;
-      ScheduledMessage& entry = schedule.messages[found->scheduled];
-      const dbc::Signal& signal = vehicle.database.messages[entry.message].signals[found->signal];
-      for (const ComputedField& field : entry.computed) {
-        if (field.signal == found->signal) {
-          return "'" + request.key + "' is computed (" + std::string(fieldAlgorithmName(field.algorithm)) +
-                 ") for every frame";
-        }
-      }
-      if (signal.minimum < signal.maximum && (request.value < signal.minimum || request.value > signal.maximum)) {
-        return "value " + number(request.value) + " is outside the range [" + number(signal.minimum) + ", " +
-               number(signal.maximum) + "] of '" + request.key + "'";
-      }
-      Overlay changed = overlay;
-      std::erase_if(changed.defaults, [&](const auto& item) { return item.first == request.key; });
-      changed.defaults.emplace_back(request.key, request.value);
-      if (auto refusal = persist(std::move(changed))) return refusal;
-      entry.defaults[found->signal] = request.value;
-      command = TxCommand{.kind = TxCommand::Kind::Default, .scheduled = found->scheduled, .signal = found->signal,
-                          .value = request.value};
-    } else {
-      auto found = findScheduled(schedule, vehicle, request.key);
-      if (!found) return found.error().message;
-      ScheduledMessage& entry = schedule.messages[*found];
-      if (request.kind == ipc::CommandKind::ScheduleCycle) {
-        if (auto problem = checkCycle(entry, request.value)) return problem;
-        // The bus-load limit holds for runtime changes too (the schedule file's rule).
-        const std::int64_t previousCycleNs = entry.cycleNs;
-        entry.cycleNs = static_cast<std::int64_t>(std::llround(request.value * NS_PER_MS));
-        const auto overload = checkBusLoad(schedule, vehicle);
-        entry.cycleNs = previousCycleNs;
-        if (overload) return *overload;
-        Overlay changed = overlay;
-        changeOf(changed, request.key).cycleMs = request.value;
-        if (auto refusal = persist(std::move(changed))) return refusal;
-        entry.cycleNs = static_cast<std::int64_t>(std::llround(request.value * NS_PER_MS));
-        command = TxCommand{.kind = TxCommand::Kind::Cycle, .scheduled = *found, .cycleNs = entry.cycleNs};
-      } else {
-        if (request.value != 0.0 && request.value != 1.0) return "the value is 1 (enable) or 0 (disable)";
-        Overlay changed = overlay;
-        changeOf(changed, request.key).enabled = request.value == 1.0;
-        if (auto refusal = persist(std::move(changed))) return refusal;
-        entry.enabled = request.value == 1.0;
-        command = TxCommand{.kind = TxCommand::Kind::Enable, .scheduled = *found, .enabled = entry.enabled};
-      }
-    }
-    if (!thread->post(command)) {
-      (void)persist(previous);
-      return "the transmit thread's inbox is full; try again";
-    }
-    return std::nullopt;
+    const ScheduledMessage& message = schedule.messages[scheduled];
+    runtime.log().info("message " + vehicle.database.messages[message.message].name +
+                       " added to the transmit schedule, every " +
+                       number(static_cast<double>(message.cycleNs) / NS_PER_MS) + " ms");
   }
 
   // ---- writer heartbeats (loop thread) ------------------------------------------------------

@@ -5,8 +5,9 @@
 #include <cmath>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/j1939/acknowledgement.hpp"
+#include "openvcu/j1939/computed_fields.hpp"
 #include "openvcu/j1939/id.hpp"
-#include "openvcu/j1939/request.hpp"
 #include "openvcu/j1939/safety.hpp"
 #include "openvcu/j1939/time_date.hpp"
 
@@ -15,8 +16,6 @@ namespace {
 
 using Payload = std::array<std::uint8_t, can::MAX_DATA_LENGTH>;
 
-constexpr std::uint32_t PGN_ACKNOWLEDGEMENT = 0xE800;  ///< J1939-21 PGN 59392
-constexpr std::uint8_t ACK_NEGATIVE = 1;
 constexpr std::int64_t NEVER = INT64_MAX;
 
 std::int64_t absolute(std::int64_t value) noexcept { return value < 0 ? -value : value; }
@@ -73,32 +72,12 @@ ErrorHistogram::Summary ErrorHistogram::summary() const noexcept {
   return summary;
 }
 
-// ---- computed fields ------------------------------------------------------------------------
-
-std::uint8_t crc8SaeJ1850(std::span<const std::uint8_t> data) noexcept {
-  std::uint8_t crc = 0xFF;
-  for (const std::uint8_t byte : data) {
-    crc = static_cast<std::uint8_t>(crc ^ byte);
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = static_cast<std::uint8_t>((crc & 0x80) != 0 ? (crc << 1) ^ 0x1D : crc << 1);
-    }
-  }
-  return static_cast<std::uint8_t>(crc ^ 0xFF);
-}
-
-std::uint8_t j1939Checksum4(std::span<const std::uint8_t> payload, std::uint32_t canId) noexcept {
-  std::uint32_t sum = 0;
-  for (const std::uint8_t byte : payload) sum += byte;
-  for (int shift = 0; shift < 32; shift += 8) sum += (canId >> shift) & 0xFF;
-  return static_cast<std::uint8_t>((((sum >> 4) & 0x0F) + sum) & 0x0F);
-}
-
 // ---- Scheduler ------------------------------------------------------------------------------
 
 struct FieldState {
   ComputedField config;
-  Payload mask{};            ///< the field's own bits
-  std::uint64_t counter{};   ///< the counter's next value
+  Payload mask{};                             ///< the field's own bits
+  j1939::RollingCounter counter{0, 0};        ///< Counter: the next value
 };
 
 struct ScheduledEntry {
@@ -170,7 +149,7 @@ struct Scheduler::Impl {
     for (const ComputedField& field : config.computed) {
       FieldState state;
       state.config = field;
-      state.counter = field.start;
+      state.counter = j1939::RollingCounter(field.start, field.modulo);
       dbc::DecodedValue ones;
       ones.kind = dbc::RawKind::Unsigned;
       ones.rawUnsigned = ~std::uint64_t{0};
@@ -254,33 +233,26 @@ struct Scheduler::Impl {
       for (std::uint32_t b = 0; b < entry.length; ++b) payload[b] = static_cast<std::uint8_t>(payload[b] & ~field.mask[b]);
       std::uint64_t value = 0;
       switch (field.config.algorithm) {
-        case FieldAlgorithm::Counter: {
-          value = field.counter;
-          const std::uint64_t modulo = field.config.modulo;
-          field.counter = modulo != 0 ? (field.counter + 1) % modulo : field.counter + 1;
+        case FieldAlgorithm::Counter:
+          value = field.counter.next();
           break;
-        }
         case FieldAlgorithm::Sum8:
         case FieldAlgorithm::Xor8:
         case FieldAlgorithm::Crc8SaeJ1850: {
-          std::uint8_t sum = 0;
-          std::uint8_t crc = 0xFF;
+          // the covered bytes: every byte that is not all field
+          Payload covered;
+          std::size_t count = 0;
           for (std::uint32_t b = 0; b < entry.length; ++b) {
-            if (field.mask[b] == 0xFF) continue;  // a byte that is all field
-            if (field.config.algorithm == FieldAlgorithm::Sum8) sum = static_cast<std::uint8_t>(sum + payload[b]);
-            if (field.config.algorithm == FieldAlgorithm::Xor8) sum = static_cast<std::uint8_t>(sum ^ payload[b]);
-            if (field.config.algorithm == FieldAlgorithm::Crc8SaeJ1850) {
-              crc = static_cast<std::uint8_t>(crc ^ payload[b]);
-              for (int bit = 0; bit < 8; ++bit) {
-                crc = static_cast<std::uint8_t>((crc & 0x80) != 0 ? (crc << 1) ^ 0x1D : crc << 1);
-              }
-            }
+            if (field.mask[b] != 0xFF) covered[count++] = payload[b];
           }
-          value = field.config.algorithm == FieldAlgorithm::Crc8SaeJ1850 ? static_cast<std::uint8_t>(crc ^ 0xFF) : sum;
+          const std::span<const std::uint8_t> bytes(covered.data(), count);
+          if (field.config.algorithm == FieldAlgorithm::Sum8) value = j1939::sum8(bytes);
+          if (field.config.algorithm == FieldAlgorithm::Xor8) value = j1939::xor8(bytes);
+          if (field.config.algorithm == FieldAlgorithm::Crc8SaeJ1850) value = j1939::crc8SaeJ1850(bytes);
           break;
         }
         case FieldAlgorithm::J1939Checksum4:
-          value = j1939Checksum4(std::span<const std::uint8_t>(payload.data(), entry.length), entry.config.canId);
+          value = j1939::j1939Checksum4(std::span<const std::uint8_t>(payload.data(), entry.length), entry.config.canId);
           break;
       }
       dbc::DecodedValue raw;
@@ -573,8 +545,9 @@ void Scheduler::sendOnce(std::size_t bus, const can::Frame& frame) noexcept {
   (void)impl.emit(bus, frame, Outcome{&impl.counters.oneShots, &impl.counters.oneShotFailures});
 }
 
-void Scheduler::answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t requester, bool global) noexcept {
+void Scheduler::answerRequest(std::size_t bus, const j1939::Request& request) noexcept {
   Impl& impl = *m_impl;
+  const std::uint32_t pgn = request.pgn;
   const std::int64_t now = impl.clock.monotonicNs();
   if (pgn == j1939::PGN_TIME_DATE) {
     const std::int64_t realtime = impl.clock.realtimeNs();
@@ -602,10 +575,10 @@ void Scheduler::answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t r
     impl.increment(impl.counters.requestsAnswered);
     return;
   }
-  if (global) return;  // J1939-21: no NACK to a global request
-  std::array<std::uint8_t, 8> nack{ACK_NEGATIVE, 0xFF, 0xFF, 0xFF, requester, static_cast<std::uint8_t>(pgn & 0xFF),
-                                   static_cast<std::uint8_t>((pgn >> 8) & 0xFF), static_cast<std::uint8_t>(pgn >> 16)};
-  const std::uint32_t id = j1939::Id::fromPgn(PGN_ACKNOWLEDGEMENT, 6, impl.ownAddress, j1939::GLOBAL_ADDRESS).toCanId();
+  if (request.global) return;  // J1939-21: no NACK to a global request
+  const j1939::AcknowledgementPayload nack = j1939::encodeAcknowledgement(
+      j1939::Acknowledgement{j1939::AckControl::Negative, j1939::GROUP_FUNCTION_NOT_APPLICABLE, request.requester, pgn});
+  const std::uint32_t id = j1939::acknowledgementCanId(j1939::ACKNOWLEDGEMENT_DEFAULT_PRIORITY, impl.ownAddress);
   (void)impl.emit(bus, impl.frameOf(id, true, nack), Outcome{&impl.counters.requestsNacked, nullptr});
 }
 
@@ -627,7 +600,6 @@ bool Scheduler::add(PreparedMessage& message, std::int64_t nowNs) noexcept {
 
 std::size_t Scheduler::capacity() const noexcept { return m_impl->room; }
 
-std::size_t Scheduler::size() const noexcept { return m_impl->entries.size(); }
 const MessageStats& Scheduler::stats(std::size_t scheduled) const noexcept { return m_impl->entries[scheduled]->stats; }
 const SchedulerCounters& Scheduler::counters() const noexcept { return m_impl->counters; }
 

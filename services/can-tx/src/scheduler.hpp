@@ -39,6 +39,7 @@
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/codec.hpp"
+#include "openvcu/j1939/request.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
@@ -166,21 +167,21 @@ class Scheduler {
   /// configuration is read only). Its statistics live as long as the scheduler once added.
   [[nodiscard]] Result<PreparedMessage> prepare(const ScheduledMessage& message) const;
   [[nodiscard]] static const MessageStats& statsOf(const ScheduledEntry& entry) noexcept;
-  /// Appends a prepared message as index size(); its first frame goes out at `nowNs`, then
+  /// Appends a prepared message after the last one; its first frame goes out at `nowNs`, then
   /// every cycle. Never reallocates: room for every DBC message is reserved at create().
   /// false (the message is left in `message`) when that room is used up.
   bool add(PreparedMessage& message, std::int64_t nowNs) noexcept;
-  /// The number of messages the scheduler can hold (size() plus what add() may append).
+  /// The number of messages the scheduler can hold (those scheduled plus what add() may append).
   [[nodiscard]] std::size_t capacity() const noexcept;
 
   /// Sends a frame other processes asked for, once, now (or right after a pending SDM with
   /// its PGN, SA and DA).
   void sendOnce(std::size_t bus, const can::Frame& frame) noexcept;
-  /// Answers a J1939 request for `pgn` from `requester` on `bus`: the Time/Date from the
-  /// clock, a scheduled message's current frame, else (destination-specific requests) a NACK.
-  void answerRequest(std::size_t bus, std::uint32_t pgn, std::uint8_t requester, bool global) noexcept;
+  /// Answers a J1939 request on `bus`: the Time/Date from the clock, a scheduled message's
+  /// current frame, else (destination-specific requests) a NACK (J1939-21 Acknowledgement,
+  /// shared/j1939 acknowledgement.hpp).
+  void answerRequest(std::size_t bus, const j1939::Request& request) noexcept;
 
-  [[nodiscard]] std::size_t size() const noexcept;
   [[nodiscard]] const MessageStats& stats(std::size_t scheduled) const noexcept;
   [[nodiscard]] const SchedulerCounters& counters() const noexcept;
 
@@ -189,12 +190,5 @@ class Scheduler {
   explicit Scheduler(std::unique_ptr<Impl> impl) noexcept;
   std::unique_ptr<Impl> m_impl;
 };
-
-// ---- computed fields (exposed for tests) ----------------------------------------------------
-
-/// CRC-8 SAE J1850: polynomial 0x1D, initial 0xFF, final XOR 0xFF. "123456789" -> 0x4B.
-[[nodiscard]] std::uint8_t crc8SaeJ1850(std::span<const std::uint8_t> data) noexcept;
-/// J1939-71 4-bit message checksum over `payload` (field bits already zero) and the ID.
-[[nodiscard]] std::uint8_t j1939Checksum4(std::span<const std::uint8_t> payload, std::uint32_t canId) noexcept;
 
 }  // namespace openvcu::cantx

@@ -12,6 +12,7 @@
 #include <climits>
 #include <cstring>
 #include <ctime>
+#include <type_traits>
 
 namespace openvcu::cantx {
 namespace {
@@ -40,10 +41,10 @@ void futexWake(std::atomic<std::uint32_t>& word) noexcept {
 
 }  // namespace
 
-bool TxInbox::push(const TxCommand& command) noexcept {
+bool TxInbox::push(TxCommand&& command) noexcept {
   const std::uint64_t tail = m_tail.load(std::memory_order_relaxed);
   if (tail - m_head.load(std::memory_order_acquire) >= CAPACITY) return false;
-  m_ring[tail % CAPACITY] = command;
+  m_ring[tail % CAPACITY] = std::move(command);
   m_tail.store(tail + 1, std::memory_order_release);
   return true;
 }
@@ -51,7 +52,7 @@ bool TxInbox::push(const TxCommand& command) noexcept {
 bool TxInbox::pop(TxCommand& command) noexcept {
   const std::uint64_t head = m_head.load(std::memory_order_relaxed);
   if (head == m_tail.load(std::memory_order_acquire)) return false;
-  command = m_ring[head % CAPACITY];
+  command = std::move(m_ring[head % CAPACITY]);
   m_head.store(head + 1, std::memory_order_release);
   return true;
 }
@@ -81,12 +82,11 @@ void TxThread::stop() noexcept {
   m_thread.join();
   TxCommand left;
   while (m_inbox.pop(left)) {
-    if (left.kind == TxCommand::Kind::Add) PreparedMessage{left.added};  // never applied: freed here
-  }
+  }  // never applied: an AddMessage's entry is freed with `left`
 }
 
-bool TxThread::post(const TxCommand& command) noexcept {
-  if (!m_inbox.push(command)) {
+bool TxThread::post(TxCommand&& command) noexcept {
+  if (!m_inbox.push(std::move(command))) {
     m_refused.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
@@ -95,29 +95,28 @@ bool TxThread::post(const TxCommand& command) noexcept {
   return true;
 }
 
-void TxThread::apply(const TxCommand& command, std::int64_t nowNs) noexcept {
-  switch (command.kind) {
-    case TxCommand::Kind::OneShot:
-      m_scheduler.sendOnce(command.bus, command.frame);
-      break;
-    case TxCommand::Kind::Request:
-      m_scheduler.answerRequest(command.bus, command.pgn, command.requester, command.global);
-      break;
-    case TxCommand::Kind::Cycle:
-      m_scheduler.setCycle(command.scheduled, command.cycleNs, nowNs);
-      break;
-    case TxCommand::Kind::Enable:
-      m_scheduler.setEnabled(command.scheduled, command.enabled);
-      break;
-    case TxCommand::Kind::Default:
-      m_scheduler.setDefault(command.scheduled, command.signal, command.value);
-      break;
-    case TxCommand::Kind::Add:
-      // the poster checked the room (Scheduler::capacity); a refusal would leave its
-      // heartbeat counters pointing at freed statistics, so the entry is then kept alive
-      if (PreparedMessage entry(command.added); !m_scheduler.add(entry, nowNs)) (void)entry.release();
-      break;
-  }
+void TxThread::apply(TxCommand& command, std::int64_t nowNs) noexcept {
+  std::visit(
+      [&](auto& change) noexcept {
+        using Change = std::decay_t<decltype(change)>;
+        if constexpr (std::is_same_v<Change, SendOnce>) {
+          m_scheduler.sendOnce(change.bus, change.frame);
+        } else if constexpr (std::is_same_v<Change, AnswerRequest>) {
+          m_scheduler.answerRequest(change.bus, change.request);
+        } else if constexpr (std::is_same_v<Change, SetCycle>) {
+          m_scheduler.setCycle(change.scheduled, change.cycleNs, nowNs);
+        } else if constexpr (std::is_same_v<Change, SetEnabled>) {
+          m_scheduler.setEnabled(change.scheduled, change.enabled);
+        } else if constexpr (std::is_same_v<Change, SetDefault>) {
+          m_scheduler.setDefault(change.scheduled, change.signal, change.value);
+        } else {
+          static_assert(std::is_same_v<Change, AddMessage>);
+          // the poster checked the room (Scheduler::capacity); a refusal would leave its
+          // heartbeat counters pointing at freed statistics, so the entry is then kept alive
+          if (!m_scheduler.add(change.message, nowNs)) (void)change.message.release();
+        }
+      },
+      command);
 }
 
 void TxThread::service(std::int64_t nowNs) noexcept {

@@ -4,13 +4,16 @@
 // next one), so it wakes exactly when a frame is due, or at once when the service's loop
 // thread posts something (a one-shot frame, a request to answer, a schedule change).
 //
-//   cantx::TxThread thread(scheduler, links, log);
-//   thread.start(priority);                       // SCHED_FIFO when priority > 0
-//   thread.post(cantx::TxCommand::oneShot(bus, frame));   // from the loop thread
+//   cantx::TxThread thread(scheduler, links, onBusEvent);
+//   thread.start(priority);                             // SCHED_FIFO when priority > 0
+//   thread.post(cantx::SendOnce{bus, frame});           // from the loop thread
 //   thread.stop();
 //
-// The inbox is a single-producer single-consumer ring (the loop thread produces): no lock,
-// no allocation per command; a full ring refuses the post (counted).
+// The inbox is a single-producer single-consumer ring of TxCommand variants (the loop
+// thread produces): no lock, no allocation per command; a full ring refuses the post
+// (counted). Commands move through the ring: an AddMessage's PreparedMessage (a unique_ptr)
+// is moved into the slot and out again, so the transmit thread neither allocates nor frees
+// (Scheduler::add takes the entry; the emptied slot holds a null pointer).
 
 #include <array>
 #include <atomic>
@@ -18,37 +21,57 @@
 #include <functional>
 #include <string>
 #include <thread>
+#include <variant>
 #include <vector>
 
 #include "openvcu/can/frame.hpp"
 #include "openvcu/can/link.hpp"
+#include "openvcu/j1939/request.hpp"
 #include "scheduler.hpp"
 
 namespace openvcu::cantx {
 
-struct TxCommand {
-  enum class Kind : std::uint8_t { OneShot, Request, Cycle, Enable, Default, Add };
-  Kind kind{Kind::OneShot};
+/// A frame other processes asked for ("send" stream): Scheduler::sendOnce.
+struct SendOnce {
   std::size_t bus{};
-  can::Frame frame{};          ///< OneShot
-  std::uint32_t pgn{};         ///< Request
-  std::uint8_t requester{};    ///< Request: the requester's source address
-  bool global{};               ///< Request: sent to the global address
-  std::size_t scheduled{};     ///< Cycle, Enable, Default: index into Schedule::messages
-  std::uint32_t signal{};      ///< Default
-  double value{};              ///< Default
-  std::int64_t cycleNs{};      ///< Cycle
-  bool enabled{};              ///< Enable
-  ScheduledEntry* added{};     ///< Add: a Scheduler::prepare()d message, owned by the command
+  can::Frame frame{};
 };
+/// A J1939 request for this node ("req" stream): Scheduler::answerRequest.
+struct AnswerRequest {
+  std::size_t bus{};
+  j1939::Request request{};
+};
+/// ScheduleCycle: Scheduler::setCycle (index into Schedule::messages).
+struct SetCycle {
+  std::size_t scheduled{};
+  std::int64_t cycleNs{};
+};
+/// ScheduleEnable: Scheduler::setEnabled.
+struct SetEnabled {
+  std::size_t scheduled{};
+  bool enabled{};
+};
+/// ScheduleDefault: Scheduler::setDefault.
+struct SetDefault {
+  std::size_t scheduled{};
+  std::uint32_t signal{};
+  double value{};
+};
+/// ScheduleAdd: a Scheduler::prepare()d message for Scheduler::add.
+struct AddMessage {
+  PreparedMessage message;
+};
+
+using TxCommand = std::variant<SendOnce, AnswerRequest, SetCycle, SetEnabled, SetDefault, AddMessage>;
+static_assert(std::is_nothrow_move_assignable_v<TxCommand>);
 
 /// Single-producer single-consumer ring of TxCommands.
 class TxInbox {
  public:
   static constexpr std::size_t CAPACITY = 1024;
-  /// Producer side. false when full.
-  bool push(const TxCommand& command) noexcept;
-  /// Consumer side. false when empty.
+  /// Producer side: moves `command` in. false when full (`command` is left as it was).
+  bool push(TxCommand&& command) noexcept;
+  /// Consumer side: moves the oldest command into `command`. false when empty.
   bool pop(TxCommand& command) noexcept;
 
  private:
@@ -75,15 +98,16 @@ class TxThread {
   /// Stops and joins the thread (idempotent).
   void stop() noexcept;
 
-  /// Queues a command and wakes the thread. false when the inbox is full (counted).
-  bool post(const TxCommand& command) noexcept;
+  /// Queues a command (moved in) and wakes the thread. false when the inbox is full
+  /// (counted; `command` is left with the caller).
+  bool post(TxCommand&& command) noexcept;
   [[nodiscard]] std::uint64_t refusedPosts() const noexcept { return m_refused.load(std::memory_order_relaxed); }
   /// Wake-ups of the thread (deadlines and posts), for the heartbeat.
   [[nodiscard]] std::uint64_t wakeups() const noexcept { return m_wakeups.load(std::memory_order_relaxed); }
 
  private:
   void run() noexcept;
-  void apply(const TxCommand& command, std::int64_t nowNs) noexcept;
+  void apply(TxCommand& command, std::int64_t nowNs) noexcept;
   void service(std::int64_t nowNs) noexcept;
 
   Scheduler& m_scheduler;

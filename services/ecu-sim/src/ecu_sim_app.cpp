@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-#include "openvcu/can/open_link.hpp"
+#include "openvcu/can_links/open_link.hpp"
 #include "vehicle_model.hpp"
 
 namespace openvcu::ecusim {

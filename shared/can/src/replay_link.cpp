@@ -11,7 +11,7 @@
 #include <limits>
 #include <utility>
 
-#include "event_queue.hpp"
+#include "openvcu/can/event_queue.hpp"
 #include "openvcu/can/log_reader.hpp"
 
 namespace openvcu::can {

@@ -21,7 +21,7 @@
 #include <cstring>
 #include <utility>
 
-#include "event_queue.hpp"
+#include "openvcu/can/event_queue.hpp"
 #include "openvcu/can/socketcan_codec.hpp"
 
 namespace openvcu::can {

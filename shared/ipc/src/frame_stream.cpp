@@ -1,4 +1,5 @@
 #include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/ipc/request_stream.hpp"
 
 #include <time.h>
 
@@ -162,9 +163,10 @@ const FrameTopic& FramePublisher::topic() const noexcept {
   return m_impl->topic;
 }
 
-// ---- FrameSubscriber ----------------------------------------------------------------
+// ---- SampleSubscriber and FrameSubscriber --------------------------------------------
 
-Result<FrameSubscriber> FrameSubscriber::create(const FrameTopic& topic, FrameSubscriberOptions options) {
+Result<std::unique_ptr<FrameSubscriberImpl>> SampleSubscriber::open(const FrameTopic& topic,
+                                                                    FrameSubscriberOptions options) {
   if (auto check = checkTopic(topic); !check) return check.error();
   if (options.queueCapacity == 0 || options.queueCapacity > iox::MAX_SUBSCRIBER_QUEUE_CAPACITY) {
     return Error{"frame subscriber " + topic.toString() + ": queue capacity " + std::to_string(options.queueCapacity) +
@@ -174,43 +176,111 @@ Result<FrameSubscriber> FrameSubscriber::create(const FrameTopic& topic, FrameSu
   portOptions.queueCapacity = options.queueCapacity;
   portOptions.queueFullPolicy = options.blockPublisher ? iox::popo::QueueFullPolicy::BLOCK_PRODUCER
                                                        : iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
-  return FrameSubscriber(std::make_unique<FrameSubscriberImpl>(topic, portOptions));
+  return std::make_unique<FrameSubscriberImpl>(topic, portOptions);
 }
 
-FrameSubscriber::FrameSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept : m_impl(std::move(impl)) {}
-FrameSubscriber::FrameSubscriber(FrameSubscriber&& other) noexcept = default;
-FrameSubscriber& FrameSubscriber::operator=(FrameSubscriber&& other) noexcept = default;
-FrameSubscriber::~FrameSubscriber() = default;
+SampleSubscriber::SampleSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept : m_impl(std::move(impl)) {}
+SampleSubscriber::SampleSubscriber(SampleSubscriber&& other) noexcept = default;
+SampleSubscriber& SampleSubscriber::operator=(SampleSubscriber&& other) noexcept = default;
+SampleSubscriber::~SampleSubscriber() = default;
 
-std::optional<FrameSample> FrameSubscriber::take() noexcept {
+bool SampleSubscriber::takeInto(void* out, std::size_t size) noexcept {
   while (true) {
     auto takeResult = m_impl->port.take();
-    if (takeResult.has_error()) return std::nullopt;
+    if (takeResult.has_error()) return false;
     const void* payload = takeResult.value();
     const auto* header = iox::mepoo::ChunkHeader::fromUserPayload(payload);
-    if (header == nullptr || header->userPayloadSize() != SAMPLE_SIZE) {
-      ++m_impl->rejected;  // another layout version: never read it as a FrameSample
+    if (header == nullptr || header->userPayloadSize() != size) {
+      ++m_impl->rejected;  // another layout version: never read it as this sample type
       m_impl->port.release(payload);
       continue;
     }
-    FrameSample sample;
-    std::memcpy(&sample, payload, sizeof(sample));
+    std::memcpy(out, payload, size);
     m_impl->port.release(payload);
-    return sample;
+    return true;
   }
 }
 
-bool FrameSubscriber::hasData() const noexcept {
+bool SampleSubscriber::hasData() const noexcept {
   return m_impl->port.hasData();
 }
-bool FrameSubscriber::hasLostFrames() noexcept {
+bool SampleSubscriber::hasLostFrames() noexcept {
   return m_impl->port.hasMissedData();
 }
-std::uint64_t FrameSubscriber::rejectedSamples() const noexcept {
+std::uint64_t SampleSubscriber::rejectedSamples() const noexcept {
   return m_impl->rejected;
 }
-const FrameTopic& FrameSubscriber::topic() const noexcept {
+const FrameTopic& SampleSubscriber::topic() const noexcept {
   return m_impl->topic;
+}
+
+FrameSubscriber::FrameSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept
+    : SampleSubscriber(std::move(impl)) {}
+
+Result<FrameSubscriber> FrameSubscriber::create(const FrameTopic& topic, FrameSubscriberOptions options) {
+  auto impl = open(topic, options);
+  if (!impl) return impl.error();
+  return FrameSubscriber(std::move(*impl));
+}
+
+std::optional<FrameSample> FrameSubscriber::take() noexcept {
+  FrameSample sample;
+  if (!takeInto(&sample, sizeof(sample))) return std::nullopt;
+  return sample;
+}
+
+// ---- RequestPublisher and RequestSubscriber ------------------------------------------
+
+Result<RequestPublisher> RequestPublisher::create(const std::string& instance, const std::string& bus) {
+  const FrameTopic topic{instance, bus, FrameStream::Request};
+  if (auto check = checkTopic(topic); !check) return check.error();
+  iox::popo::PublisherOptions portOptions;
+  portOptions.subscriberTooSlowPolicy = iox::popo::ConsumerTooSlowPolicy::DISCARD_OLDEST_DATA;
+  const std::uint32_t index = g_publisherCount.fetch_add(1) + 1;
+  const std::uint32_t id = fnv1a32(Runtime::name() + "#" + std::to_string(index));
+  return RequestPublisher(std::make_unique<FramePublisherImpl>(topic, portOptions, id));
+}
+
+RequestPublisher::RequestPublisher(std::unique_ptr<FramePublisherImpl> impl) noexcept : m_impl(std::move(impl)) {}
+RequestPublisher::RequestPublisher(RequestPublisher&& other) noexcept = default;
+RequestPublisher& RequestPublisher::operator=(RequestPublisher&& other) noexcept = default;
+RequestPublisher::~RequestPublisher() = default;
+
+bool RequestPublisher::publish(const RequestSample& sample) noexcept {
+  auto loanResult = m_impl->port.loan(static_cast<std::uint32_t>(sizeof(RequestSample)),
+                                      static_cast<std::uint32_t>(alignof(RequestSample)));
+  if (loanResult.has_error()) return false;
+  void* payload = loanResult.value();
+  auto* chunk = new (payload) RequestSample(sample);
+  chunk->sequence = m_impl->nextSequence++;
+  chunk->senderId = m_impl->senderId;
+  chunk->busNameHash = m_impl->busNameHash;
+  if (chunk->monotonicNs == 0) chunk->monotonicNs = monotonicNowNs();
+  m_impl->port.publish(payload);
+  return true;
+}
+
+bool RequestPublisher::hasSubscribers() const noexcept {
+  return m_impl->port.hasSubscribers();
+}
+const FrameTopic& RequestPublisher::topic() const noexcept {
+  return m_impl->topic;
+}
+
+RequestSubscriber::RequestSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept
+    : SampleSubscriber(std::move(impl)) {}
+
+Result<RequestSubscriber> RequestSubscriber::create(const std::string& instance, const std::string& bus,
+                                                    FrameSubscriberOptions options) {
+  auto impl = open(FrameTopic{instance, bus, FrameStream::Request}, options);
+  if (!impl) return impl.error();
+  return RequestSubscriber(std::move(*impl));
+}
+
+std::optional<RequestSample> RequestSubscriber::take() noexcept {
+  RequestSample sample;
+  if (!takeInto(&sample, sizeof(sample))) return std::nullopt;
+  return sample;
 }
 
 }  // namespace openvcu::ipc

@@ -1,5 +1,7 @@
 #include "openvcu/ipc/waiter.hpp"
 
+#include "openvcu/ipc/frame_stream.hpp"
+
 #include <poll.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
@@ -143,7 +145,7 @@ Waiter::Waiter(Waiter&& other) noexcept = default;
 Waiter& Waiter::operator=(Waiter&& other) noexcept = default;
 Waiter::~Waiter() = default;
 
-Status Waiter::attach(FrameSubscriber& subscriber, std::uint64_t id) {
+Status Waiter::attach(SampleSubscriber& subscriber, std::uint64_t id) {
   if (m_impl->subscriberCount + m_impl->fds.size() >= CAPACITY) {
     return Error{"Waiter is full (" + std::to_string(CAPACITY) + " attachments)"};
   }
@@ -157,11 +159,28 @@ Status Waiter::attach(FrameSubscriber& subscriber, std::uint64_t id) {
   return {};
 }
 
-void Waiter::detach(FrameSubscriber& subscriber) noexcept {
+void Waiter::detach(SampleSubscriber& subscriber) noexcept {
   if (m_impl->subscriberCount == 0) return;
   const auto before = m_impl->waitSet.size();
   m_impl->waitSet.detachState(subscriber.m_impl->port, iox::popo::SubscriberState::HAS_DATA);
   if (m_impl->waitSet.size() < before) --m_impl->subscriberCount;
+}
+
+Status Waiter::attachLink(const can::WaitHandle& handle, std::uint64_t id) {
+  if (handle.source != nullptr) {
+    auto* subscriber = dynamic_cast<SampleSubscriber*>(handle.source);
+    if (subscriber == nullptr) return Error{"Waiter: the link's wait source is not an iceoryx subscriber"};
+    return attach(*subscriber, id);
+  }
+  return attachFd(handle.fd, id);
+}
+
+void Waiter::detachLink(const can::WaitHandle& handle) noexcept {
+  if (handle.source != nullptr) {
+    if (auto* subscriber = dynamic_cast<SampleSubscriber*>(handle.source)) detach(*subscriber);
+    return;
+  }
+  detachFd(handle.fd);
 }
 
 Status Waiter::attachFd(int fd, std::uint64_t id) {

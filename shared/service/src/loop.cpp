@@ -29,7 +29,7 @@ struct Source {
   SourceKind kind{SourceKind::Fd};
   int fd{-1};
   PeriodicTimer* timer{nullptr};
-  ipc::FrameSubscriber* subscriber{nullptr};
+  ipc::SampleSubscriber* subscriber{nullptr};
   std::function<void()> onReadable;
   std::function<void(const TimerTick&)> onTick;
   std::uint64_t id{};
@@ -196,7 +196,7 @@ Status Loop::addTimer(PeriodicTimer& timer, std::function<void(const TimerTick&)
   return m_impl->add(std::move(source));
 }
 
-Status Loop::addSubscriber(ipc::FrameSubscriber& subscriber, std::function<void()> onData) {
+Status Loop::addSubscriber(ipc::SampleSubscriber& subscriber, std::function<void()> onData) {
   LoopImpl& impl = *m_impl;
   if (!impl.waiter) {
     // Switch back ends: every fd watched so far moves to the Waiter's fd watcher.
@@ -213,6 +213,14 @@ Status Loop::addSubscriber(ipc::FrameSubscriber& subscriber, std::function<void(
   source->subscriber = &subscriber;
   source->onReadable = std::move(onData);
   return impl.add(std::move(source));
+}
+
+Status Loop::addLink(can::Link& link, std::function<void()> onReadable) {
+  const can::WaitHandle handle = link.waitHandle();
+  if (handle.source == nullptr) return addFd(handle.fd, std::move(onReadable));
+  auto* subscriber = dynamic_cast<ipc::SampleSubscriber*>(handle.source);
+  if (subscriber == nullptr) return Error{"link " + link.name() + ": its wait source is not an iceoryx subscriber"};
+  return addSubscriber(*subscriber, std::move(onReadable));
 }
 
 int Loop::run() {

@@ -27,13 +27,14 @@ constexpr std::size_t BUS_B = 1;
 const std::string CONFIG = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/can-rx/vehicle.json";
 
 struct Recorder final : canrx::ReceiverOutputs {
-  std::vector<std::pair<std::size_t, can::Frame>> receivedFrames, requests, forwarded, transmitted;
+  std::vector<std::pair<std::size_t, can::Frame>> receivedFrames, forwarded, transmitted;
+  std::vector<std::pair<std::size_t, j1939::Request>> requests;
   std::vector<ipc::FaultEvent> faults;
   void received(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
     receivedFrames.emplace_back(bus, frame.frame);
   }
-  void request(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
-    requests.emplace_back(bus, frame.frame);
+  void request(std::size_t bus, const j1939::Request& request, std::int64_t) noexcept override {
+    requests.emplace_back(bus, request);
   }
   void forward(std::size_t toBus, const can::Frame& frame) noexcept override { forwarded.emplace_back(toBus, frame); }
   bool transmit(std::size_t bus, const can::Frame& frame) noexcept override {
@@ -208,9 +209,17 @@ TEST_CASE("J1939 requests to this node or to all are handed on, requests to othe
   f.sut->onFrame(BUS_A, frameOf(0x18EAFFF3, {0xE6, 0xFE, 0x00}, START + MS));  // global
   f.sut->onFrame(BUS_A, frameOf(0x18EA10F3, {0xE6, 0xFE, 0x00}, START + MS));  // to ECU1
   REQUIRE(f.outputs.requests.size() == 2);
-  CHECK(f.outputs.requests[0].second.id == 0x18EA21F3);
-  CHECK(f.outputs.requests[1].second.id == 0x18EAFFF3);
+  CHECK(f.outputs.requests[0].second == j1939::Request{0xFEE6, 0xF3, false});  // 0x18EA21F3
+  CHECK(f.outputs.requests[1].second == j1939::Request{0xFEE6, 0xF3, true});   // 0x18EAFFF3
   CHECK(f.sut->counters(BUS_A).requests == 2);
+}
+
+TEST_CASE("a J1939 request to this node whose payload is not a PGN is not handed on (issue 20)") {
+  Fixture f;
+  f.sut->onFrame(BUS_A, frameOf(0x18EA21F3, {0xE6, 0xFE}, START + MS));              // 2 bytes
+  f.sut->onFrame(BUS_A, frameOf(0x18EA21F3, {0xE6, 0xFE, 0x04}, START + MS));        // 19 bits
+  CHECK(f.outputs.requests.empty());
+  CHECK(f.sut->counters(BUS_A).requests == 0);
 }
 
 TEST_CASE("a BAM transfer is reassembled and decoded through the DBC") {

@@ -695,7 +695,7 @@ TEST_CASE("a link that opens reports LinkUp first and a constant epoll wait hand
   CHECK(sut->name() == "socketcan:vcan0");
   CHECK(sut->up());
   CHECK(sut->waitHandle().fd >= 0);
-  CHECK(sut->waitHandle().subscriber == nullptr);
+  CHECK(sut->waitHandle().source == nullptr);
   CHECK_FALSE(readable(sut->waitHandle().fd, 0));
   const auto events = drainEvents(*sut);
   REQUIRE(events.size() == 1);

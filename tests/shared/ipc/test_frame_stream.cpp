@@ -12,6 +12,7 @@
 #include "ipc_test_support.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/ipc/runtime.hpp"
 #include "openvcu/ipc/waiter.hpp"
 
@@ -300,4 +301,100 @@ TEST_CASE("one wait covers frame subscribers and the event bus fd together") {
   CHECK(events->handle(0ms) == ipc::HandleResult::Handled);
   CHECK(logs == 2);
   sut.detachFd(events->fileno());
+}
+
+// ---- the "req" topic: typed J1939 requests (issue 20) ------------------------------------
+
+TEST_CASE("a J1939 request crosses the req topic typed and stamped, and wakes the waiter") {
+  if (!startRoudiAndRuntime()) return;
+  constexpr std::uint64_t REQ_ID = 4;
+  constexpr std::uint32_t PGN_TIME_DATE = 0xFEE6;  // 65254
+  constexpr std::uint8_t VIC_ADDRESS = 0xF3;
+  auto subscriberResult = ipc::RequestSubscriber::create("test", "requests");
+  REQUIRE(subscriberResult.ok());
+  auto publisherResult = ipc::RequestPublisher::create("test", "requests");
+  REQUIRE(publisherResult.ok());
+  ipc::RequestPublisher& sut = *publisherResult;
+  auto waiterResult = ipc::Waiter::create();
+  REQUIRE(waiterResult.ok());
+  REQUIRE(waiterResult->attach(*subscriberResult, REQ_ID).ok());
+  const auto connectDeadline = std::chrono::steady_clock::now() + 5s;
+  while (!sut.hasSubscribers() && std::chrono::steady_clock::now() < connectDeadline) std::this_thread::sleep_for(1ms);
+  REQUIRE(sut.hasSubscribers());
+  CHECK(sut.topic().toString() == "openvcu/test.requests/req");
+
+  ipc::RequestSample sample{};
+  sample.bus = 1;
+  sample.pgn = PGN_TIME_DATE;
+  sample.requester = VIC_ADDRESS;
+  sample.global = true;
+  REQUIRE(sut.publish(sample));
+
+  const auto ready = waiterResult->waitFor(5s);
+  REQUIRE(ready.size() == 1);
+  CHECK(ready[0] == REQ_ID);
+  const auto received = subscriberResult->take();
+  REQUIRE(received);
+  CHECK(received->bus == 1);
+  CHECK(received->pgn == PGN_TIME_DATE);
+  CHECK(received->requester == VIC_ADDRESS);
+  CHECK(received->global);
+  CHECK(received->sequence == 1);
+  CHECK(received->busNameHash == ipc::fnv1a32("requests"));
+  CHECK(received->monotonicNs > 0);
+  CHECK_FALSE(subscriberResult->take());
+}
+
+TEST_CASE("a frame subscriber on the req topic rejects request samples instead of misreading them") {
+  if (!startRoudiAndRuntime()) return;
+  auto frames = ipc::FrameSubscriber::create({"test", "mixed", ipc::FrameStream::Request});
+  REQUIRE(frames.ok());
+  auto publisherResult = ipc::RequestPublisher::create("test", "mixed");
+  REQUIRE(publisherResult.ok());
+  const auto connectDeadline = std::chrono::steady_clock::now() + 5s;
+  while (!publisherResult->hasSubscribers() && std::chrono::steady_clock::now() < connectDeadline) {
+    std::this_thread::sleep_for(1ms);
+  }
+  REQUIRE(publisherResult->hasSubscribers());
+
+  REQUIRE(publisherResult->publish(ipc::RequestSample{}));
+
+  CHECK_FALSE(frames->take());
+  CHECK(frames->rejectedSamples() == 1);
+}
+
+TEST_CASE("the waiter takes a link's wait handle whole: a subscriber source or an fd") {
+  if (!startRoudiAndRuntime()) return;
+  constexpr std::uint64_t LINK_ID = 5;
+  constexpr std::uint64_t FD_ID = 6;
+  auto subscriber = ipc::FrameSubscriber::create({"test", "handles", ipc::FrameStream::Received});
+  auto publisher = ipc::FramePublisher::create({"test", "handles", ipc::FrameStream::Received});
+  REQUIRE((subscriber.ok() && publisher.ok()));
+  auto waiterResult = ipc::Waiter::create();
+  REQUIRE(waiterResult.ok());
+  ipc::Waiter& sut = *waiterResult;
+  int pipeFds[2] = {-1, -1};
+  REQUIRE(::pipe(pipeFds) == 0);
+
+  REQUIRE(sut.attachLink(openvcu::can::WaitHandle{-1, &*subscriber}, LINK_ID).ok());
+  REQUIRE(sut.attachLink(openvcu::can::WaitHandle{pipeFds[0], nullptr}, FD_ID).ok());
+  CHECK_FALSE(sut.attachLink(openvcu::can::WaitHandle{}, FD_ID).ok());  // neither set
+  requireConnected(*publisher);
+
+  REQUIRE(publisher->publish(sampleWithId(1)));
+  auto ready = sut.waitFor(5s);
+  REQUIRE(ready.size() == 1);
+  CHECK(ready[0] == LINK_ID);
+  REQUIRE(subscriber->take());
+
+  const char byte = 1;
+  REQUIRE(::write(pipeFds[1], &byte, 1) == 1);
+  ready = sut.waitFor(5s);
+  REQUIRE(ready.size() == 1);
+  CHECK(ready[0] == FD_ID);
+
+  sut.detachLink(openvcu::can::WaitHandle{pipeFds[0], nullptr});
+  sut.detachLink(openvcu::can::WaitHandle{-1, &*subscriber});
+  ::close(pipeFds[0]);
+  ::close(pipeFds[1]);
 }

@@ -69,3 +69,55 @@ TEST_CASE("request identifier of the VCU asking the VIC for HVESSHIST uses the d
 TEST_CASE("global request identifier goes to 0xFF") {
   CHECK(requestCanId(REQUEST_DEFAULT_PRIORITY, VCU_ADDRESS, GLOBAL_ADDRESS) == 0x18EAFF21u);
 }
+
+namespace {
+
+constexpr std::uint32_t REQUEST_TO_VCU = 0x18EA21F3;
+constexpr std::uint32_t REQUEST_TO_ALL = 0x18EAFFF3;
+constexpr std::uint32_t REQUEST_TO_ECU1 = 0x18EA10F3;
+
+AddressSet vcuAddresses() {
+  AddressSet mine{};
+  mine[VCU_ADDRESS] = true;
+  return mine;
+}
+
+}  // namespace
+
+TEST_CASE("request parse: a request to one of my addresses names the PGN and the requester") {
+  const std::optional<Request> maybeSut = parseRequest(REQUEST_TO_VCU, true, TIME_DATE_REQUEST, vcuAddresses());
+
+  REQUIRE(maybeSut);
+  CHECK(*maybeSut == Request{PGN_TIME_DATE_REQUESTED, VIC_ADDRESS, false});
+}
+
+TEST_CASE("request parse: a request to the global address is for me and marked global") {
+  const std::optional<Request> maybeSut = parseRequest(REQUEST_TO_ALL, true, TIME_DATE_REQUEST, vcuAddresses());
+
+  REQUIRE(maybeSut);
+  CHECK(maybeSut->global);
+  CHECK(maybeSut->requester == VIC_ADDRESS);
+}
+
+TEST_CASE("request parse: a request to another node, a standard frame or another PGN is not mine") {
+  CHECK_FALSE(parseRequest(REQUEST_TO_ECU1, true, TIME_DATE_REQUEST, vcuAddresses()));
+  CHECK_FALSE(parseRequest(REQUEST_TO_VCU & 0x7FFu, false, TIME_DATE_REQUEST, vcuAddresses()));
+  CHECK_FALSE(parseRequest(0x18E821F3, true, TIME_DATE_REQUEST, vcuAddresses()));  // PGN 59392, not 59904
+  CHECK_FALSE(parseRequest(0x19EA21F3, true, TIME_DATE_REQUEST, vcuAddresses()));  // DP set: PGN 0x1EA00
+}
+
+TEST_CASE("request parse: a request for me with a malformed payload is refused") {
+  const std::span<const std::uint8_t> tooShort{TIME_DATE_REQUEST.data(), 2};
+
+  CHECK_FALSE(parseRequest(REQUEST_TO_VCU, true, tooShort, vcuAddresses()));
+  CHECK_FALSE(parseRequest(REQUEST_TO_VCU, true, RequestPayload{0xE6, 0xFE, 0x04}, vcuAddresses()));
+}
+
+TEST_CASE("request build gives the identifier and the bytes, and parses back") {
+  const RequestFrame sut = buildRequest(PGN_TIME_DATE_REQUESTED, REQUEST_DEFAULT_PRIORITY, VIC_ADDRESS, VCU_ADDRESS);
+
+  CHECK(sut.canId == REQUEST_TO_VCU);
+  CHECK(sut.payload == TIME_DATE_REQUEST);
+  CHECK(parseRequest(sut.canId, true, sut.payload, vcuAddresses()) ==
+        Request{PGN_TIME_DATE_REQUESTED, VIC_ADDRESS, false});
+}

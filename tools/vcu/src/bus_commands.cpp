@@ -21,7 +21,7 @@
 #include "diagnostics.hpp"
 #include "stop_signal.hpp"
 #include "openvcu/can/log_writer.hpp"
-#include "openvcu/can/open_link.hpp"
+#include "openvcu/can_links/open_link.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/matcher.hpp"

@@ -30,7 +30,7 @@
 #include "diagnostics.hpp"
 #include "openvcu/can/log_reader.hpp"
 #include "openvcu/can/log_writer.hpp"
-#include "openvcu/can/open_link.hpp"
+#include "openvcu/can_links/open_link.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/runtime.hpp"
 #include "openvcu/ipc/waiter.hpp"
@@ -281,11 +281,10 @@ class LinkWaiter {
     }
     for (std::size_t i = 0; i < buses.size(); ++i) {
       const can::WaitHandle handle = buses[i].link->waitHandle();
-      if (handle.subscriber != nullptr) {
-        if (!m_waiter) return Error{buses[i].link->name() + ": needs the iceoryx runtime"};
-        if (const Status attached = m_waiter->attach(*handle.subscriber, i); !attached) return attached.error();
-      } else if (m_waiter) {
-        if (const Status attached = m_waiter->attachFd(handle.fd, i); !attached) return attached.error();
+      if (m_waiter) {
+        if (const Status attached = m_waiter->attachLink(handle, i); !attached) return attached.error();
+      } else if (handle.source != nullptr) {
+        return Error{buses[i].link->name() + ": needs the iceoryx runtime"};
       } else {
         m_fds.push_back(pollfd{handle.fd, POLLIN, 0});
       }

@@ -1,15 +1,14 @@
 #pragma once
 // A CAN link: one bus as a service sees it, whatever is underneath.
 //   socketcan:IFACE  Linux raw CAN / CAN FD socket (socketcan_link.hpp)
-//   sim:NAME         the virtual bus over iceoryx (sim_link.hpp, library openvcu::can_links)
+//   sim:NAME         the virtual bus over iceoryx (shared/can_links: sim_link.hpp)
 //   replay:FILE      a recorded log played with its original timing (replay_link.hpp)
-// A service opens every configured bus with openLink() (open_link.hpp) and only ever uses
-// this interface:
+// A service opens every configured bus with openLink() (shared/can_links: open_link.hpp)
+// and only ever uses this interface:
 //
 //   auto linkResult = can::openLink(can::LinkKind::Sim, "vehicle", options);
 //   can::Link& link = **linkResult;
-//   const can::WaitHandle handle = link.waitHandle();        // an fd, or an iceoryx subscriber
-//   loop.addFd(handle.fd, [&] { drain(link); });           // (addSubscriber for the other kind)
+//   loop.addLink(link, [&] { drain(link); });    // service::Loop waits on link.waitHandle()
 //   std::array<can::ReceivedFrame, 64> batch;
 //   while (const std::size_t n = link.receive(batch)) { ...; if (n < batch.size()) break; }
 //   while (auto maybeEvent = link.nextEvent()) report(*maybeEvent);
@@ -29,10 +28,6 @@
 #include <vector>
 
 #include "openvcu/can/frame.hpp"
-
-namespace openvcu::ipc {
-class FrameSubscriber;
-}
 
 namespace openvcu::can {
 
@@ -134,10 +129,26 @@ enum class SendStatus : std::uint8_t {
 /// "Sent", "Busy", "Down", "Invalid", "NotSupported".
 [[nodiscard]] std::string_view sendStatusName(SendStatus status) noexcept;
 
+/// Something to wait on that is not a file descriptor: the iceoryx subscriber behind a sim
+/// link (ipc::SampleSubscriber is one). shared/can knows only this interface; the waiters
+/// that know the implementations (ipc::Waiter::attach(WaitHandle), service::Loop::addLink)
+/// take a WaitHandle whole, so no service looks inside it.
+class WaitSource {
+ public:
+  virtual ~WaitSource() = default;
+
+ protected:
+  WaitSource() = default;
+  WaitSource(const WaitSource&) = default;
+  WaitSource(WaitSource&&) noexcept = default;
+  WaitSource& operator=(const WaitSource&) = default;
+  WaitSource& operator=(WaitSource&&) noexcept = default;
+};
+
 /// How to wait for a link: exactly one of the two is set.
 struct WaitHandle {
-  int fd{-1};                                 ///< readable when receive() has something to do
-  ipc::FrameSubscriber* subscriber{nullptr};  ///< has data when receive() has something to do
+  int fd{-1};                   ///< readable when receive() has something to do
+  WaitSource* source{nullptr};  ///< has data when receive() has something to do (sim links)
 };
 
 /// One bus. Not copyable, not movable (held by unique_ptr).

@@ -15,10 +15,12 @@
 // samples published before a subscriber is connected are not delivered to it.
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
 
+#include "openvcu/can/link.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/ipc/topics.hpp"
 
@@ -120,22 +122,16 @@ struct FrameSubscriberOptions {
   bool blockPublisher{false};
 };
 
-/// Receives FrameSamples of one topic from every publisher on it. Movable; a moved-from
-/// subscriber is empty.
-/// @note restricted thread-safe: one thread at a time. take() is real-time friendly.
-class FrameSubscriber {
+/// What Waiter and service::Loop wait on: a subscriber of one topic, whatever its sample
+/// type (FrameSubscriber: FrameSample; RequestSubscriber, request_stream.hpp: RequestSample).
+/// Movable; a moved-from subscriber is empty.
+/// @note restricted thread-safe: one thread at a time.
+class SampleSubscriber : public can::WaitSource {
  public:
-  static Result<FrameSubscriber> create(const FrameTopic& topic, FrameSubscriberOptions options = {});
-
-  FrameSubscriber(FrameSubscriber&& other) noexcept;
-  FrameSubscriber& operator=(FrameSubscriber&& other) noexcept;
-  FrameSubscriber(const FrameSubscriber&) = delete;
-  FrameSubscriber& operator=(const FrameSubscriber&) = delete;
-  ~FrameSubscriber();
-
-  /// The oldest queued sample, or empty when none is queued ("no frame" is not an error).
-  /// Samples from one publisher arrive in publish order.
-  std::optional<FrameSample> take() noexcept;
+  SampleSubscriber(SampleSubscriber&& other) noexcept;
+  SampleSubscriber& operator=(SampleSubscriber&& other) noexcept;
+  SampleSubscriber(const SampleSubscriber&) = delete;
+  SampleSubscriber& operator=(const SampleSubscriber&) = delete;
 
   /// true when at least one sample is queued.
   [[nodiscard]] bool hasData() const noexcept;
@@ -144,16 +140,43 @@ class FrameSubscriber {
   /// (then resets). Sequence gaps per senderId tell which ones.
   bool hasLostFrames() noexcept;
 
-  /// Samples dropped by take() because their size did not match FrameSample (a peer
-  /// built from another version of this header).
+  /// Samples dropped by take() because their size did not match the sample type (a peer
+  /// built from another version of topics.hpp).
   [[nodiscard]] std::uint64_t rejectedSamples() const noexcept;
 
   [[nodiscard]] const FrameTopic& topic() const noexcept;
 
+ protected:
+  explicit SampleSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept;
+  ~SampleSubscriber() override;
+  /// Copies the oldest queued sample of exactly `size` bytes into `out`; samples of
+  /// another size are released and counted (rejectedSamples). false when none is queued.
+  bool takeInto(void* out, std::size_t size) noexcept;
+  /// Opens the port of `topic` (checked) for a subclass's create().
+  static Result<std::unique_ptr<FrameSubscriberImpl>> open(const FrameTopic& topic, FrameSubscriberOptions options);
+
  private:
   friend class Waiter;
-  explicit FrameSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept;
   std::unique_ptr<FrameSubscriberImpl> m_impl;
+};
+
+/// Receives FrameSamples of one topic from every publisher on it. Movable; a moved-from
+/// subscriber is empty.
+/// @note restricted thread-safe: one thread at a time. take() is real-time friendly.
+class FrameSubscriber : public SampleSubscriber {
+ public:
+  static Result<FrameSubscriber> create(const FrameTopic& topic, FrameSubscriberOptions options = {});
+
+  FrameSubscriber(FrameSubscriber&& other) noexcept = default;
+  FrameSubscriber& operator=(FrameSubscriber&& other) noexcept = default;
+  ~FrameSubscriber() = default;
+
+  /// The oldest queued sample, or empty when none is queued ("no frame" is not an error).
+  /// Samples from one publisher arrive in publish order.
+  std::optional<FrameSample> take() noexcept;
+
+ private:
+  explicit FrameSubscriber(std::unique_ptr<FrameSubscriberImpl> impl) noexcept;
 };
 
 }  // namespace openvcu::ipc

@@ -1,9 +1,9 @@
 #pragma once
-// The iceoryx half of the IPC contract (STYLE.md 10): the raw-frame sample type and the
-// topic names. This header is the only place they are defined; services include it (and
-// frame_stream.hpp), never iceoryx.
+// The iceoryx half of the IPC contract (STYLE.md 10): the sample types and the topic
+// names. This header is the only place they are defined; services include it (and
+// frame_stream.hpp, request_stream.hpp), never iceoryx.
 //
-// Three topics per bus, as iceoryx service descriptions (service, instance, event):
+// Four topics per bus, as iceoryx service descriptions (service, instance, event):
 //   ("openvcu", "<instance>.<bus>", "rx")    frames received from the bus    (can-rx publishes)
 //   ("openvcu", "<instance>.<bus>", "tx")    frames actually sent on the bus (can-tx publishes)
 //   ("openvcu", "<instance>.<bus>", "send")  one-shot send requests          (can-tx subscribes)
@@ -12,9 +12,10 @@
 //   ("openvcu", "sim.<NAME>", "wire")        every frame on the simulated bus (sim links)
 //   e.g. FrameTopic{"hhea", "vehicle", FrameStream::Received} -> ("openvcu", "hhea.vehicle", "rx")
 //
-// Each topic carries FrameSample, 120 bytes of plain data living in iceoryx shared memory
-// (STYLE.md 9). Changing its layout is a contract change: bump FRAME_SAMPLE_VERSION and
-// update config/iceoryx/roudi.toml if the size grows past the mempool's 128 bytes.
+// "req" carries RequestSample (32 bytes: the parsed request, not the frame); every other
+// topic carries FrameSample, 120 bytes. Both are plain data living in iceoryx shared memory
+// (STYLE.md 9). Changing a layout is a contract change: bump its *_VERSION and update
+// config/iceoryx/roudi.toml if a size grows past the mempool's 128 bytes.
 
 #include <cstddef>
 #include <cstdint>
@@ -63,18 +64,41 @@ static_assert(sizeof(FrameSample) == 120, "layout change: bump FRAME_SAMPLE_VERS
 static_assert(alignof(FrameSample) == 8);
 static_assert(offsetof(FrameSample, frame) == 40);
 
-/// Which of the three streams of a bus.
+/// A J1939 Request for this node (PGN 59904, 0xEA00), as can-rx parsed it
+/// (j1939::parseRequest), on the "req" topic for can-tx to answer.
+///
+/// Contract: can-rx fills `bus`, `pgn`, `requester`, `global` and `monotonicNs` (when the
+/// frame was received); RequestPublisher::publish stamps `sequence`, `senderId` and
+/// `busNameHash` like FramePublisher. Consumers treat every field as read-only.
+struct RequestSample {
+  std::uint64_t sequence{};     ///< per publisher, 1, 2, 3, ... (stamped)
+  std::int64_t monotonicNs{};   ///< CLOCK_MONOTONIC ns when the request frame was received
+  std::uint32_t senderId{};     ///< identifies the publisher (stamped)
+  std::uint32_t busNameHash{};  ///< fnv1a32(bus name) of the topic (stamped)
+  std::uint32_t pgn{};          ///< the requested PGN (18 bits)
+  std::uint16_t bus{};          ///< position of the bus in the configuration
+  std::uint8_t requester{};     ///< the requester's J1939 source address
+  bool global{};                ///< sent to the global address 0xFF (255): answered, never NACKed
+};
+inline constexpr std::uint32_t REQUEST_SAMPLE_VERSION = 1;
+static_assert(std::is_trivially_copyable_v<RequestSample>);
+static_assert(std::is_standard_layout_v<RequestSample>);
+static_assert(sizeof(RequestSample) == 32, "layout change: bump REQUEST_SAMPLE_VERSION");
+static_assert(alignof(RequestSample) == 8);
+static_assert(offsetof(RequestSample, pgn) == 24);
+
+/// Which of the streams of a bus.
 enum class FrameStream : std::uint8_t {
   Received,     ///< "rx": frames read from the bus
   Sent,         ///< "tx": frames written to the bus
   SendRequest,  ///< "send": one-shot frames others ask can-tx to send
-  Request,      ///< "req": J1939 Request frames (PGN 59904) addressed to this node, for can-tx
+  Request,      ///< "req": J1939 Requests (PGN 59904) for this node, as RequestSample, for can-tx
   SimWire,      ///< "wire": the simulated bus itself (FrameTopic{"sim", NAME, SimWire})
 };
 
 inline constexpr std::string_view FRAME_TOPIC_SERVICE = "openvcu";
 
-/// "rx", "tx" or "send".
+/// "rx", "tx", "send", "req" or "wire".
 constexpr std::string_view eventName(FrameStream stream) noexcept {
   switch (stream) {
     case FrameStream::Received:

@@ -1,5 +1,5 @@
 #pragma once
-// One blocking wait for a service's inputs: frame subscribers (iceoryx WaitSet, no fd)
+// One blocking wait for a service's inputs: frame and request subscribers (iceoryx WaitSet, no fd)
 // and ordinary file descriptors such as EventBus::fileno() (LCM).
 //
 //   auto waiterResult = ipc::Waiter::create();
@@ -22,11 +22,12 @@
 #include <memory>
 #include <span>
 
+#include "openvcu/can/link.hpp"
 #include "openvcu/core/result.hpp"
 
 namespace openvcu::ipc {
 
-class FrameSubscriber;
+class SampleSubscriber;
 struct WaiterImpl;
 
 /// Waits on several frame subscribers and fds with a timeout. Movable: the WaitSet
@@ -49,8 +50,14 @@ class Waiter {
   /// Reports `id` from wait while `subscriber` has data (level-triggered: again and again
   /// until it is drained). The subscriber must stay alive while attached, or detach first
   /// (destroying an attached subscriber detaches it). Fails when full or already attached.
-  Status attach(FrameSubscriber& subscriber, std::uint64_t id);
-  void detach(FrameSubscriber& subscriber) noexcept;
+  Status attach(SampleSubscriber& subscriber, std::uint64_t id);
+  void detach(SampleSubscriber& subscriber) noexcept;
+
+  /// A link's wait handle (can::Link::waitHandle()): its fd (attachFd) or its subscriber
+  /// (attach). Fails like those, or for a handle with neither or a source that is no
+  /// ipc::SampleSubscriber. Detach with detachLink before the link goes away.
+  Status attachLink(const can::WaitHandle& handle, std::uint64_t id);
+  void detachLink(const can::WaitHandle& handle) noexcept;
 
   /// Reports `id` from wait when `fd` is readable. After it is reported, the fd is watched
   /// again from the next wait call on: handle it before waiting again, or it is reported

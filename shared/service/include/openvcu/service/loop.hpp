@@ -25,7 +25,10 @@
 #include "openvcu/service/timer.hpp"
 
 namespace openvcu::ipc {
-class FrameSubscriber;
+class SampleSubscriber;
+}
+namespace openvcu::can {
+class Link;
 }
 
 namespace openvcu::service {
@@ -59,7 +62,12 @@ class Loop {
   /// Calls `onData` while `subscriber` holds samples (level-triggered: take them all).
   /// Needs an initialised ipc::Runtime; switches the loop to the ipc::Waiter back end.
   /// The subscriber must outlive the loop.
-  Status addSubscriber(ipc::FrameSubscriber& subscriber, std::function<void()> onData);
+  Status addSubscriber(ipc::SampleSubscriber& subscriber, std::function<void()> onData);
+
+  /// Calls `onReadable` whenever `link` has something to do: its wait handle is an fd
+  /// (addFd) or, for a sim link, an iceoryx subscriber (addSubscriber). The link must
+  /// outlive the loop (or its fd be removed).
+  Status addLink(can::Link& link, std::function<void()> onReadable);
 
   /// Waits and dispatches until stop(); returns the code given to stop().
   int run();

@@ -1,6 +1,7 @@
 #pragma once
 // Opens a link of any kind from the configuration's "socketcan:IFACE", "sim:NAME" or
-// "replay:FILE" (library openvcu::can_links). Services call this and nothing else.
+// "replay:FILE" (library openvcu::can_links, namespace openvcu::can). Services call this
+// and nothing else.
 //
 //   auto linkResult = can::openLink(can::LinkKind::Sim, "vehicle", options);
 //   if (!linkResult) return linkResult.error();   // "sim:vehicle: ..."

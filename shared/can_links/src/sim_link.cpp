@@ -1,8 +1,8 @@
-#include "openvcu/can/sim_link.hpp"
+#include "openvcu/can_links/sim_link.hpp"
 
 #include <ctime>
 
-#include "event_queue.hpp"
+#include "openvcu/can/event_queue.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 
 namespace openvcu::can {
@@ -25,6 +25,7 @@ class SimLink final : public Link {
 
   [[nodiscard]] LinkKind kind() const noexcept override { return LinkKind::Sim; }
   [[nodiscard]] const std::string& name() const noexcept override { return m_name; }
+  // ipc::FrameSubscriber is a can::WaitSource: service::Loop::addLink waits on it
   [[nodiscard]] WaitHandle waitHandle() noexcept override { return WaitHandle{-1, &m_subscriber}; }
 
   std::size_t receive(std::span<ReceivedFrame> out) noexcept override {

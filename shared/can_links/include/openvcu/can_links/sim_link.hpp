@@ -1,6 +1,7 @@
 #pragma once
 // The `sim:NAME` link: a virtual CAN bus over iceoryx for machines without SocketCAN
-// (containers, CI, these build machines). Part of openvcu::can_links (it needs openvcu::ipc).
+// (containers, CI, these build machines). Part of openvcu::can_links (it needs openvcu::ipc);
+// the namespace stays openvcu::can: it is one more can::Link backend.
 //
 // Every process that opens sim:vehicle gets a link with one publisher and one subscriber
 // on the topic ("openvcu", "sim.vehicle", "wire"). A sent frame is stamped at send

@@ -1,7 +1,7 @@
-#include "openvcu/can/open_link.hpp"
+#include "openvcu/can_links/open_link.hpp"
 
 #include "openvcu/can/replay_link.hpp"
-#include "openvcu/can/sim_link.hpp"
+#include "openvcu/can_links/sim_link.hpp"
 #include "openvcu/can/socketcan_link.hpp"
 
 namespace openvcu::can {
