@@ -145,7 +145,7 @@ TEST_CASE("a signal with no slot is decoded but written nowhere") {
   }
 }
 
-TEST_CASE("a value outside the DBC range is written with quality OutOfRange and counted; [0|0] is no range") {
+TEST_CASE("a value outside the DBC range is written with quality OutOfRange and counted, [0|0] is no range") {
   Fixture f;
   const bridge::DatabaseBinding bindings(f.database, f.catalog);
   // Soc 0xFF -> 127.5 % (> 100), Spare 0xFF (no range).
@@ -200,7 +200,7 @@ TEST_CASE("markBusQuality marks every bound slot of the message") {
   CHECK(f.bus("BMS.BMS_Status.Tail").quality == signals::Quality::Stale);
 }
 
-TEST_CASE("encode from the table round-trips through decode into the table; override wins over command") {
+TEST_CASE("encode from the table round-trips through decode into the table and override wins over command") {
   Fixture f;
   const bridge::DatabaseBinding bindings(f.database, f.catalog);
   const bridge::MessageBinding& sut = bindings[STATUS];
@@ -225,7 +225,7 @@ TEST_CASE("encode from the table round-trips through decode into the table; over
   CHECK(payload[3] == 0x5A);
 }
 
-TEST_CASE("encode from values: the value function sees each signal's slot; refused values are counted") {
+TEST_CASE("encode from values gives the value function each signal slot and counts refused values") {
   Fixture f;
   const bridge::DatabaseBinding bindings(f.database, f.catalog);
   const bridge::MessageBinding& sut = bindings[STATUS];
