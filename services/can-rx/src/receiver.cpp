@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdio>
 
+#include "openvcu/bridge/message_binding.hpp"
 #include "openvcu/can/wire_time.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/dbc/codec.hpp"
@@ -38,8 +39,6 @@ struct MessageState {
   std::size_t bus{};
   std::int64_t timeoutNs{};
   std::int64_t lastNs{};  ///< last frame, or the receiver's start
-  std::vector<std::int32_t> slots;  ///< DBC signal index -> table index, NO_SLOT when none
-  std::vector<std::pair<double, double>> limits;  ///< DBC signal index -> [min, max] (min == max: none)
   MessageCounters counters;
   std::int64_t windowSumNs{};
   std::int64_t windowMaxNs{};
@@ -96,7 +95,7 @@ struct ReceiverImpl {
   config::ReceiveConfig receive;
   signals::SignalTable& table;
   ReceiverOutputs& outputs;
-  dbc::DatabaseCodec codecs;
+  bridge::DatabaseBinding bindings;  ///< per DBC message: codec, table slots and ranges
   dbc::MessageMatcher matcher;
   std::vector<BusSlot> buses;
   std::vector<std::int32_t> trackedByMessage;  ///< DBC message index -> index into messages, or -1
@@ -112,12 +111,12 @@ struct ReceiverImpl {
   std::int64_t lastTickNs{};
 
   ReceiverImpl(const config::VehicleConfig& vehicleConfig, config::ReceiveConfig receiveConfig,
-               signals::SignalTable& signalTable, ReceiverOutputs& receiverOutputs)
+               const signals::Catalog& catalog, signals::SignalTable& signalTable, ReceiverOutputs& receiverOutputs)
       : vehicle(vehicleConfig),
         receive(std::move(receiveConfig)),
         table(signalTable),
         outputs(receiverOutputs),
-        codecs(vehicleConfig.database),
+        bindings(vehicleConfig.database, catalog),
         matcher(vehicleConfig.database, dbc::MatchMode::J1939) {}
 
   // ---- per frame ------------------------------------------------------------------------
@@ -174,22 +173,10 @@ struct ReceiverImpl {
 
   void decodeInto(MessageState& message, std::span<const std::uint8_t> payload, std::int64_t nowNs,
                   std::uint16_t source, BusCounters& counters) noexcept {
-    const dbc::MessageCodec& codec = codecs[message.messageIndex];
-    std::uint64_t outOfRange = 0;
-    const dbc::DecodeSummary summary =
-        codec.decode(payload, [&](std::uint32_t signalIndex, const dbc::DecodedValue& value) {
-          const std::int32_t slot = message.slots[signalIndex];
-          if (slot == NO_SLOT) return;
-          const auto [minimum, maximum] = message.limits[signalIndex];
-          signals::Quality quality = signals::Quality::Valid;
-          if (minimum < maximum && (value.physical < minimum || value.physical > maximum)) {
-            quality = signals::Quality::OutOfRange;
-            ++outOfRange;
-          }
-          table.writeBus(static_cast<signals::SignalIndex>(slot), value.physical, nowNs, source, quality);
-        });
-    counters.outOfRange += outOfRange;
-    if (summary.missing > 0) ++counters.decodeErrors;
+    const bridge::DecodeResult result =
+        bindings[message.messageIndex].decodeInto(table, payload, nowNs, source, bridge::RangeCheck::Mark);
+    counters.outOfRange += result.outOfRange;
+    if (result.missing > 0) ++counters.decodeErrors;
     ++counters.decoded;
     seen(message, nowNs);
   }
@@ -395,9 +382,7 @@ struct ReceiverImpl {
       if (nowNs - message.lastNs <= message.timeoutNs) continue;
       message.counters.stale = true;
       ++buses[message.bus].counters.timeouts;
-      for (const std::int32_t slot : message.slots) {
-        if (slot != NO_SLOT) table.markBusQuality(static_cast<signals::SignalIndex>(slot), signals::Quality::Stale);
-      }
+      bindings[message.messageIndex].markBusQuality(table, signals::Quality::Stale);
       const std::string& name = vehicle.database.messages[message.messageIndex].name;
       raise(message.timeoutFault, true, ipc::FaultSeverity::Warning,
             name + (message.seen ? " not received for " : " never received within ") +
@@ -473,7 +458,7 @@ void TpSink::event(const j1939::TpEvent& event) noexcept {
 Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::ReceiveConfig receive,
                                   const signals::Catalog& catalog, signals::SignalTable& table,
                                   ReceiverOutputs& outputs, std::int64_t startNs) {
-  auto impl = std::make_unique<ReceiverImpl>(vehicle, std::move(receive), table, outputs);
+  auto impl = std::make_unique<ReceiverImpl>(vehicle, std::move(receive), catalog, table, outputs);
   impl->startNs = startNs;
   impl->lastTickNs = startNs;
   const dbc::Database& database = vehicle.database;
@@ -520,13 +505,6 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
       state.bus = b;
       state.timeoutNs = impl->receive.timeoutNs[messageIndex];
       state.lastNs = startNs;
-      state.slots.assign(message.signals.size(), NO_SLOT);
-      state.limits.resize(message.signals.size());
-      for (std::size_t s = 0; s < message.signals.size(); ++s) {
-        const dbc::Signal& signal = message.signals[s];
-        state.slots[s] = slotOf(config::signalKey(message, signal));
-        state.limits[s] = {signal.minimum, signal.maximum};
-      }
       const auto cycle = database.attribute(message.attributes, "GenMsgCycleTime", dbc::ObjectType::Message);
       if (cycle && cycle->kind == dbc::AttributeValue::Kind::Number && cycle->number > 0) {
         state.counters.dbcCycleNs = static_cast<std::int64_t>(cycle->number * 1e6);

@@ -4,6 +4,7 @@
 #include <climits>
 #include <cmath>
 
+#include "openvcu/bridge/message_binding.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/j1939/acknowledgement.hpp"
 #include "openvcu/j1939/computed_fields.hpp"
@@ -82,6 +83,7 @@ struct FieldState {
 
 struct ScheduledEntry {
   ScheduledMessage config;
+  const bridge::MessageBinding* binding{};  ///< the message's codec and table slots
   const dbc::MessageCodec* codec{};
   std::uint32_t length{};
   std::uint8_t sourceAddress{};
@@ -90,7 +92,6 @@ struct ScheduledEntry {
   std::vector<std::optional<double>> commanded;
   std::optional<j1939::SafetyPairBuilder> pair;
   std::optional<std::size_t> headerMessage;  ///< the DBC message describing the SHM, if any
-  std::vector<std::optional<signals::SignalIndex>> headerKeys;
   std::int64_t nextNs{NEVER};                ///< next cyclic deadline
   std::int64_t nextCheckNs{NEVER};           ///< next on-change check
   std::int64_t lastCyclicSendNs{};
@@ -106,11 +107,10 @@ struct ScheduledEntry {
 
 struct Scheduler::Impl {
   const config::VehicleConfig& vehicle;
-  const signals::Catalog& catalog;
   signals::SignalTable& table;
   TxPort& port;
   Clock& clock;
-  dbc::DatabaseCodec codecs;
+  bridge::DatabaseBinding bindings;  ///< per DBC message: codec, table slots and ranges
   std::vector<SendGroup> groups;
   std::vector<std::optional<double>> groupCommanded;  ///< per group: its signal's last effective command
   std::uint64_t seenDamage{};   ///< table.damageCount() when the last grace window started
@@ -129,7 +129,7 @@ struct Scheduler::Impl {
   std::int8_t localMinuteOffset{};
 
   Impl(const config::VehicleConfig& v, const signals::Catalog& c, signals::SignalTable& t, TxPort& p, Clock& k)
-      : vehicle(v), catalog(c), table(t), port(p), clock(k), codecs(v.database) {}
+      : vehicle(v), table(t), port(p), clock(k), bindings(v.database, c) {}
 
   // ---- building frames ------------------------------------------------------------------
 
@@ -137,7 +137,8 @@ struct Scheduler::Impl {
   Result<PreparedMessage> build(const ScheduledMessage& config) const {
     PreparedMessage entry(new ScheduledEntry());
     entry->config = config;
-    entry->codec = &codecs[config.message];
+    entry->binding = &bindings[config.message];
+    entry->codec = &entry->binding->codec();
     entry->length = entry->codec->length();
     if (entry->length > can::MAX_DATA_LENGTH) {
       return Error{"message '" + vehicle.database.messages[config.message].name + "' is " +
@@ -145,7 +146,7 @@ struct Scheduler::Impl {
                    "not supported)"};
     }
     entry->sourceAddress = config.extended ? j1939::Id::fromCanId(config.canId).sourceAddress : 0;
-    entry->commanded.assign(config.keys.size(), std::nullopt);
+    entry->commanded.assign(entry->binding->signalCount(), std::nullopt);
     for (const ComputedField& field : config.computed) {
       FieldState state;
       state.config = field;
@@ -165,7 +166,6 @@ struct Scheduler::Impl {
         const dbc::Message& candidate = vehicle.database.messages[m];
         if (candidate.extended && (candidate.id & 0x03FFFFFFu) == (header & 0x03FFFFFFu)) {
           entry->headerMessage = m;
-          entry->headerKeys = keysOf(m);
           break;
         }
       }
@@ -212,18 +212,18 @@ struct Scheduler::Impl {
     const auto initial = entry.codec->initialPayload();
     std::copy(initial.begin(), initial.end(), payload.begin());
     const std::span<std::uint8_t> buffer(payload.data(), entry.length);
-    const dbc::Message& message = vehicle.database.messages[entry.config.message];
-    for (std::uint32_t s = 0; s < entry.config.keys.size(); ++s) {
-      if (message.signals[s].muxRole == dbc::MuxRole::Multiplexed) continue;  // docs/design/can-tx.md
-      std::optional<double> value = entry.config.defaults[s];
-      if (const auto key = entry.config.keys[s]) {
-        if (const auto command = commandOf(*key, entry.commanded[s])) value = command;
-      }
-      if (!value) continue;
-      if (entry.codec->encode(s, *value, buffer) != dbc::EncodeStatus::Ok) {
-        entry.stats.encodeErrors.store(entry.stats.encodeErrors.load(std::memory_order_relaxed) + 1,
-                                       std::memory_order_relaxed);
-      }
+    // multiplexed signals are skipped by the binding (docs/design/can-tx.md)
+    const bridge::EncodeResult result =
+        entry.binding->encodeFrom(buffer, [&](std::uint32_t s, std::optional<signals::SignalIndex> slot) noexcept {
+          std::optional<double> value = entry.config.defaults[s];
+          if (slot) {
+            if (const auto command = commandOf(*slot, entry.commanded[s])) value = command;
+          }
+          return value;
+        });
+    if (result.errors > 0) {
+      entry.stats.encodeErrors.store(entry.stats.encodeErrors.load(std::memory_order_relaxed) + result.errors,
+                                     std::memory_order_relaxed);
     }
   }
 
@@ -273,25 +273,11 @@ struct Scheduler::Impl {
     return frame;
   }
 
-  using Keys = std::vector<std::optional<signals::SignalIndex>>;
-
-  /// Writes what went out to the bus plane (`keys`: catalog index per DBC signal).
-  void record(std::size_t messageIndex, const Keys& keys, std::span<const std::uint8_t> payload, std::uint8_t source,
+  /// Writes what went out to the bus plane of DBC message `messageIndex`'s slots (Valid).
+  void record(std::size_t messageIndex, std::span<const std::uint8_t> payload, std::uint8_t source,
               std::int64_t nowNs) noexcept {
-    codecs[messageIndex].decode(payload, [&](std::uint32_t signalIndex, const dbc::DecodedValue& value) {
-      if (signalIndex < keys.size() && keys[signalIndex]) {
-        table.writeBus(*keys[signalIndex], value.physical, nowNs, source, signals::Quality::Valid);
-      }
-    });
+    (void)bindings[messageIndex].decodeInto(table, payload, nowNs, source, bridge::RangeCheck::None);
   }
-
-  Keys keysOf(std::size_t messageIndex) const {
-    const dbc::Message& message = vehicle.database.messages[messageIndex];
-    Keys keys;
-    for (const dbc::Signal& signal : message.signals) keys.push_back(catalog.indexOf(config::signalKey(message, signal)));
-    return keys;
-  }
-  Keys timeDateKeys;
 
   static void increment(std::atomic<std::uint64_t>& counter) noexcept {
     counter.store(counter.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
@@ -362,7 +348,7 @@ struct Scheduler::Impl {
     (void)emit(entry.config.bus, frameOf(entry.config.canId, entry.config.extended, bytes),
                Outcome{nullptr, &entry.stats.sendFailures});
     increment(entry.stats.frames);
-    record(entry.config.message, entry.config.keys, bytes, entry.sourceAddress, now);
+    record(entry.config.message, bytes, entry.sourceAddress, now);
   }
 
   /// The SHM of a pair; its SDM (`payload`) becomes pending, due deltaNs after the SHM.
@@ -381,7 +367,7 @@ struct Scheduler::Impl {
       increment(entry.stats.sendFailures);
     }
     const std::int64_t now = clock.monotonicNs();  // after the SHM left: the delta starts here
-    if (entry.headerMessage) record(*entry.headerMessage, entry.headerKeys, header, entry.sourceAddress, now);
+    if (entry.headerMessage) record(*entry.headerMessage, header, entry.sourceAddress, now);
     entry.sdm = payload;
     entry.sdmPending = true;
     entry.shmSentNs = now;
@@ -399,7 +385,7 @@ struct Scheduler::Impl {
     entry.stats.deltaError.record(now - entry.shmSentNs - *entry.config.safetyDeltaNs);
     entry.sdmPending = false;
     entry.sdmDueNs = NEVER;
-    record(entry.config.message, entry.config.keys, bytes, entry.sourceAddress, now);
+    record(entry.config.message, bytes, entry.sourceAddress, now);
     releaseHeld();
   }
 
@@ -475,7 +461,6 @@ Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig
     if (std::find(senders.begin(), senders.end(), vehicle.node) == senders.end()) continue;
     if (j1939::pgnOf(message.id) == j1939::PGN_TIME_DATE && !impl->timeDateMessage) {
       impl->timeDateMessage = m;
-      impl->timeDateKeys = impl->keysOf(m);
     }
   }
   impl->room = std::max(vehicle.database.messages.size(), schedule.messages.size());
@@ -560,7 +545,7 @@ void Scheduler::answerRequest(std::size_t bus, const j1939::Request& request) no
                                          .toCanId();
       if (impl.emit(bus, impl.frameOf(id, true, *payload), Outcome{&impl.counters.requestsAnswered, nullptr}) !=
           Emitted::Failed) {
-        if (impl.timeDateMessage) impl.record(*impl.timeDateMessage, impl.timeDateKeys, *payload, impl.ownAddress, now);
+        if (impl.timeDateMessage) impl.record(*impl.timeDateMessage, *payload, impl.ownAddress, now);
       }
       return;
     }

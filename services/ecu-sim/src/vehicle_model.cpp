@@ -42,7 +42,7 @@ Result<VehicleModel> VehicleModel::create(VirtualBus& bus, const config::SimConf
 
 Status VehicleModel::resolve() {
   Status status;
-  const auto in = [&](const char* message, const char* signal, InputRef& target) {
+  const auto in = [&](const char* message, const char* signal, bridge::SignalRef& target) {
     auto ref = m_bus->input(message, signal);
     if (!ref) {
       if (status) status = Error{"simulated vehicle: " + ref.error().message};
@@ -50,7 +50,7 @@ Status VehicleModel::resolve() {
     }
     target = *ref;
   };
-  const auto out = [&](const std::string& message, const char* signal, OutputRef& target) {
+  const auto out = [&](const std::string& message, const char* signal, bridge::SignalRef& target) {
     auto ref = m_bus->output(message, signal);
     if (!ref) {
       if (status) status = Error{"simulated vehicle: " + ref.error().message};
@@ -216,7 +216,7 @@ std::optional<j1939::SafetyResult> VehicleModel::takeSafetyChange() noexcept {
 }
 
 void VehicleModel::stepVic(std::int64_t nowNs, double dt, bool wake) {
-  const auto recent = [&](InputRef ref) {
+  const auto recent = [&](bridge::SignalRef ref) {
     const std::int64_t at = m_bus->lastReceivedNs(ref);
     return at != 0 && nowNs - at <= m_config->keepAliveTimeoutNs;
   };

@@ -91,8 +91,8 @@ class VehicleModel {
 
  private:
   struct Inverter {
-    InputRef controlWord, torqueRequest;
-    OutputRef statusOut, torque, speed, current, driveState, dcLink;
+    bridge::SignalRef controlWord, torqueRequest;                            ///< VCU inputs
+    bridge::SignalRef statusOut, torque, speed, current, driveState, dcLink;  ///< outputs
     int status{8};
     int stage{6};             ///< the last ControlWord followed
     std::int64_t stepAtNs{};  ///< when the next ControlWord may be followed
@@ -116,17 +116,17 @@ class VehicleModel {
   const config::SimConfig* m_config;
   std::array<bool, FAULT_COUNT> m_faults{};
   // VCU inputs
-  InputRef m_esRelay{}, m_consent{}, m_ccvsAny{}, m_hvesscAny{}, m_crashType{}, m_contactorA{}, m_contactorB{},
+  bridge::SignalRef m_esRelay{}, m_consent{}, m_ccvsAny{}, m_hvesscAny{}, m_crashType{}, m_contactorA{}, m_contactorB{},
       m_bmsControl{}, m_bmsMaxCurrent{}, m_bmsMaxVoltage{}, m_dcdcCommand{}, m_dcdcSetV{}, m_dcdcMaxI{}, m_motRequest{},
       m_rqstPgn{}, m_motSpeedRef{};
   std::uint32_t m_timeDateId{};
   // VIC outputs
-  OutputRef m_cnctnSts{}, m_operSts{}, m_posCntctr{}, m_negCntctr{}, m_permission{}, m_intChrgr{}, m_hvil{},
+  bridge::SignalRef m_cnctnSts{}, m_operSts{}, m_posCntctr{}, m_negCntctr{}, m_permission{}, m_intChrgr{}, m_hvil{},
       m_pasIsln{}, m_socSts{}, m_uLvl{}, m_currentOut{}, m_avlCh{}, m_avlDcha{}, m_socOut{}, m_uChLim{}, m_iChLim{}, m_soh{},
       m_rqstVic{};
   std::size_t m_sohMessage{}, m_rqstVicMessage{};
   // PDU, OBC, DC-DC, Editron outputs
-  OutputRef m_pduStatus{}, m_groupA{}, m_groupB{}, m_pduU{}, m_pduI{}, m_obcU{}, m_obcI{}, m_obcFault{}, m_obcReady{},
+  bridge::SignalRef m_pduStatus{}, m_groupA{}, m_groupB{}, m_pduU{}, m_pduI{}, m_obcU{}, m_obcI{}, m_obcFault{}, m_obcReady{},
       m_obcComm{}, m_dcU{}, m_dcI{}, m_dcSts{}, m_motFault{}, m_motRun{}, m_motN{}, m_motUdc{};
   std::array<Inverter, 4> m_inverters{};
   std::vector<Pair> m_pairs;

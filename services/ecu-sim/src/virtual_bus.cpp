@@ -7,7 +7,9 @@ namespace openvcu::ecusim {
 Result<VirtualBus> VirtualBus::create(const config::VehicleConfig& vehicle) {
   VirtualBus bus;
   bus.m_vehicle = &vehicle;
-  bus.m_codecs = dbc::DatabaseCodec(vehicle.database);
+  bus.m_bindings = bridge::DatabaseBinding(vehicle.database);
+  bus.m_txByMessage.assign(vehicle.database.messages.size(), -1);
+  bus.m_rxByMessage.assign(vehicle.database.messages.size(), -1);
   for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
     for (const std::size_t index : vehicle.buses[b].messages) {
       const dbc::Message& message = vehicle.database.messages[index];
@@ -18,6 +20,7 @@ Result<VirtualBus> VirtualBus::create(const config::VehicleConfig& vehicle) {
         rx.id = message.id;
         rx.extended = message.extended;
         rx.values.assign(message.signals.size(), std::numeric_limits<double>::quiet_NaN());
+        if (bus.m_rxByMessage[index] < 0) bus.m_rxByMessage[index] = static_cast<std::int32_t>(bus.m_rx.size());
         bus.m_rx.push_back(std::move(rx));
         continue;
       }
@@ -27,23 +30,22 @@ Result<VirtualBus> VirtualBus::create(const config::VehicleConfig& vehicle) {
       tx.node = message.transmitter;
       tx.frame.id = message.id;
       tx.frame.flags = message.extended ? can::FLAG_EXTENDED : 0;
-      const auto initial = bus.m_codecs[index].initialPayload();
+      const auto initial = bus.m_bindings[index].codec().initialPayload();
       tx.frame.length = static_cast<std::uint8_t>(std::min<std::size_t>(initial.size(), can::MAX_DATA_LENGTH));
       std::copy_n(initial.begin(), tx.frame.length, tx.frame.data.begin());
       tx.cycleNs = message.cycleTimeMs ? static_cast<std::int64_t>(*message.cycleTimeMs) * 1'000'000 : 0;
+      if (bus.m_txByMessage[index] < 0) bus.m_txByMessage[index] = static_cast<std::int32_t>(bus.m_tx.size());
       bus.m_tx.push_back(std::move(tx));
     }
   }
   return bus;
 }
 
-Result<OutputRef> VirtualBus::output(const std::string& message, const std::string& signal) const {
-  for (std::size_t i = 0; i < m_tx.size(); ++i) {
-    const dbc::Message& candidate = m_vehicle->database.messages[m_tx[i].messageIndex];
-    if (candidate.name != message) continue;
-    for (std::uint32_t s = 0; s < candidate.signals.size(); ++s) {
-      if (candidate.signals[s].name == signal) return OutputRef{i, s};
-    }
+Result<bridge::SignalRef> VirtualBus::output(const std::string& message, const std::string& signal) const {
+  for (const Tx& tx : m_tx) {
+    const bridge::MessageBinding& binding = m_bindings[tx.messageIndex];
+    if (binding.message().name != message) continue;
+    if (const auto maybeSignal = binding.signalIndex(signal)) return bridge::SignalRef{tx.messageIndex, *maybeSignal};
     return Error{"message " + message + " has no signal " + signal};
   }
   return Error{"no simulated node transmits a message " + message + " on a configured bus"};
@@ -56,32 +58,27 @@ Result<std::size_t> VirtualBus::outputMessage(const std::string& name) const {
   return Error{"no simulated node transmits a message " + name + " on a configured bus"};
 }
 
-Result<InputRef> VirtualBus::input(const std::string& message, const std::string& signal) const {
-  for (std::size_t i = 0; i < m_rx.size(); ++i) {
-    const dbc::Message& candidate = m_vehicle->database.messages[m_rx[i].messageIndex];
-    if (candidate.name != message) continue;
-    for (std::uint32_t s = 0; s < candidate.signals.size(); ++s) {
-      if (candidate.signals[s].name == signal) return InputRef{i, s};
-    }
+Result<bridge::SignalRef> VirtualBus::input(const std::string& message, const std::string& signal) const {
+  for (const Rx& rx : m_rx) {
+    const bridge::MessageBinding& binding = m_bindings[rx.messageIndex];
+    if (binding.message().name != message) continue;
+    if (const auto maybeSignal = binding.signalIndex(signal)) return bridge::SignalRef{rx.messageIndex, *maybeSignal};
     return Error{"message " + message + " has no signal " + signal};
   }
   return Error{"the VCU (" + m_vehicle->node + ") transmits no message " + message + " on a configured bus"};
 }
 
-void VirtualBus::set(OutputRef ref, double value) noexcept {
-  Tx& tx = m_tx[ref.message];
-  const dbc::Signal& signal = m_vehicle->database.messages[tx.messageIndex].signals[ref.signal];
-  if (!std::isfinite(value)) return;
-  if (signal.minimum < signal.maximum) value = std::clamp(value, signal.minimum, signal.maximum);
-  (void)m_codecs[tx.messageIndex].encode(ref.signal, value, std::span<std::uint8_t>(tx.frame.data.data(), tx.frame.length));
+void VirtualBus::set(bridge::SignalRef ref, double value) noexcept {
+  if (ref.message >= m_txByMessage.size() || m_txByMessage[ref.message] < 0) return;
+  Tx& tx = m_tx[static_cast<std::size_t>(m_txByMessage[ref.message])];
+  (void)m_bindings[ref.message].encodeClamped(ref.signal, value,
+                                              std::span<std::uint8_t>(tx.frame.data.data(), tx.frame.length));
 }
 
 bool VirtualBus::receive(const can::Frame& frame, std::int64_t atNs) noexcept {
   for (Rx& rx : m_rx) {
     if (rx.id != frame.id || rx.extended != frame.extended()) continue;
-    m_codecs[rx.messageIndex].decode(frame.payload(), [&rx](std::uint32_t signal, const dbc::DecodedValue& value) {
-      rx.values[signal] = value.physical;
-    });
+    (void)m_bindings[rx.messageIndex].decodeValues(frame.payload(), rx.values);
     rx.lastNs = atNs;
     ++m_received;
     return true;

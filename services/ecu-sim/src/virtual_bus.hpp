@@ -2,10 +2,12 @@
 // The simulated nodes' side of the bus: every DBC message a node other than this VCU
 // transmits, with its payload (the DBC's initial payload, then what the node models set),
 // its cycle (GenMsgCycleTime; messages without one go out only when a model asks) and an
-// absolute next deadline; and the VCU's messages decoded as they are received.
+// absolute next deadline; and the VCU's messages decoded as they are received. Signals are
+// named by bridge::SignalRef (DBC message and signal index) and encoded and decoded through
+// the messages' bridge::MessageBinding (no signal table here: values stay in the process).
 //
 //   auto busResult = ecusim::VirtualBus::create(vehicle);
-//   const auto soc = bus.output("VIC", "HVESSD2_PGN61585", "HS_FastUpdSOC");   // resolved once
+//   const auto soc = bus.output("HVESSD2_PGN61585", "HS_FastUpdSOC");   // a bridge::SignalRef, resolved once
 //   bus.set(*soc, 62.5);                                                     // encoded at once
 //   bus.sendDue(now, [&](std::size_t busIndex, const can::Frame& frame) { links[busIndex]->send(frame); });
 //   bus.receive(frame, atNs);   // a VCU frame: decoded; bus.get(*relay) reads it
@@ -19,42 +21,41 @@
 #include <vector>
 
 #include "openvcu/can/frame.hpp"
+#include "openvcu/bridge/message_binding.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
-#include "openvcu/dbc/codec.hpp"
 
 namespace openvcu::ecusim {
 
 inline constexpr std::int64_t NEVER = std::numeric_limits<std::int64_t>::max();
-
-/// A signal of a simulated node's message.
-struct OutputRef {
-  std::size_t message{};  ///< index into the transmitted messages
-  std::uint32_t signal{};
-};
-/// A signal of a VCU message.
-struct InputRef {
-  std::size_t message{};  ///< index into the received messages
-  std::uint32_t signal{};
-};
 
 /// @note restricted thread-safe: one thread (the simulation's).
 class VirtualBus {
  public:
   static Result<VirtualBus> create(const config::VehicleConfig& vehicle);
 
-  /// Errors name the message and signal (and say the node does not transmit it).
-  Result<OutputRef> output(const std::string& message, const std::string& signal) const;
-  Result<InputRef> input(const std::string& message, const std::string& signal) const;
+  /// A signal of a simulated node's message (for set()). Errors name the message and
+  /// signal (and say no simulated node transmits it).
+  Result<bridge::SignalRef> output(const std::string& message, const std::string& signal) const;
+  /// A signal of a VCU message (for get()). Errors name the message and signal.
+  Result<bridge::SignalRef> input(const std::string& message, const std::string& signal) const;
   /// The transmitted message `name`, for sendNow().
   Result<std::size_t> outputMessage(const std::string& name) const;
 
-  /// Sets a physical value (clamped to the signal's DBC range); no allocation.
-  void set(OutputRef ref, double value) noexcept;
-  /// The last received value; NaN before the first frame of its message.
-  [[nodiscard]] double get(InputRef ref) const noexcept { return m_rx[ref.message].values[ref.signal]; }
+  /// Sets a physical value of an output() signal (clamped to the signal's DBC range; a
+  /// non-finite value is ignored); no allocation. A ref of no transmitted message: no-op.
+  void set(bridge::SignalRef ref, double value) noexcept;
+  /// The last received value of an input() signal; NaN before the first frame of its
+  /// message (and for a ref of no VCU message).
+  [[nodiscard]] double get(bridge::SignalRef ref) const noexcept {
+    const Rx* rx = rxOf(ref);
+    return rx != nullptr ? rx->values[ref.signal] : std::numeric_limits<double>::quiet_NaN();
+  }
   /// CLOCK_MONOTONIC ns of the last frame of a VCU message; 0 when none came.
-  [[nodiscard]] std::int64_t lastReceivedNs(InputRef ref) const noexcept { return m_rx[ref.message].lastNs; }
+  [[nodiscard]] std::int64_t lastReceivedNs(bridge::SignalRef ref) const noexcept {
+    const Rx* rx = rxOf(ref);
+    return rx != nullptr ? rx->lastNs : 0;
+  }
 
   /// Decodes `frame` when it is a VCU message; false otherwise.
   bool receive(const can::Frame& frame, std::int64_t atNs) noexcept;
@@ -96,10 +97,17 @@ class VirtualBus {
     std::int64_t lastNs{};
   };
 
+  [[nodiscard]] const Rx* rxOf(bridge::SignalRef ref) const noexcept {
+    if (ref.message >= m_rxByMessage.size() || m_rxByMessage[ref.message] < 0) return nullptr;
+    return &m_rx[static_cast<std::size_t>(m_rxByMessage[ref.message])];
+  }
+
   const config::VehicleConfig* m_vehicle{};
-  dbc::DatabaseCodec m_codecs;
+  bridge::DatabaseBinding m_bindings;  ///< every DBC message's codec, no table slots
   std::vector<Tx> m_tx;
   std::vector<Rx> m_rx;
+  std::vector<std::int32_t> m_txByMessage;  ///< DBC message index -> index into m_tx (first bus), or -1
+  std::vector<std::int32_t> m_rxByMessage;  ///< DBC message index -> index into m_rx, or -1
   std::uint64_t m_sent{};
   std::uint64_t m_received{};
 };
