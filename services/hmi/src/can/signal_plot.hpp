@@ -88,5 +88,4 @@ class SignalPlot : public QQuickItem {
   bool m_seriesChanged{true};
 };
 
-
 }  // namespace openvcu::hmi

@@ -1,7 +1,5 @@
 #include "header/fsm_model.hpp"
 
-
-
 namespace openvcu::hmi {
 namespace {
 

@@ -140,7 +140,8 @@ QString TraceModel::exportCsv(const QString& pathOrUrl) const {
 QStringList TraceModel::signalNames() const {
   QStringList names;
   if (!m_decoder) return names;
-  for (const std::string& name : trace::signalNames(m_log, m_decoder->database())) names << QString::fromStdString(name);
+  for (const std::string& name : trace::signalNames(m_log, m_decoder->database()))
+    names << QString::fromStdString(name);
   return names;
 }
 

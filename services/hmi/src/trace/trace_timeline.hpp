@@ -65,5 +65,4 @@ class TraceTimeline : public QQuickItem {
   bool m_seriesChanged{true};
 };
 
-
 }  // namespace openvcu::hmi

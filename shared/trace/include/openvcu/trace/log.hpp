@@ -30,11 +30,12 @@ namespace openvcu::trace {
 
 /// One frame of a loaded log.
 struct LogFrame {
-  can::Frame frame{};          ///< timestampNs: as the log writes it (loggedTimeNs)
-  std::int32_t message{-1};    ///< index into Database::messages, or FrameDecoder::NO_MATCH
-  std::uint16_t channel{};     ///< index into LoadedLog::channels
-  bool hasTime{};              ///< false when the line carried no timestamp
+  can::Frame frame{};        ///< timestampNs: as the log writes it (loggedTimeNs)
+  std::int32_t message{-1};  ///< index into Database::messages, or FrameDecoder::NO_MATCH
+  std::uint16_t channel{};   ///< index into LoadedLog::channels
+  bool hasTime{};            ///< false when the line carried no timestamp
 };
+static_assert(sizeof(LogFrame) == 88, "a loaded log costs 88 bytes per frame");
 
 /// The frames of one log and what went wrong while reading it.
 struct LoadedLog {
@@ -53,7 +54,7 @@ struct LoadedLog {
 };
 
 struct LoadOptions {
-  /// Frames kept from one log (about 90 bytes each: 1,000,000 frames = 90 MB).
+  /// Frames kept from one log (88 bytes each: 1,000,000 frames = 88 MB).
   std::size_t maxFrames{1'000'000};
   /// Written with the fraction of lines read (0..1) while loading, when set (another
   /// thread may read it).
