@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "hmi_app.hpp"
+#include "app/hmi_app.hpp"
 #include "openvcu/service/options.hpp"
 #include "openvcu/service/shutdown.hpp"
 

@@ -1,12 +1,12 @@
-// The HMI's display logic without Qt: value text and status, the FSM rules behind the operator switches, service health, command acknowledgements, the log
-// ring and the plot's decimation (issue 10).
+// The HMI's display logic without Qt: value text and status, the FSM rules behind the
+// operator switches, service health, command acknowledgements and the log ring (issue 10).
+// The plot's ring and decimation are tested with shared/trace (tests/shared/trace).
 #include <doctest/doctest.h>
 
 #include <string>
 #include <vector>
 
-#include "display_logic.hpp"
-#include "plot_and_trace.hpp"
+#include "common/display_logic.hpp"
 
 using namespace openvcu;
 using namespace openvcu::hmi;
@@ -180,21 +180,4 @@ TEST_CASE("the log ring keeps the newest records and filters by service and leve
   REQUIRE(errors.size() == 2);
   CHECK(sut.exportText(errors) ==
         "1970-01-01T00:00:00.000Z warning vcu-can-rx: b\n1970-01-01T00:00:00.000Z error vcu-fsm: c\n");
-}
-
-TEST_CASE("the plot ring drops the oldest sample and decimation gives one min/max per pixel column") {
-  SampleRing ring(4);
-  for (int i = 0; i < 6; ++i) ring.push(i, i * 10);
-  REQUIRE(ring.size() == 4);
-  CHECK(ring.time(0) == 2);
-  CHECK(ring.value(3) == 50);
-  std::vector<float> out(2 * 3);
-  const std::size_t columns = decimate(ring, 2, 6, 2, out);  // [2,4) and [4,6)
-  REQUIRE(columns == 2);
-  CHECK(out[1] == 20);
-  CHECK(out[2] == 30);
-  CHECK(out[4] == 40);
-  CHECK(out[5] == 50);
-  std::vector<float> tooSmall(1);
-  CHECK(decimate(ring, 2, 6, 2, tooSmall) == 0);
 }

@@ -23,12 +23,13 @@
 #include <string>
 #include <vector>
 
-#include "frame_trace.hpp"
+#include "can/frame_trace_model.hpp"
+#include "common/stack_connection.hpp"
+#include "header/fsm_model.hpp"
+#include "hmi_test_support.hpp"
 #include "integration_support.hpp"
-#include "schedule_model.hpp"
-#include "signal_models.hpp"
-#include "stack_connection.hpp"
-#include "stack_models.hpp"
+#include "setup/schedule_model.hpp"
+#include "vehicle/operator_model.hpp"
 
 namespace harness = openvcu::harness;
 namespace fs = std::filesystem;
@@ -65,16 +66,6 @@ struct HmiStack : ConfiguredStack {
     return **process;
   }
 };
-
-void ensureApplication() {
-  static int argc = 1;
-  static char name[] = "test_integration_hmi";
-  static char* argv[] = {name, nullptr};
-  if (!QCoreApplication::instance()) {
-    qputenv("QT_QPA_PLATFORM", "offscreen");
-    static QGuiApplication application(argc, argv);
-  }
-}
 
 std::size_t distinctColours(const QImage& image) {
   std::set<QRgb> colours;
@@ -181,7 +172,7 @@ TEST_CASE(
     "reason") {
   SKIP_UNLESS_ISOLATED();
   HmiStack s;
-  ensureApplication();
+  openvcu::hmi::test::ensureApplication("test_integration_hmi");
   openvcu::hmi::StackSettings settings;
   settings.configPath = s.config.string();
   settings.frameStreams = true;
@@ -238,7 +229,7 @@ TEST_CASE(
 TEST_CASE("the ECU setup changes a cycle, sets and clears an override, adds and disables a message on the running can-tx without a restart") {
   SKIP_UNLESS_ISOLATED();
   HmiStack s;
-  ensureApplication();
+  openvcu::hmi::test::ensureApplication("test_integration_hmi");
   openvcu::hmi::StackSettings settings;
   settings.configPath = s.config.string();
   auto connection = openvcu::hmi::StackConnection::open(settings);

@@ -3,12 +3,12 @@
 // OpenVcu.Hmi are linked in and imported with Q_IMPORT_QML_PLUGIN. Issue 10.
 #include <QtQml/qqmlextensionplugin.h>
 #include <QtQuickTest/quicktest.h>
-#include <unistd.h>
 
 #include <QQmlEngine>
 #include <memory>
 
-#include "stack_connection.hpp"
+#include "common/stack_connection.hpp"
+#include "hmi_test_support.hpp"
 
 Q_IMPORT_QML_PLUGIN(OpenVcu_ModelsPlugin)
 Q_IMPORT_QML_PLUGIN(OpenVcu_HmiPlugin)
@@ -17,10 +17,7 @@ class Setup : public QObject {
   Q_OBJECT
  public Q_SLOTS:
   void applicationAvailable() {
-    openvcu::hmi::StackSettings settings;
-    settings.configPath = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
-    settings.lcmUrl = "memq://";
-    settings.instance = "hmi-quick-" + std::to_string(::getpid());
+    openvcu::hmi::StackSettings settings = openvcu::hmi::test::memqSettings("hmi-quick");
     settings.dataFolder = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/logs";  // Browse starts here (read only)
     auto opened = openvcu::hmi::StackConnection::open(settings);
     if (!opened) qFatal("%s", opened.error().toString().c_str());

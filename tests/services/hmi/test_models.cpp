@@ -17,42 +17,36 @@
 #include <string>
 #include <thread>
 
-#include "file_browser.hpp"
-#include "frame_trace.hpp"
-#include "hmi_app.hpp"
+#include "app/hmi_app.hpp"
+#include "can/frame_trace_model.hpp"
+#include "can/signal_plot.hpp"
+#include "can/signal_tree_model.hpp"
+#include "common/file_browser.hpp"
+#include "common/stack_connection.hpp"
+#include "dashboard/dashboard_models.hpp"
+#include "hmi_test_support.hpp"
+#include "debug/fault_model.hpp"
+#include "debug/log_model.hpp"
+#include "debug/system_actions.hpp"
+#include "header/fsm_model.hpp"
+#include "header/health_model.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/event_bus.hpp"
-#include "plot_and_trace.hpp"
-#include "schedule_model.hpp"
-#include "signal_models.hpp"
-#include "stack_connection.hpp"
-#include "stack_models.hpp"
+#include "setup/schedule_model.hpp"
+#include "trace/trace_model.hpp"
+#include "trace/trace_timeline.hpp"
+#include "vehicle/operator_model.hpp"
 
 using namespace openvcu;
 using namespace openvcu::hmi;
 
 namespace {
 
-const std::string HHEA_CONFIG = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
-
-void ensureApplication() {
-  static int argc = 1;
-  static char name[] = "test_hmi_models";
-  static char* argv[] = {name, nullptr};
-  if (!QCoreApplication::instance()) {
-    qputenv("QT_QPA_PLATFORM", "offscreen");
-    static QGuiApplication application(argc, argv);
-  }
-}
-
 /// A stack connection on memq:// with an instance no table exists for.
 std::unique_ptr<StackConnection> openStack(const std::string& dashboard = {}, const std::string& supervisor = {},
                                            const std::string& dataFolder = {}) {
-  ensureApplication();
-  StackSettings settings;
-  settings.configPath = HHEA_CONFIG;
-  settings.lcmUrl = "memq://";
-  settings.instance = "hmi-unit-" + std::to_string(::getpid());
+  test::ensureApplication("test_hmi_models");
+  StackSettings settings = test::memqSettings("hmi-unit");
   settings.dashboardPath = dashboard;
   settings.supervisorConfig = supervisor;
   settings.dataFolder = dataFolder;
@@ -138,13 +132,13 @@ void deliver(StackConnection& stack) {
 }  // namespace
 
 TEST_CASE("a missing or broken configuration is refused with a clear error, not a crash") {
-  ensureApplication();
+  test::ensureApplication("test_hmi_models");
   StackSettings settings;
   settings.configPath = "/nonexistent/vehicle.json";
   const auto sut = StackConnection::open(settings);
   REQUIRE_FALSE(sut);
   CHECK(sut.error().toString().find("/nonexistent/vehicle.json") != std::string::npos);
-  settings.configPath = HHEA_CONFIG;
+  settings.configPath = test::HHEA_CONFIG;
   settings.instance = "bad name!";
   CHECK_FALSE(StackConnection::open(settings));
 }
@@ -349,7 +343,7 @@ TEST_CASE("the plot takes up to four known signals and says why it refuses more"
   CHECK(sut.windowSeconds() == 10);
 }
 
-TEST_CASE("the trace viewer loads a candump log, decodes it with the DBC and exports CSV") {
+TEST_CASE("the trace viewer loads a candump log, decodes it with the DBC and exports CSV as vcu dbc decode does") {
   auto stack = openStack();
   QTemporaryDir folder;
   const std::string log = folder.filePath("drive.log").toStdString();
@@ -373,10 +367,10 @@ TEST_CASE("the trace viewer loads a candump log, decodes it with the DBC and exp
   std::ifstream in(csv.toStdString());
   std::string header;
   std::getline(in, header);
-  CHECK(header == "time_s,message,signal,value");
+  CHECK(header == "t,bus,id,ext,msg,signal,raw,physical");  // trace::FrameWriter's CSV
   std::string first;
   std::getline(in, first);
-  CHECK(first.rfind("0,OBC,", 0) == 0);
+  CHECK(first.rfind("1436509052.249713,can0,419385573,true,OBC,", 0) == 0);
 
   const QStringList names = sut.signalNames();
   REQUIRE(names.contains("OBC.OBC_Start_State"));
@@ -392,7 +386,7 @@ TEST_CASE("the trace viewer loads a candump log, decodes it with the DBC and exp
   CHECK(timeline.viewEnd() - timeline.viewStart() == doctest::Approx(0.005));
   timeline.reset();
   CHECK(timeline.viewStart() == 0);
-  SampleRing ring;
+  trace::SampleRing ring;
   CHECK_FALSE(sut.extract("NoSuch.Signal", ring));
 
   TraceModel missing;
@@ -496,7 +490,7 @@ TEST_CASE("restart and power actions are fixed argv: known services only, reboot
 }
 
 TEST_CASE("the command line refuses bad options with a message and checks the configuration before any display") {
-  const QString hhea = QString::fromStdString(HHEA_CONFIG);
+  const QString hhea = QString::fromStdString(test::HHEA_CONFIG);
   CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--size", "10x10"}));
   CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--tab", "9"}));
   CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--time-zone", "Mars/Olympus"}));

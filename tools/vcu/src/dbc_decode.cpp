@@ -1,6 +1,4 @@
 // vcu dbc decode: stream a CAN log through the DBC codec, constant memory.
-#include <algorithm>
-#include <cmath>
 #include <fstream>
 #include <optional>
 
@@ -8,7 +6,7 @@
 #include "dbc_loading.hpp"
 #include "diagnostics.hpp"
 #include "openvcu/can/log_reader.hpp"
-#include "openvcu/dbc/codec.hpp"
+#include "openvcu/trace/frame_decoder.hpp"
 
 namespace openvcu::cli {
 namespace {
@@ -44,12 +42,6 @@ std::optional<can::LogReader> openLog(const std::string& path, std::ifstream& st
   return std::move(*openResult);
 }
 
-std::size_t maxSignalCount(const dbc::Database& database) noexcept {
-  std::size_t count = 1;
-  for (const dbc::Message& message : database.messages) count = std::max(count, message.signals.size());
-  return count;
-}
-
 }  // namespace
 
 ExitCode runDecode(const DecodeOptions& options, Streams streams) {
@@ -68,10 +60,8 @@ ExitCode runDecode(const DecodeOptions& options, Streams streams) {
     ++reportedLines;
   });
 
-  const dbc::MessageMatcher matcher(database, options.match);
-  const dbc::DatabaseCodec codecs(database);
+  trace::FrameDecoder decoder(database, options.match);
   FrameWriter writer(database, options.format);
-  std::vector<SignalValue> values(maxSignalCount(database));  // the codec visits each signal at most once
   std::string buffer;
   buffer.reserve(OUTPUT_CHUNK + OUTPUT_CHUNK / 4);
   writer.appendHeader(buffer);
@@ -80,28 +70,15 @@ ExitCode runDecode(const DecodeOptions& options, Streams streams) {
   while (options.limit == 0 || counts.frames < options.limit) {
     std::optional<can::LogRecord> maybeRecord = reader.next();
     if (!maybeRecord) break;
-    if (reader.format() == can::LogFormat::VectorAsc) {
-      // Print the time as the ASC file writes it (the offset, like python-can), not the
-      // reader's header date + offset. timeSeconds holds it exactly enough for 104 days.
-      maybeRecord->frame.timestampNs = std::llround(maybeRecord->timeSeconds * 1e9);
-    }
+    maybeRecord->frame.timestampNs = trace::loggedTimeNs(*maybeRecord, reader.format());  // ASC: the offset
     const can::Frame& frame = maybeRecord->frame;
     if ((frame.flags & can::FLAG_ERROR) != 0) {
       ++counts.errorFrames;
       continue;
     }
-    const std::int32_t messageIndex = matcher.match(frame.id, frame.extended());
-    std::size_t decoded = 0;
-    if (messageIndex != dbc::MessageMatcher::NO_MATCH) {
-      ++counts.matched;
-      if ((frame.flags & can::FLAG_RTR) == 0) {  // a remote request carries no data
-        codecs[static_cast<std::size_t>(messageIndex)].decode(
-            frame.payload(), [&](std::uint32_t signalIndex, const dbc::DecodedValue& value) {
-              values[decoded++] = SignalValue{signalIndex, value};
-            });
-      }
-    }
-    writer.appendFrame(buffer, *maybeRecord, messageIndex, std::span<const SignalValue>(values.data(), decoded));
+    const std::int32_t messageIndex = decoder.match(frame);
+    if (messageIndex != trace::FrameDecoder::NO_MATCH) ++counts.matched;
+    writer.appendFrame(buffer, *maybeRecord, messageIndex, decoder.decode(frame, messageIndex));
     ++counts.frames;
     if (buffer.size() >= OUTPUT_CHUNK) {
       streams.out.write(buffer);
