@@ -22,7 +22,7 @@
 
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/signals/table.hpp"
-#include "stack_connection.hpp"
+#include "common/stack_connection.hpp"
 
 Q_IMPORT_QML_PLUGIN(OpenVcu_ModelsPlugin)
 
