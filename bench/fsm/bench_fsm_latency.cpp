@@ -10,7 +10,7 @@
 // For each of --count samples:
 //   1. sleep a random 2..10 ms (clock_nanosleep on an absolute CLOCK_MONOTONIC deadline), so
 //      that vcu-fsm is asleep on the table's change futex when the change comes;
-//   2. t = monotonicNowNs(); writeBus(trigger, 60 or 40 alternately, t);
+//   2. t = openvcu::clock::monotonicNs(); writeBus(trigger, 60 or 40 alternately, t);
 //   3. wait (SignalTable::waitForChange on the change epoch: no busy loop) until the command
 //      plane of the target has a new update (its update counter grew) with the expected value
 //      (1 after 60, 0 after 40), or 1 s passed (a timeout, counted);
@@ -52,6 +52,7 @@
 #include <thread>
 #include <vector>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/signals/catalog.hpp"
@@ -142,12 +143,12 @@ int main(int argc, char** argv) {
 
   if (idleSeconds > 0) {
     const std::uint32_t before = table.changeEpoch();
-    const std::int64_t start = signals::monotonicNowNs();
+    const std::int64_t start = openvcu::clock::monotonicNs();
     sleepUntil(start + static_cast<std::int64_t>(idleSeconds * static_cast<double>(NS_PER_S)));
     const std::uint32_t after = table.changeEpoch();
     const std::uint32_t moved = (after - before) & 0x7FFF'FFFFu;  // 31 bits, wrapping
     std::printf("idle seconds %.3f epoch_changes %u\n",
-                static_cast<double>(signals::monotonicNowNs() - start) / static_cast<double>(NS_PER_S), moved);
+                static_cast<double>(openvcu::clock::monotonicNs() - start) / static_cast<double>(NS_PER_S), moved);
     return 0;
   }
 
@@ -177,13 +178,13 @@ int main(int argc, char** argv) {
   std::int64_t noiseEnd = 0;
   std::thread noise;
   if (noiseRate > 0) {
-    noiseStart = signals::monotonicNowNs();
+    noiseStart = openvcu::clock::monotonicNs();
     noise = std::thread([&] {
       const auto period = static_cast<std::int64_t>(static_cast<double>(NS_PER_S) / noiseRate);
-      std::int64_t next = signals::monotonicNowNs();
+      std::int64_t next = openvcu::clock::monotonicNs();
       std::uint64_t n = 0;
       while (!stopNoise.load(std::memory_order_relaxed)) {
-        const std::int64_t now = signals::monotonicNowNs();
+        const std::int64_t now = openvcu::clock::monotonicNs();
         table.writeBus(noiseSignals[n % noiseSignals.size()], 8.0, now, 0x71 + static_cast<std::uint16_t>(n % 4),
                        signals::Quality::Valid);
         ++n;
@@ -193,7 +194,7 @@ int main(int argc, char** argv) {
         sleepUntil(next);
       }
     });
-    sleepUntil(signals::monotonicNowNs() + 200 * NS_PER_MS);  // vcu-fsm sees the first noise change before we start
+    sleepUntil(openvcu::clock::monotonicNs() + 200 * NS_PER_MS);  // vcu-fsm sees the first noise change before we start
   }
 
   // ---- samples --------------------------------------------------------------------------
@@ -220,10 +221,10 @@ int main(int argc, char** argv) {
   if (const auto command = table.readCommand(target)) lastUpdates = command->updates;
 
   for (int i = 0; i < count; ++i, high = !high) {
-    sleepUntil(signals::monotonicNowNs() + gap(random) * 1000);
+    sleepUntil(openvcu::clock::monotonicNs() + gap(random) * 1000);
     const double value = high ? 60.0 : 40.0;
     const double expected = high ? 1.0 : 0.0;
-    const std::int64_t t = signals::monotonicNowNs();
+    const std::int64_t t = openvcu::clock::monotonicNs();
     table.writeBus(trigger, value, t, 0xF3, signals::Quality::Valid);
     const std::int64_t giveUp = t + static_cast<std::int64_t>(timeoutMs) * NS_PER_MS;
     bool done = false;
@@ -232,7 +233,7 @@ int main(int argc, char** argv) {
       if (const auto command = table.readCommand(target); command && command->updates != lastUpdates) {
         lastUpdates = command->updates;
         if (command->value == expected) {
-          const std::int64_t seen = signals::monotonicNowNs();
+          const std::int64_t seen = openvcu::clock::monotonicNs();
           latencies.push_back(static_cast<double>(command->timestampNs - t) / 1000.0);
           observed.push_back(static_cast<double>(seen - t) / 1000.0);
           if (!dumpPath.empty()) rows.push_back({value, command->timestampNs - t, seen - t});
@@ -241,7 +242,7 @@ int main(int argc, char** argv) {
         }
         ++unexpected;  // a command with the other value: not ours, keep waiting
       }
-      const std::int64_t now = signals::monotonicNowNs();
+      const std::int64_t now = openvcu::clock::monotonicNs();
       if (now >= giveUp) break;
       (void)table.waitForChange(epoch, std::chrono::nanoseconds(giveUp - now));
     }
@@ -254,7 +255,7 @@ int main(int argc, char** argv) {
   if (noise.joinable()) {
     stopNoise.store(true);
     noise.join();
-    noiseEnd = signals::monotonicNowNs();
+    noiseEnd = openvcu::clock::monotonicNs();
   }
 
   printDistribution("latency_us", latencies);

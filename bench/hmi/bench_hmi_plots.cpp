@@ -20,6 +20,7 @@
 #include <optional>
 #include <vector>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/signals/table.hpp"
 #include "common/stack_connection.hpp"
@@ -75,10 +76,10 @@ int main(int argc, char** argv) {
     stack = std::move(*connection);
     writer.setInterval(16);
     QObject::connect(&writer, &QTimer::timeout, [&] {
-      const double t = static_cast<double>(openvcu::signals::monotonicNowNs()) / 1e9;
+      const double t = static_cast<double>(openvcu::clock::monotonicNs()) / 1e9;
       for (std::size_t i = 0; i < slots.size(); ++i) {
         table->writeBus(slots[i], 500 + 100 * std::sin(t * static_cast<double>(i + 1)),
-                        openvcu::signals::monotonicNowNs(), 0xF3, openvcu::signals::Quality::Valid);
+                        openvcu::clock::monotonicNs(), 0xF3, openvcu::signals::Quality::Valid);
       }
     });
     writer.start();

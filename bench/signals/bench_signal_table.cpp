@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
 
@@ -74,9 +75,9 @@ void report(const char* what, double nsPerOp) {
 /// Runs `operation(i)` `count` times; ns per call.
 template <typename Operation>
 double timePerOp(std::uint64_t count, Operation&& operation) {
-  const std::int64_t start = monotonicNowNs();
+  const std::int64_t start = openvcu::clock::monotonicNs();
   for (std::uint64_t i = 0; i < count; ++i) operation(i);
-  return static_cast<double>(monotonicNowNs() - start) / static_cast<double>(count);
+  return static_cast<double>(openvcu::clock::monotonicNs() - start) / static_cast<double>(count);
 }
 
 volatile double g_sink = 0;  // keeps reads from being optimised away
@@ -207,7 +208,7 @@ void notificationLatency(SignalTable& table, const Catalog& catalog, const std::
     g_shared->ready.store(1);
     for (;;) {
       const std::uint32_t next = waiting.waitForChange(epoch, std::chrono::milliseconds(100));
-      const std::int64_t wokeNs = monotonicNowNs();
+      const std::int64_t wokeNs = openvcu::clock::monotonicNs();
       if (g_shared->stop.load() != 0) break;
       if (next == epoch) continue;
       epoch = next;
@@ -229,7 +230,7 @@ void notificationLatency(SignalTable& table, const Catalog& catalog, const std::
   for (std::uint64_t i = 0; i < options.notifications; ++i) {
     state = state * 6364136223846793005ULL + 1442695040888963407ULL;
     sleepNs(200 * NS_PER_US + static_cast<std::int64_t>((state >> 33) % (200 * NS_PER_US)));
-    table.writeCommand(NOTIFY_SLOT, static_cast<double>(i), monotonicNowNs(), 1);
+    table.writeCommand(NOTIFY_SLOT, static_cast<double>(i), openvcu::clock::monotonicNs(), 1);
   }
   sleepNs(10 * NS_PER_MS);
   g_shared->stop.store(1);

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/events.hpp"
 
@@ -79,7 +80,7 @@ int datagram(const std::string& address, const std::string& instance, const std:
   for (int i = 0; i < count; ++i) {
     const std::int64_t id = 1000 + i;
     const ipc::CommandRequest request{0,   id, "vcu-hmi", ipc::CommandKind::OperatorSwitch, key,
-                                      value, "",        ipc::monotonicNs() + 10'000'000'000};
+                                      value, "",        openvcu::clock::monotonicNs() + 10'000'000'000};
     const ipc::CommandAck ack{0, id, "vcu", "vcu-fsm", true, "", true};
     for (const auto& packet :
          {lcmDatagram(ipc::channelName(instance, ipc::EventKind::Command), ipc::encodeCommandRequest(request),
@@ -121,7 +122,7 @@ int flood(const std::string& instance, const std::string& service, int count, co
     }
     if ((pfd.revents & POLLOUT) != 0 && sentCount < count) {
       const ipc::CommandRequest request{0,   sentCount + 1, "flood", ipc::CommandKind::SetSignal, key,
-                                        1.0, "",            ipc::monotonicNs() + 30'000'000'000};
+                                        1.0, "",            openvcu::clock::monotonicNs() + 30'000'000'000};
       const auto bytes = ipc::encodeCommandRequest(request);
       if (::send(fd, bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size())) {
         ++sentCount;

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "integration_support.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/can_links/sim_link.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/ipc/event_bus.hpp"
@@ -340,10 +341,10 @@ TEST_CASE("when the heartbeat of the fsm stops, can-tx commands the safe values 
   REQUIRE_STATUS(table);
   const auto controlWord = catalog->indexOf("Vehicle_Control_Unit.HC1_Demands.ControlWord");
   REQUIRE(controlWord);
-  table->writeCommand(*controlWord, 5, signals::monotonicNowNs(), 3);
+  table->writeCommand(*controlWord, 5, openvcu::clock::monotonicNs(), 3);
   std::this_thread::sleep_for(1500ms);  // longer than a heartbeat period: the fsm is seen alive
 
-  const std::int64_t killedNs = signals::monotonicNowNs();
+  const std::int64_t killedNs = openvcu::clock::monotonicNs();
   REQUIRE((*fsm)->signal(SIGKILL));
   listener.listen(5s);
   for (int i = 0; i < 20; ++i) (void)events->handle(10ms);

@@ -11,6 +11,7 @@
 #include <climits>
 #include <cstring>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/service/bus_ports.hpp"
@@ -101,7 +102,7 @@ struct CanRxAppImpl final : ReceiverOutputs {
     if (!publisher.publish(sample)) ++buses[bus].publishFailures;
   }
   void forward(std::size_t toBus, const can::Frame& frame) noexcept override {
-    if (!publish(buses[toBus].sendRequestsOut, frame, signals::monotonicNowNs(), toBus)) ++buses[toBus].forwardFailures;
+    if (!publish(buses[toBus].sendRequestsOut, frame, clock::monotonicNs(), toBus)) ++buses[toBus].forwardFailures;
   }
   bool transmit(std::size_t bus, const can::Frame& frame) noexcept override {
     BusIo& io = buses[bus];
@@ -109,7 +110,7 @@ struct CanRxAppImpl final : ReceiverOutputs {
       ++io.transmitFailures;
       return false;
     }
-    (void)publish(io.sent, frame, signals::monotonicNowNs(), bus);
+    (void)publish(io.sent, frame, clock::monotonicNs(), bus);
     return true;
   }
   void fault(const ipc::FaultEvent& event) override {
@@ -159,7 +160,7 @@ struct CanRxAppImpl final : ReceiverOutputs {
   void onTick() noexcept {
     std::uint64_t expirations = 0;
     [[maybe_unused]] const auto got = ::read(deadlineFd, &expirations, sizeof expirations);
-    const std::int64_t now = signals::monotonicNowNs();
+    const std::int64_t now = clock::monotonicNs();
     receiver->onTick(now);
     if (now >= nextWindowNs) {
       receiver->rollPeriodWindow();
@@ -172,7 +173,7 @@ struct CanRxAppImpl final : ReceiverOutputs {
     const config::VehicleConfig& vehicle = runtime.config();
     auto receiveResult = loadReceiveConfig(vehicle);
     if (!receiveResult) return receiveResult.error();
-    const std::int64_t start = signals::monotonicNowNs();
+    const std::int64_t start = clock::monotonicNs();
     auto receiverResult =
         Receiver::create(vehicle, std::move(*receiveResult), runtime.catalog(), runtime.table(), *this, start);
     if (!receiverResult) return receiverResult.error();

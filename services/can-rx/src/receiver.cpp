@@ -479,7 +479,7 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
     }
   }
   for (const dbc::Message& message : database.messages) {
-    if (message.transmitter == vehicle.node && message.extended && !message.pseudo) {
+    if (config::sentBy(message, vehicle.node) && message.extended && !message.pseudo) {
       impl->ownAddress[j1939::Id::fromCanId(message.id).sourceAddress] = true;
     }
   }
@@ -499,7 +499,7 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
     for (const std::size_t messageIndex : busConfig.messages) {
       impl->busByMessage[messageIndex] = static_cast<std::int32_t>(b);
       const dbc::Message& message = database.messages[messageIndex];
-      if (message.transmitter == vehicle.node) continue;
+      if (config::directionOf(vehicle, message) == signals::SignalDirection::Transmitted) continue;  // can-tx's
       MessageState state;
       state.messageIndex = messageIndex;
       state.bus = b;

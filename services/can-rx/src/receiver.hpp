@@ -6,7 +6,7 @@
 //
 //   canrx::Receiver sut(vehicle, receiveConfig, catalog, table, outputs);
 //   sut.onFrame(busIndex, receivedFrame);      // per frame: noexcept, allocation-free
-//   sut.onTick(monotonicNowNs);                // timeouts (staleness, TP), bus load
+//   sut.onTick(nowNs);                         // timeouts (staleness, TP), bus load
 //
 // Decisions (services/can-rx/README.md):
 //   - a frame of a message this node transmits is published on "rx" but not decoded:

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <optional>
 
+#include "openvcu/core/clock.hpp"
+#include "openvcu/core/text.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/j1939/request.hpp"
@@ -22,15 +24,10 @@
 namespace openvcu::cantx {
 namespace {
 
-constexpr std::string_view GROUP_KEYS = "internal.tx.";
 constexpr std::chrono::milliseconds WATCH_PERIOD{100};
 constexpr std::int64_t NS_PER_MS = 1'000'000;
 
-std::string number(double value) {
-  std::ostringstream text;
-  text << value;
-  return text.str();
-}
+using text::number;
 
 }  // namespace
 
@@ -77,14 +74,14 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
     }
     ipc::FrameSample& sample = maybeLoan->sample();
     sample.frame = frame;
-    sample.monotonicNs = signals::monotonicNowNs();
+    sample.monotonicNs = clock::monotonicNs();
     sample.hardwareNs = 0;
     sample.busIndex = static_cast<std::uint16_t>(bus);
     if (!publisher.publish(std::move(*maybeLoan))) io.publishFailures.fetch_add(1, std::memory_order_relaxed);
     return status;
   }
 
-  std::int64_t monotonicNs() noexcept override { return signals::monotonicNowNs(); }
+  std::int64_t monotonicNs() noexcept override { return clock::monotonicNs(); }
   std::int64_t realtimeNs() noexcept override {
     timespec now{};
     ::clock_gettime(CLOCK_REALTIME, &now);
@@ -123,7 +120,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   }
 
   void applyOverrides() {
-    const std::int64_t now = signals::monotonicNowNs();
+    const std::int64_t now = clock::monotonicNs();
     for (const auto& [key, value] : overlay.overrides) {
       if (const auto index = runtime.catalog().indexOf(key)) {
         runtime.table().setOverride(*index, value, now, CAN_TX_WRITER);
@@ -146,7 +143,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       if (!portsResult) return portsResult.error();
       static_cast<service::BusPorts&>(buses.emplace_back()) = std::move(*portsResult);
     }
-    startNs = signals::monotonicNowNs();
+    startNs = clock::monotonicNs();
     auto schedulerResult = Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *this, *this,
                                              startNs);
     if (!schedulerResult) return schedulerResult.error();
@@ -216,11 +213,17 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   }
 
   service::CommandPolicy commandPolicy() {
-    service::CommandPolicy policy;
-    policy.owns = [this](std::string_view key) { return key.starts_with(GROUP_KEYS) || scheduledSignal(key); };
+    // The keys the catalog gives can-tx (shared/config/catalog.hpp): the signals this VCU
+    // transmits, the send groups and its heartbeat.
+    service::CommandPolicy policy = service::CommandPolicy::byOwner(runtime.catalog(), CAN_TX_WRITER);
     policy.veto = [this](const ipc::CommandRequest& request,
                          const signals::SignalInfo& info) -> std::optional<std::string> {
-      if (info.key.starts_with(GROUP_KEYS)) return std::nullopt;
+      if (auto refusal = service::statusRefusal(info)) return refusal;
+      if (info.direction == signals::SignalDirection::Internal) return std::nullopt;  // a send group
+      if (!scheduledSignal(info.key)) {
+        return "'" + info.key + "' is not sent: its message " + info.message +
+               " is not in the transmit schedule (vcu schedule add " + info.message + " MS)";
+      }
       if (request.kind == ipc::CommandKind::SetSignal || request.kind == ipc::CommandKind::OperatorSwitch) {
         return "transmitted signals are commanded by the FSM; an operator sets an override (vcu signal set "
                "--override) or the schedule default (vcu schedule default)";
@@ -257,7 +260,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   // ---- writer heartbeats (loop thread) ------------------------------------------------------
 
   void watchWriters() {
-    const std::int64_t now = signals::monotonicNowNs();
+    const std::int64_t now = clock::monotonicNs();
     signals::SignalTable& table = runtime.table();
     for (std::size_t w = 0; w < schedule.writers.size(); ++w) {
       const WatchedWriter& writer = schedule.writers[w];

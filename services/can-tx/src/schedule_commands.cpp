@@ -1,18 +1,15 @@
 #include "schedule_commands.hpp"
 
 #include <cmath>
-#include <sstream>
+
+#include "openvcu/core/text.hpp"
 
 namespace openvcu::cantx {
 namespace {
 
 constexpr std::int64_t NS_PER_MS = 1'000'000;
 
-std::string number(double value) {
-  std::ostringstream text;
-  text << value;
-  return text.str();
-}
+using text::number;
 
 MessageChange& changeOf(Overlay& target, const std::string& name) {
   for (MessageChange& change : target.messages) {

@@ -457,8 +457,7 @@ Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig
   for (std::size_t m = 0; m < vehicle.database.messages.size(); ++m) {
     const dbc::Message& message = vehicle.database.messages[m];
     if (!message.extended || message.pseudo) continue;
-    const auto senders = message.transmitters();
-    if (std::find(senders.begin(), senders.end(), vehicle.node) == senders.end()) continue;
+    if (!config::sentBy(message, vehicle.node)) continue;
     if (j1939::pgnOf(message.id) == j1939::PGN_TIME_DATE && !impl->timeDateMessage) {
       impl->timeDateMessage = m;
     }

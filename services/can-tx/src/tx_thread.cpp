@@ -13,17 +13,12 @@
 #include <cstring>
 #include <ctime>
 #include <type_traits>
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::cantx {
 namespace {
 
 constexpr std::int64_t SERVICE_PERIOD_NS = 100'000'000;  ///< link housekeeping every 100 ms
-
-std::int64_t monotonicNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 /// Sleeps while *word == expected, at most until the absolute CLOCK_MONOTONIC `deadlineNs`.
 void futexWaitUntil(std::atomic<std::uint32_t>& word, std::uint32_t expected, std::int64_t deadlineNs) noexcept {
@@ -133,17 +128,17 @@ void TxThread::service(std::int64_t nowNs) noexcept {
 void TxThread::run() noexcept {
   // The timer slack of a normal thread (50 us) would land in every period: ask for 1 ns.
   ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
-  m_nextServiceNs = monotonicNs();
+  m_nextServiceNs = clock::monotonicNs();
   while (!m_stopping.load(std::memory_order_acquire)) {
     const std::uint32_t seen = m_wake.load(std::memory_order_acquire);
-    std::int64_t now = monotonicNs();
+    std::int64_t now = clock::monotonicNs();
     TxCommand command;
     while (m_inbox.pop(command)) apply(command, now);
     m_scheduler.run(now);
-    now = monotonicNs();
+    now = clock::monotonicNs();
     if (now >= m_nextServiceNs) service(now);
     const std::int64_t deadline = std::min(m_scheduler.nextDeadlineNs(), m_nextServiceNs);
-    if (deadline > monotonicNs()) {
+    if (deadline > clock::monotonicNs()) {
       m_sleeping.store(true, std::memory_order_seq_cst);
       // a post between the load of `seen` and here changed the word: the wait returns at once
       futexWaitUntil(m_wake, seen, deadline);

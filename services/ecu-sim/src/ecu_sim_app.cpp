@@ -7,6 +7,7 @@
 #include <thread>
 #include <vector>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/can_links/open_link.hpp"
 #include "vehicle_model.hpp"
 
@@ -14,12 +15,6 @@ namespace openvcu::ecusim {
 namespace {
 
 constexpr std::string_view SILENT_PREFIX = "silent.";
-
-std::int64_t realtimeNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 void sleepUntil(std::int64_t monotonicNs) noexcept {
   timespec until{};
@@ -117,7 +112,7 @@ struct EcuSimAppImpl {
         model->setFault(*fault, on);
       }
       ipc::FaultEvent event;
-      event.timestampNs = realtimeNs();
+      event.timestampNs = clock::realtimeNs();
       event.name = "sim." + name;
       event.source = runtime.program();
       event.severity = ipc::FaultSeverity::Warning;
@@ -133,10 +128,10 @@ struct EcuSimAppImpl {
     const auto send = [this](std::size_t busIndex, const can::Frame& frame) {
       if (links[busIndex]->send(frame) != can::SendStatus::Sent) sendFailures.fetch_add(1, std::memory_order_relaxed);
     };
-    std::int64_t nextTick = signals::monotonicNowNs();
+    std::int64_t nextTick = clock::monotonicNs();
     bus->start(nextTick);
     while (!stopping.load(std::memory_order_relaxed)) {
-      const std::int64_t now = signals::monotonicNowNs();
+      const std::int64_t now = clock::monotonicNs();
       for (auto& link : links) {
         std::size_t count = 0;
         while ((count = link->receive(batch)) > 0) {
@@ -151,7 +146,7 @@ struct EcuSimAppImpl {
           const auto level = runtime.table().readBus(*wakeIndex);
           wake = level && level->updates > 0 && level->value >= 0.5;
         }
-        model->step(now, realtimeNs(), wake, send);
+        model->step(now, clock::realtimeNs(), wake, send);
         nextTick += ((now - nextTick) / config.tickNs + 1) * config.tickNs;
         reportSafety();
       }
@@ -166,7 +161,7 @@ struct EcuSimAppImpl {
     if (!change) return;
     const bool ok = *change == j1939::SafetyResult::Ok;
     ipc::FaultEvent event;
-    event.timestampNs = realtimeNs();
+    event.timestampNs = clock::realtimeNs();
     event.name = "sim.vic_safety";
     event.source = runtime.program();
     event.severity = ipc::FaultSeverity::Error;

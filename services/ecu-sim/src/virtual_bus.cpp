@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "openvcu/config/catalog.hpp"
+
 namespace openvcu::ecusim {
 
 Result<VirtualBus> VirtualBus::create(const config::VehicleConfig& vehicle) {
@@ -14,7 +16,7 @@ Result<VirtualBus> VirtualBus::create(const config::VehicleConfig& vehicle) {
     for (const std::size_t index : vehicle.buses[b].messages) {
       const dbc::Message& message = vehicle.database.messages[index];
       if (message.pseudo || message.length > can::MAX_DATA_LENGTH) continue;
-      if (message.transmitter == vehicle.node) {
+      if (config::sentBy(message, vehicle.node)) {
         Rx rx;
         rx.messageIndex = index;
         rx.id = message.id;

@@ -15,6 +15,7 @@
 
 #include "reload_file.hpp"
 #include "reload_worker.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/fsm/engine.hpp"
 #include "openvcu/fsm/machine.hpp"
 
@@ -26,14 +27,6 @@ namespace {
 constexpr std::chrono::milliseconds LONGEST_SLEEP{250};
 /// The reload diagnostics quote the file: they go to stderr only (journal), in one burst.
 constexpr std::uint32_t RELOAD_LOG_BURST = 200;
-/// Keys vcu-fsm answers commands for: the internal signals except can-tx's send groups and
-/// vcu-gpio's keys (internal.gpio.* and the signals of input lines).
-
-std::int64_t realtimeNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 }  // namespace
 
@@ -92,7 +85,7 @@ struct FsmAppImpl {
   /// out of waitForChange at once.
   void wakeEngine() {
     if (const auto index = runtime.catalog().indexOf("internal.fsm.reloads")) {
-      runtime.table().writeBus(*index, static_cast<double>(reloadRequests), signals::monotonicNowNs(), FSM_WRITER,
+      runtime.table().writeBus(*index, static_cast<double>(reloadRequests), clock::monotonicNs(), FSM_WRITER,
                                signals::Quality::Valid);
     }
   }
@@ -116,7 +109,7 @@ struct FsmAppImpl {
     if (!slotsResult) return slotsResult.error();
     runtime.log().info(std::to_string(machineResult->states.size()) + " states from " + vehicle.fsmFile);
     engine.emplace(std::move(*machineResult), runtime.catalog(), access, std::move(*slotsResult));
-    engine->start(signals::monotonicNowNs(), realtimeNs(), StartMode::Resume);
+    engine->start(clock::monotonicNs(), clock::realtimeNs(), StartMode::Resume);
     publishOutputs();
     mirrorCounters();
 
@@ -164,12 +157,12 @@ struct FsmAppImpl {
         watch = watchMachine();  // the new machine reads other signals
         continue;
       }
-      engine->step(signals::monotonicNowNs(), realtimeNs());
+      engine->step(clock::monotonicNs(), clock::realtimeNs());
       publishOutputs();
       mirrorCounters();
       // Damage met during the step is repaired before sleeping, not after the next wake-up.
       if (table.damageCount() != seenDamage) continue;
-      const std::int64_t now = signals::monotonicNowNs();
+      const std::int64_t now = clock::monotonicNs();
       const std::int64_t deadline = engine->nextDeadlineNs();
       std::chrono::nanoseconds timeout = LONGEST_SLEEP;
       if (deadline != NO_DEADLINE) timeout = std::min(timeout, std::chrono::nanoseconds(std::max<std::int64_t>(deadline - now, 0)));
@@ -186,7 +179,7 @@ struct FsmAppImpl {
     seenDamage = damage;
     watch = {};  // leaves the entry untouched: it may be another process's by now
     watch = watchMachine();
-    const std::size_t restored = engine->restoreTable(signals::monotonicNowNs(), realtimeNs());
+    const std::size_t restored = engine->restoreTable(clock::monotonicNs(), clock::realtimeNs());
     runtime.log().warning("the signal table lost its values: state '" + engine->stateName() + "' and " +
                           std::to_string(restored) + " commands written back; inputs not received since keep " +
                           "their last value for " + formatDuration(DAMAGE_GRACE_NS));
@@ -202,11 +195,11 @@ struct FsmAppImpl {
     const std::int64_t deadline = pendingDeadlineNs;
     lock.unlock();
     Switched result;
-    const std::int64_t now = signals::monotonicNowNs();
+    const std::int64_t now = clock::monotonicNs();
     if (now > deadline) {
       result.expired = true;  // a command past its deadline is never applied
     } else {
-      result.status = engine->replace(std::move(machine), now, realtimeNs());
+      result.status = engine->replace(std::move(machine), now, clock::realtimeNs());
     }
     lock.lock();
     reloadResult = std::move(result);

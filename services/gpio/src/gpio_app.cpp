@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "controller.hpp"
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::gpio {
 namespace {
@@ -65,7 +66,7 @@ struct GpioAppImpl {
     }
     if (inputThread.joinable()) inputThread.join();
     if (outputThread.joinable()) outputThread.join();  // within LONGEST_SLEEP_NS
-    if (controller) controller->safeState(signals::monotonicNowNs());
+    if (controller) controller->safeState(clock::monotonicNs());
     if (chip) chip->release();
     if (stopFd >= 0) ::close(stopFd);
   }
@@ -90,8 +91,8 @@ struct GpioAppImpl {
                                                });
     if (!controllerResult) return controllerResult.error();
     controller = std::move(*controllerResult);
-    if (Status started = controller->start(signals::monotonicNowNs()); !started) return started;
-    controller->updateOutputs(signals::monotonicNowNs());
+    if (Status started = controller->start(clock::monotonicNs()); !started) return started;
+    controller->updateOutputs(clock::monotonicNs());
     if (Status answering = runtime.answerCommands(gpioCommandPolicy(runtime.catalog(), map)); !answering) return answering.error();
     registerCounters(map);
     runtime.setStatus(std::to_string(map.lines.size()) + " lines on the " + std::string(chip->kind()) + " back end");
@@ -135,11 +136,11 @@ struct GpioAppImpl {
         seenDamage = damage;
         watch = {};
         watch = runtime.table().watch(indexes);
-        controller->republish(signals::monotonicNowNs());
+        controller->republish(clock::monotonicNs());
       }
       const std::uint32_t epoch = watch.epoch();
       chip->tableChanged();
-      const std::int64_t now = signals::monotonicNowNs();
+      const std::int64_t now = clock::monotonicNs();
       controller->updateOutputs(now);
       const std::int64_t deadline = controller->nextOutputDeadlineNs();
       std::int64_t timeout = LONGEST_SLEEP_NS;
@@ -156,7 +157,7 @@ struct GpioAppImpl {
     watched.push_back(pollfd{stopFd, POLLIN, 0});
     std::array<LineEvent, 32> batch{};
     while (!stopping.load(std::memory_order_relaxed)) {
-      const std::int64_t now = signals::monotonicNowNs();
+      const std::int64_t now = clock::monotonicNs();
       controller->updateInputs(now);
       const std::int64_t deadline = controller->nextInputDeadlineNs();
       int timeoutMs = -1;

@@ -17,6 +17,7 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::gpio {
 namespace {
@@ -116,7 +117,7 @@ class GpiodChip final : public Chip {
     const unsigned int wanted = static_cast<unsigned int>(std::min(out.size(), events.size()));
     const int count = gpiod_line_event_read_fd_multiple(fd, events.data(), wanted);
     if (count <= 0) return 0;  // EAGAIN: nothing waiting
-    const std::int64_t now = signals::monotonicNowNs();
+    const std::int64_t now = clock::monotonicNs();
     for (int i = 0; i < count; ++i) {
       const gpiod_line_event& event = events[static_cast<std::size_t>(i)];
       std::int64_t stamp = static_cast<std::int64_t>(event.ts.tv_sec) * 1'000'000'000 + event.ts.tv_nsec;

@@ -13,6 +13,7 @@
 #include <mutex>
 
 #include "chip.hpp"
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::gpio {
 namespace {
@@ -74,7 +75,7 @@ class SimChip final : public Chip {
       if (level == static_cast<bool>(m_levels[i])) continue;
       m_levels[i] = level;
       if (m_head - m_tail == m_queue.size()) ++m_tail;  // full: the oldest edge goes (counted by the caller as a gap)
-      m_queue[m_head % m_queue.size()] = LineEvent{i, level, signals::monotonicNowNs()};
+      m_queue[m_head % m_queue.size()] = LineEvent{i, level, clock::monotonicNs()};
       ++m_head;
       any = true;
     }

@@ -1,3 +1,4 @@
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 
 #include <dirent.h>
@@ -97,12 +98,6 @@ std::string commandRoot() {
 
 std::string commandSocketDir(std::string_view instance) {
   return commandRoot() + "/" + std::string(instance);
-}
-
-std::int64_t monotonicNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
 }
 
 std::optional<std::uint32_t> groupId(const std::string& name) {
@@ -449,7 +444,7 @@ std::vector<std::string> CommandClient::services() const {
 
 Result<CommandAck> CommandClient::send(CommandRequest request, std::chrono::nanoseconds timeout) {
   const std::int64_t deadline =
-      request.deadlineNs > 0 ? request.deadlineNs : monotonicNs() + std::max<std::int64_t>(timeout.count(), 1);
+      request.deadlineNs > 0 ? request.deadlineNs : clock::monotonicNs() + std::max<std::int64_t>(timeout.count(), 1);
   if (request.requestId == 0) request.requestId = randomRequestId();
   request.deadlineNs = deadline;
   const std::vector<std::uint8_t> bytes = encodeCommandRequest(request);
@@ -471,7 +466,7 @@ Result<CommandAck> CommandClient::send(CommandRequest request, std::chrono::nano
   std::vector<std::string> notOwners;
   std::vector<pollfd> fds(services.size());
   while (open > 0) {
-    const std::int64_t left = deadline - monotonicNs();
+    const std::int64_t left = deadline - clock::monotonicNs();
     if (left <= 0) break;
     for (std::size_t i = 0; i < services.size(); ++i) {
       fds[i] = pollfd{waiting[i] ? services[i].fd.get() : -1, POLLIN, 0};

@@ -1,3 +1,4 @@
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 
@@ -61,14 +62,8 @@ namespace {
 /// log records; 512 small events cost nothing until they are actually queued.
 constexpr int SUBSCRIPTION_QUEUE_CAPACITY = 512;
 
-std::int64_t realtimeNowNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-
 std::int64_t stampOrNow(std::int64_t timestampNs) noexcept {
-  return timestampNs != 0 ? timestampNs : realtimeNowNs();
+  return timestampNs != 0 ? timestampNs : clock::realtimeNs();
 }
 
 bool fitsArray(std::size_t size) noexcept {

@@ -1,3 +1,4 @@
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/request_stream.hpp"
 
@@ -18,12 +19,6 @@ namespace {
 constexpr auto SAMPLE_SIZE = static_cast<std::uint32_t>(sizeof(FrameSample));
 constexpr auto SAMPLE_ALIGNMENT = static_cast<std::uint32_t>(alignof(FrameSample));
 
-std::int64_t monotonicNowNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-
 Status checkTopic(const FrameTopic& topic) {
   if (!Runtime::initialized()) {
     return Error{"cannot open frame stream " + topic.toString() + ": call ipc::Runtime::init first"};
@@ -41,7 +36,7 @@ void stamp(FramePublisherImpl& publisher, FrameSample& sample) noexcept {
   sample.sequence = publisher.nextSequence++;
   sample.senderId = publisher.senderId;
   sample.busNameHash = publisher.busNameHash;
-  if (sample.monotonicNs == 0) sample.monotonicNs = monotonicNowNs();
+  if (sample.monotonicNs == 0) sample.monotonicNs = clock::monotonicNs();
 }
 
 std::atomic<std::uint32_t> g_publisherCount{0};
@@ -255,7 +250,7 @@ bool RequestPublisher::publish(const RequestSample& sample) noexcept {
   chunk->sequence = m_impl->nextSequence++;
   chunk->senderId = m_impl->senderId;
   chunk->busNameHash = m_impl->busNameHash;
-  if (chunk->monotonicNs == 0) chunk->monotonicNs = monotonicNowNs();
+  if (chunk->monotonicNs == 0) chunk->monotonicNs = clock::monotonicNs();
   m_impl->port.publish(payload);
   return true;
 }

@@ -10,6 +10,7 @@
 #include <optional>
 #include <unordered_map>
 
+#include "openvcu/config/catalog.hpp"
 #include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/j1939/id.hpp"
@@ -465,8 +466,8 @@ class Importer {
       return nullptr;
     }
     if (!m_options.node.empty()) {
-      const std::vector<std::string> transmitters = message->transmitters();
-      if (std::find(transmitters.begin(), transmitters.end(), m_options.node) == transmitters.end()) {
+      if (!config::sentBy(*message, m_options.node)) {
+        const std::vector<std::string> transmitters = message->transmitters();
         m_diagnostics.warning(m_line, "message '" + name + "' is transmitted by " +
                                           (transmitters.empty() ? std::string("no node") : transmitters.front()) +
                                           ", not by " + m_options.node);

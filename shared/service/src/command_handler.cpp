@@ -1,3 +1,4 @@
+#include "openvcu/core/clock.hpp"
 #include "openvcu/service/command_handler.hpp"
 
 #include <algorithm>
@@ -174,7 +175,7 @@ CommandVerdict checkCommand(const ipc::CommandRequest& request, const signals::C
 }
 
 bool CommandReply::expired() const noexcept {
-  return ipc::monotonicNs() > m_deadlineNs;
+  return clock::monotonicNs() > m_deadlineNs;
 }
 
 void CommandReply::expire() {
@@ -219,7 +220,7 @@ void CommandHandler::onReadable() {
   std::stable_sort(m_batch.begin(), m_batch.end(), [](const ipc::ReceivedCommand& a, const ipc::ReceivedCommand& b) {
     return priority(a.request.kind) < priority(b.request.kind);
   });
-  const std::int64_t now = ipc::monotonicNs();
+  const std::int64_t now = clock::monotonicNs();
   // Forget issuers quiet for 10 s (their bucket is full again anyway).
   if (m_buckets.size() > 64) {
     std::erase_if(m_buckets, [now](const auto& entry) { return now - entry.second.refilledNs > 10'000'000'000; });
@@ -257,7 +258,7 @@ void CommandHandler::onReadable() {
 }
 
 bool CommandHandler::apply(const ipc::CommandRequest& request, signals::SignalIndex index) noexcept {
-  const std::int64_t now = signals::monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   switch (request.kind) {
     case ipc::CommandKind::SetSignal:
     case ipc::CommandKind::OperatorSwitch:
@@ -293,7 +294,7 @@ CommandVerdict CommandHandler::decide(const ipc::CommandRequest& request, std::o
     }
     return verdict;
   }
-  if (auto problem = deadlineProblem(request, ipc::monotonicNs())) {
+  if (auto problem = deadlineProblem(request, clock::monotonicNs())) {
     if (request.deadlineNs > 0 && problem->starts_with("expired")) ++m_expired;
     verdict = CommandVerdict{CommandDecision::Refused, std::move(*problem), verdict.index};
   } else if (verdict.decision == CommandDecision::Accepted && isDeferred(m_policy, request.kind)) {

@@ -1,3 +1,4 @@
+#include "openvcu/core/clock.hpp"
 #include "openvcu/service/heartbeat.hpp"
 
 #include <unistd.h>
@@ -129,7 +130,7 @@ void HeartbeatPublisher::beat() {
       const auto maybeBus = m_table->readBus(*m_slot);
       m_tableCount = (maybeBus && maybeBus->updates > 0) ? maybeBus->value + 1.0 : 1.0;
     }
-    m_table->writeBus(*m_slot, *m_tableCount, signals::monotonicNowNs(), m_writer, signals::Quality::Valid);
+    m_table->writeBus(*m_slot, *m_tableCount, clock::monotonicNs(), m_writer, signals::Quality::Valid);
     *m_tableCount += 1.0;
   }
 }

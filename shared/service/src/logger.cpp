@@ -1,3 +1,4 @@
+#include "openvcu/core/clock.hpp"
 #include "openvcu/service/logger.hpp"
 
 #include <time.h>
@@ -44,12 +45,6 @@ std::string oneLine(std::string_view text) {
 }
 
 }  // namespace
-
-std::int64_t realtimeNowNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 std::string formatUtc(std::int64_t realtimeNs) {
   const std::int64_t seconds =
@@ -109,12 +104,12 @@ std::uint64_t Logger::suppressed() const noexcept {
 void Logger::log(ipc::LogLevel level, std::string_view text) {
   std::lock_guard<std::mutex> lock(m_mutex);
   if (level < m_options.threshold) return;
-  if (!m_limiter.allow(signals::monotonicNowNs())) {
+  if (!m_limiter.allow(clock::monotonicNs())) {
     ++m_suppressed;
     ++m_suppressedUnreported;
     return;
   }
-  const std::int64_t now = realtimeNowNs();
+  const std::int64_t now = clock::realtimeNs();
   if (m_suppressedUnreported > 0) {
     emit(ipc::LogLevel::Warning, std::to_string(m_suppressedUnreported) + " log lines suppressed by the rate limit",
          now);

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <climits>
 #include <ctime>
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::signals::detail {
 
@@ -29,12 +30,6 @@ void futexWakeAll(std::uint32_t* word) noexcept {
 
 }  // namespace
 
-std::int64_t monotonicNs() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * NS_PER_SECOND + now.tv_nsec;
-}
-
 void notifyChange(std::uint32_t& word) noexcept {
   std::atomic_ref<std::uint32_t> change(word);
   // Release: a waiter that sees the new epoch (acquire) also sees the value just written.
@@ -52,13 +47,13 @@ std::uint32_t currentEpoch(std::uint32_t& word) noexcept {
 std::uint32_t waitForEpochChange(std::uint32_t& word, std::uint32_t lastEpoch,
                                  std::chrono::nanoseconds timeout) noexcept {
   std::atomic_ref<std::uint32_t> change(word);
-  const std::int64_t start = monotonicNs();
+  const std::int64_t start = clock::monotonicNs();
   const std::int64_t timeoutNs = timeout.count() < 0 ? 0 : timeout.count();
   const std::int64_t deadline = timeoutNs > INT64_MAX - start ? INT64_MAX : start + timeoutNs;
   for (;;) {
     std::uint32_t seen = change.load(std::memory_order_acquire);
     if ((seen >> 1) != lastEpoch) return seen >> 1;
-    const std::int64_t remaining = deadline - monotonicNs();
+    const std::int64_t remaining = deadline - clock::monotonicNs();
     if (remaining <= 0) return lastEpoch;
     // Setting the flag and changing the epoch are RMWs on one word, so they are totally
     // ordered: either the writer's add comes first (we see the new epoch here) or it

@@ -28,7 +28,5 @@ void notifyChange(std::uint32_t& word) noexcept;
 [[nodiscard]] std::uint32_t waitForEpochChange(std::uint32_t& word, std::uint32_t lastEpoch,
                                                std::chrono::nanoseconds timeout) noexcept;
 
-/// CLOCK_MONOTONIC in nanoseconds.
-[[nodiscard]] std::int64_t monotonicNs() noexcept;
 
 }  // namespace openvcu::signals::detail

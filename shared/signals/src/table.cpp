@@ -1,3 +1,4 @@
+#include "openvcu/core/clock.hpp"
 #include "openvcu/signals/table.hpp"
 
 #include <signal.h>
@@ -72,10 +73,6 @@ std::optional<EffectiveCommand> effectiveCommand(const SlotSnapshot& snapshot) n
   }
   if (snapshot.command.updates == 0) return std::nullopt;
   return EffectiveCommand{snapshot.command.value, snapshot.command.timestampNs, snapshot.command.writer, false};
-}
-
-std::int64_t monotonicNowNs() noexcept {
-  return detail::monotonicNs();
 }
 
 // ---- opening ----------------------------------------------------------------------------
@@ -423,7 +420,7 @@ SignalWatch SignalTable::watch(std::span<const SignalIndex> indexes) {
     if (index < m_slotCount) result.m_indexes.push_back(index);
   }
   const auto self = static_cast<std::int32_t>(::getpid());
-  const std::int64_t now = monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   for (std::size_t i = 0; i < detail::MAX_WATCHES && result.m_entry < 0; ++i) {
     detail::WatchEntry& entry = m_header->watches[i];
     std::atomic_ref<std::int32_t> owner(entry.ownerPid);
@@ -501,7 +498,7 @@ std::uint32_t SignalWatch::wait(std::uint32_t lastEpoch, std::chrono::nanosecond
   if (m_header == nullptr) return lastEpoch;
   if (m_entry < 0) return detail::waitForEpochChange(m_header->changeWord, lastEpoch, timeout);
   detail::WatchEntry& entry = m_header->watches[static_cast<std::size_t>(m_entry)];
-  std::atomic_ref<std::int64_t>(entry.aliveNs).store(monotonicNowNs(), std::memory_order_relaxed);
+  std::atomic_ref<std::int64_t>(entry.aliveNs).store(clock::monotonicNs(), std::memory_order_relaxed);
   return detail::waitForEpochChange(entry.changeWord, lastEpoch, timeout);
 }
 

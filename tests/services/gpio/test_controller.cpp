@@ -5,6 +5,7 @@
 
 #include "gpio_app.hpp"
 #include "gpio_test_support.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/service/command_handler.hpp"
 
 using namespace gpiotest;
@@ -142,14 +143,14 @@ TEST_CASE("an input level counts once it stayed for the debounce time, and a bou
 
 TEST_CASE("the simulated chip turns a commanded line level into an edge event on its descriptor") {
   Fixture f;
-  f.start(signals::monotonicNowNs());
+  f.start(openvcu::clock::monotonicNs());
   const std::size_t input = f.line("ContactorFault");
   const std::vector<int> fds = f.chip->eventFds();
   REQUIRE(fds.size() == 1);
   std::array<gpio::LineEvent, 8> batch{};
   CHECK(f.chip->readEvents(fds[0], batch) == 0);
 
-  f.command(FAULT_SIM, 1, signals::monotonicNowNs());
+  f.command(FAULT_SIM, 1, openvcu::clock::monotonicNs());
   f.chip->tableChanged();
   REQUIRE(f.chip->readEvents(fds[0], batch) == 1);
   CHECK(batch[0].line == input);

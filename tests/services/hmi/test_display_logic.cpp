@@ -49,14 +49,27 @@ TEST_CASE("a fresh valid bus value is Ready, an old one Stale, a never written o
 }
 
 TEST_CASE("a commanded value without a bus value is Ready and shown and the bus value wins when there is one") {
+  signals::SignalInfo internal{.key = "internal.operator.Start", .kind = signals::SignalKind::Internal};
+  internal.direction = signals::SignalDirection::Internal;
   signals::SlotSnapshot slot;
   slot.command = {.value = 1, .timestampNs = 5, .writer = 3, .updates = 1};
   CHECK(classify(slot, 10 * SECOND_NS, STALE_AFTER_NS) == ValueStatus::Ready);
-  REQUIRE(shownValue(slot));
-  CHECK(*shownValue(slot) == 1);
+  REQUIRE(shownValue(internal, slot));
+  CHECK(*shownValue(internal, slot) == 1);
   slot.bus = {.value = 7, .timestampNs = 10 * SECOND_NS, .quality = signals::Quality::Valid, .updates = 2};
-  CHECK(*shownValue(slot) == 7);
-  CHECK_FALSE(shownValue(signals::SlotSnapshot{}));
+  CHECK(*shownValue(internal, slot) == 7);
+  CHECK_FALSE(shownValue(internal, signals::SlotSnapshot{}));
+}
+
+TEST_CASE("a received signal shows only what came from the bus, never a command (#20)") {
+  signals::SignalInfo received{.key = "BMS.Status.SOC", .kind = signals::SignalKind::Bus};
+  received.direction = signals::SignalDirection::Received;
+  signals::SlotSnapshot slot;
+  slot.command = {.value = 1, .timestampNs = 5, .writer = 240, .updates = 1};
+
+  CHECK_FALSE(shownValue(received, slot));
+  slot.bus = {.value = 7, .timestampNs = 6, .quality = signals::Quality::Valid, .updates = 1};
+  CHECK(shownValue(received, slot) == std::optional<double>(7));
 }
 
 TEST_CASE("values are formatted with the unit, or as their value text") {

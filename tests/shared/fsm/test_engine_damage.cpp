@@ -12,6 +12,7 @@
 #include <string>
 
 #include "fsm_test_support.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/fsm/engine.hpp"
 
 using namespace openvcu;
@@ -219,7 +220,7 @@ TEST_CASE("a truncated signal table gets the FSM's state and commands back from 
   auto slots = fsm::StatusSlots::find(hhea.catalog);
   REQUIRE(slots);
   fsm::Engine sut(hhea.good(DRIVING), hhea.catalog, access, std::move(*slots));
-  std::int64_t now = signals::monotonicNowNs();
+  std::int64_t now = openvcu::clock::monotonicNs();
   sut.start(now, REALTIME + now, fsm::StartMode::Fresh);
   table.writeBus(hhea.key(fsmtest::CONNECTION), CONNECTED, now, 0xF3, signals::Quality::Valid);
   table.writeCommand(hhea.key(fsmtest::START_STOP), START, now, fsm::FSM_WRITER);
@@ -232,7 +233,7 @@ TEST_CASE("a truncated signal table gets the FSM's state and commands back from 
   REQUIRE(lost);
   CHECK(lost->updates == 0);
   CHECK(table.damageCount() != damageBefore);
-  now = signals::monotonicNowNs();
+  now = openvcu::clock::monotonicNs();
   sut.step(now, REALTIME + now);  // before restoreTable: the wipe alone does not leave Driving
   CHECK(sut.stateName() == "Driving");
   CHECK(sut.restoreTable(now, REALTIME + now) == 4);  // keepAlive, BMS_Control, contactor A, StartStop

@@ -16,6 +16,7 @@
 #include <optional>
 
 #include "harness.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
@@ -77,7 +78,7 @@ struct HandlerBench {
   /// until its answer is back.
   void send(ipc::CommandKind kind, const std::string& key, double value, std::int64_t requestId = 1,
             std::int64_t deadlineInNs = 2'000'000'000) {
-    const std::int64_t deadline = deadlineInNs == 0 ? 0 : ipc::monotonicNs() + deadlineInNs;
+    const std::int64_t deadline = deadlineInNs == 0 ? 0 : openvcu::clock::monotonicNs() + deadlineInNs;
     sendRaw(ipc::encodeCommandRequest(ipc::CommandRequest{0, requestId, "test", kind, key, value, "", deadline}));
   }
   void sendRaw(const std::vector<std::uint8_t>& bytes) {

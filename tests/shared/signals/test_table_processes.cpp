@@ -25,6 +25,7 @@
 
 #include "layout.hpp"
 #include "notifier.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/signals/table.hpp"
 #include "signals_test_support.hpp"
 
@@ -83,8 +84,8 @@ void sleepNs(std::int64_t ns) {
 
 /// Waits up to `timeout` for `pid` to exit; SIGKILLs it and returns false when it does not.
 bool waitForExit(pid_t pid, int& status, std::chrono::milliseconds timeout) {
-  const std::int64_t deadline = monotonicNowNs() + timeout.count() * NS_PER_MS;
-  while (monotonicNowNs() < deadline) {
+  const std::int64_t deadline = openvcu::clock::monotonicNs() + timeout.count() * NS_PER_MS;
+  while (openvcu::clock::monotonicNs() < deadline) {
     if (waitpid(pid, &status, WNOHANG) == pid) return true;
     sleepNs(NS_PER_MS);
   }
@@ -241,7 +242,7 @@ void lowerPriority() {
   std::uint64_t slowReads = 0;
   std::int64_t maxReadNs = 0;
   auto account = [&](std::int64_t startNs, bool ok, bool consistent, std::uint64_t updates, std::uint64_t& last) {
-    const std::int64_t readNs = monotonicNowNs() - startNs;
+    const std::int64_t readNs = openvcu::clock::monotonicNs() - startNs;
     maxReadNs = std::max(maxReadNs, readNs);
     if (readNs > SLOW_READ_NS) ++slowReads;
     ++reads;
@@ -255,15 +256,15 @@ void lowerPriority() {
   };
   while (shared.stop.load(std::memory_order_relaxed) == 0) {
     for (SignalIndex slot = 0; slot < SLOTS; ++slot) {
-      std::int64_t start = monotonicNowNs();
+      std::int64_t start = openvcu::clock::monotonicNs();
       const auto maybeBus = table.readBus(slot);
       account(start, maybeBus.has_value(), maybeBus && busIsConsistent(*maybeBus), maybeBus ? maybeBus->updates : 0,
               lastUpdates[slot][0]);
-      start = monotonicNowNs();
+      start = openvcu::clock::monotonicNs();
       const auto maybeCommand = table.readCommand(slot);
       account(start, maybeCommand.has_value(), maybeCommand && commandIsConsistent(*maybeCommand),
               maybeCommand ? maybeCommand->updates : 0, lastUpdates[slot][1]);
-      start = monotonicNowNs();
+      start = openvcu::clock::monotonicNs();
       const auto maybeOverride = table.readOverride(slot);
       account(start, maybeOverride.has_value(), maybeOverride && overrideIsConsistent(*maybeOverride),
               maybeOverride ? maybeOverride->updates : 0, lastUpdates[slot][2]);
@@ -377,9 +378,9 @@ TEST_CASE("writers SIGKILLed at random instructions never block or tear what rea
   constexpr std::int64_t LONGEST_PAUSE_NS = 2 * NS_PER_MS;
   constexpr std::uint64_t WAITER_KILL_EVERY = 16;
   const KillPhase phase = killPhase();
-  const std::int64_t start = monotonicNowNs();
+  const std::int64_t start = openvcu::clock::monotonicNs();
   for (;;) {
-    const std::int64_t elapsed = monotonicNowNs() - start;
+    const std::int64_t elapsed = openvcu::clock::monotonicNs() - start;
     if (elapsed >= phase.maximumNs || (elapsed >= phase.minimumNs && kills >= phase.targetKills)) break;
     sleepNs(static_cast<std::int64_t>(random.below(LONGEST_PAUSE_NS)));
     const bool killWaiter = random.below(WAITER_KILL_EVERY) == 0;
@@ -415,7 +416,7 @@ TEST_CASE("writers SIGKILLed at random instructions never block or tear what rea
     total.slowReads += stats.slowReads.load();
     maxReadNs = std::max(maxReadNs, stats.maxReadNs.load());
   }
-  const double seconds = static_cast<double>(monotonicNowNs() - start) / 1e9;
+  const double seconds = static_cast<double>(openvcu::clock::monotonicNs() - start) / 1e9;
   std::printf(
       "signal table kill test (%.1f s, %d writers, %d readers, %zu slots x 3 planes):\n"
       "  kills survived: %llu (%llu of them the waiter; %llu writers died inside a table call), writer generations: "
@@ -551,8 +552,8 @@ TEST_CASE("a waiter killed while asleep leaves a flag that the next write clears
     (void)childResult->waitForChange(childResult->changeEpoch(), 60s);
     _exit(0);
   }
-  const std::int64_t deadline = monotonicNowNs() + 10'000 * NS_PER_MS;
-  while (!waitersFlag() && monotonicNowNs() < deadline) sleepNs(NS_PER_MS);
+  const std::int64_t deadline = openvcu::clock::monotonicNs() + 10'000 * NS_PER_MS;
+  while (!waitersFlag() && openvcu::clock::monotonicNs() < deadline) sleepNs(NS_PER_MS);
   REQUIRE(waitersFlag());
   kill(pid, SIGKILL);
   waitpid(pid, nullptr, 0);

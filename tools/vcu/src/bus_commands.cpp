@@ -9,7 +9,9 @@
 
 #include "cli_checks.hpp"
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cstdio>
 #include <csignal>
 #include <memory>
 #include <optional>
@@ -26,6 +28,7 @@
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/matcher.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/ipc/runtime.hpp"
 #include "openvcu/ipc/waiter.hpp"
 
@@ -37,8 +40,6 @@ using namespace std::chrono_literals;
 /// How long `vcu send` waits for a subscriber of can-tx's send stream (why: RouDi
 /// connects new ports in one pass every 100 ms; 0.5 s leaves room for a loaded machine).
 constexpr auto CAN_TX_CONNECT_TIMEOUT = 500ms;
-/// How long `vcu send --direct` waits for RouDi to connect a new sim link (normally < 0.1 s).
-constexpr auto SIM_CONNECT_TIMEOUT = 2s;
 /// A frame refused as Busy (transmit queue or mempool full) is retried this long.
 constexpr auto BUSY_RETRY_TIME = 100ms;
 constexpr auto BUSY_RETRY_STEP = 1ms;
@@ -229,26 +230,6 @@ std::uint64_t sendAll(const SendOptions& options, const std::vector<ParsedFrame>
   return handedOver;
 }
 
-/// Why a fresh sim link may need a wait: a frame published before the link's publisher
-/// is connected to a peer is not delivered to it (sim_link.hpp), and the Link interface
-/// has no peer count. The frame-stream contract allows ~100 ms for the connection. (RouDi
-/// 2.0.3 connects a new port to the existing ones before create() returns; its periodic
-/// discovery pass, which catches anything left over, handles the publishers it finds
-/// before the subscribers.) Either way a probe publisher on the same wire topic, created
-/// after the link, gets its first subscriber (at least the link's own receive side) no
-/// earlier than the link's publisher was connected to every subscriber that existed
-/// before it. So the wait is a readiness signal, not a guessed sleep (on RouDi 2.0.3 it
-/// ends at the first look). The probe never publishes and is gone when this returns.
-Status waitUntilSimLinkConnected(const std::string& simBus) {
-  auto probeResult = ipc::FramePublisher::create(ipc::FrameTopic{"sim", simBus, ipc::FrameStream::SimWire});
-  if (!probeResult) return probeResult.error();
-  if (!probeResult->waitForSubscribers(SIM_CONNECT_TIMEOUT)) {
-    return Error{"sim:" + simBus + ": iox-roudi did not connect the link within " +
-                 std::to_string(std::chrono::milliseconds(SIM_CONNECT_TIMEOUT).count()) + " ms"};
-  }
-  return {};
-}
-
 ExitCode sendDirect(const SendOptions& options, const config::BusConfig& bus, const std::vector<ParsedFrame>& frames,
                     Streams streams) {
   const std::string linkName = bus.link.toString();
@@ -362,6 +343,18 @@ std::int64_t realtimeNs(const ipc::FrameSample& sample) noexcept {
   return monotonicToRealtimeNs(sample.monotonicNs);
 }
 
+/// A J1939 request can-rx handed to can-tx, as candump's time and channel then the request:
+/// "(1700000000.123456) vehicle request PGN 0x0FEE6 (65254) from 0x21, global".
+std::string requestLine(const ipc::RequestSample& request, const std::string& bus) {
+  const std::int64_t ns = monotonicToRealtimeNs(request.monotonicNs);
+  std::array<char, 160> text{};
+  std::snprintf(text.data(), text.size(), "(%lld.%06lld) %s request PGN 0x%05X (%u) from 0x%02X, %s\n",
+                static_cast<long long>(ns / 1'000'000'000), static_cast<long long>((ns % 1'000'000'000) / 1000),
+                bus.c_str(), static_cast<unsigned>(request.pgn), static_cast<unsigned>(request.pgn),
+                static_cast<unsigned>(request.requester), request.global ? "global" : "to this node");
+  return text.data();
+}
+
 /// --decode: the matched message and its signals, appended to a candump line.
 class SignalAppender {
  public:
@@ -453,15 +446,28 @@ ExitCode runDump(const DumpOptions& options, Streams streams) {
   if (topics.empty()) return ExitCode::Failure;
   if (!initRuntime("dump", streams.err)) return ExitCode::Failure;
 
+  // Frames on every stream but "req", which carries typed J1939 requests (RequestSample).
   std::vector<ipc::FrameSubscriber> subscribers;
+  std::optional<ipc::RequestSubscriber> requests;
+  std::vector<ipc::FrameTopic> frameTopics;
   subscribers.reserve(topics.size());  // attached below by address: no reallocation after
   for (const ipc::FrameTopic& topic : topics) {
+    if (topic.stream == ipc::FrameStream::Request) {
+      auto requestResult = ipc::RequestSubscriber::create(topic.instance, topic.bus);
+      if (!requestResult) {
+        reportError(streams.err, requestResult.error().message);
+        return ExitCode::Failure;
+      }
+      requests.emplace(std::move(*requestResult));
+      continue;
+    }
     auto subscriberResult = ipc::FrameSubscriber::create(topic);
     if (!subscriberResult) {
       reportError(streams.err, subscriberResult.error().message);
       return ExitCode::Failure;
     }
     subscribers.push_back(std::move(*subscriberResult));
+    frameTopics.push_back(topic);
   }
   auto waiterResult = ipc::Waiter::create();
   if (!waiterResult) {
@@ -475,7 +481,15 @@ ExitCode runDump(const DumpOptions& options, Streams streams) {
       reportError(streams.err, attached.error().message);
       return ExitCode::Failure;
     }
-    names.push_back(topics[i].toString());
+    names.push_back(frameTopics[i].toString());
+  }
+  const std::uint64_t requestsId = subscribers.size();
+  if (requests) {
+    if (const Status attached = waiter.attach(*requests, requestsId); !attached) {
+      reportError(streams.err, attached.error().message);
+      return ExitCode::Failure;
+    }
+    names.push_back(ipc::FrameTopic{config.instance, bus->name, ipc::FrameStream::Request}.toString());
   }
   std::optional<SignalAppender> maybeSignals;
   if (options.decode) maybeSignals.emplace(config.database);
@@ -503,6 +517,16 @@ ExitCode runDump(const DumpOptions& options, Streams streams) {
     }
     out.clear();
     for (const std::uint64_t id : waiter.waitFor(wait)) {
+      if (id == requestsId) {
+        while (options.count == 0 || printed < options.count) {
+          const std::optional<ipc::RequestSample> maybeRequest = requests->take();
+          if (!maybeRequest) break;
+          if (prefixed) out += streamLabel(ipc::FrameStream::Request) + ' ';
+          out += requestLine(*maybeRequest, bus->name);
+          ++printed;
+        }
+        continue;
+      }
       ipc::FrameSubscriber& subscriber = subscribers[id];
       if (subscriber.hasLostFrames()) {
         streams.err.write("vcu: warning: frames lost on " + names[id] + ": the dump fell behind\n");
@@ -512,7 +536,7 @@ ExitCode runDump(const DumpOptions& options, Streams streams) {
         if (!maybeSample) break;
         can::Frame frame = maybeSample->frame;
         frame.timestampNs = realtimeNs(*maybeSample);
-        if (prefixed) out += streamLabel(topics[id].stream) + ' ';
+        if (prefixed) out += streamLabel(frameTopics[id].stream) + ' ';
         out += can::formatCandumpL(frame, bus->name);
         if (maybeSignals) maybeSignals->append(out, frame);
         out += '\n';

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "diagnostics.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/signals/table.hpp"
 #include "text_table.hpp"
 
@@ -55,7 +56,7 @@ std::string levelText(const signals::SignalTable* table, const signals::Catalog&
   if (!table || !index) return "-";
   const auto bus = table->readBus(*index);
   if (!bus || bus->updates == 0) return "never";
-  return onOff(bus->value) + " (" + formatDuration(signals::monotonicNowNs() - bus->timestampNs) + " ago)";
+  return onOff(bus->value) + " (" + formatDuration(clock::monotonicNs() - bus->timestampNs) + " ago)";
 }
 
 std::string commandText(const signals::SignalTable* table, const signals::Catalog& catalog,

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "diagnostics.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/can/log_reader.hpp"
 #include "openvcu/can/log_writer.hpp"
 #include "openvcu/can_links/open_link.hpp"
@@ -57,8 +58,6 @@ constexpr auto LOGGER_STOP_TIMEOUT = 3s;
 constexpr auto LOGGER_POLL_STEP = 10ms;
 /// Bus logs are flushed to disk at least this often (a crash loses less).
 constexpr auto FLUSH_INTERVAL = 500ms;
-/// How long `vcu replay` waits for RouDi to connect a new sim link (normally < 0.1 s).
-constexpr auto SIM_CONNECT_TIMEOUT = 2s;
 /// A frame refused as Busy (transmit queue or mempool full) is retried this long.
 constexpr auto BUSY_RETRY_TIME = 100ms;
 constexpr auto BUSY_RETRY_STEP = 1ms;
@@ -315,7 +314,7 @@ void drain(RecordedBus& recorded, std::string& lines) {
     const std::size_t count = recorded.link->receive(batch);
     for (std::size_t i = 0; i < count; ++i) {
       can::Frame frame = batch[i].frame;
-      if (frame.timestampNs == 0) frame.timestampNs = realtimeNowNs();
+      if (frame.timestampNs == 0) frame.timestampNs = clock::realtimeNs();
       lines += can::formatCandumpL(frame, recorded.bus->name);
       lines += '\n';
     }
@@ -575,20 +574,6 @@ std::optional<LogSurvey> surveyLogs(const std::string& directory, const config::
     }
   }
   return survey;
-}
-
-/// Why a fresh sim link may need a wait: a frame published before the link's publisher is
-/// connected to a peer is not delivered to it. A probe publisher on the same wire topic,
-/// created after the link, gets its first subscriber no earlier than the link's publisher
-/// was connected (the same readiness signal as `vcu send --direct`, bus_commands.cpp).
-Status waitUntilSimLinkConnected(const std::string& simBus) {
-  auto probeResult = ipc::FramePublisher::create(ipc::FrameTopic{"sim", simBus, ipc::FrameStream::SimWire});
-  if (!probeResult) return probeResult.error();
-  if (!probeResult->waitForSubscribers(SIM_CONNECT_TIMEOUT)) {
-    return Error{"sim:" + simBus + ": iox-roudi did not connect the link within " +
-                 std::to_string(std::chrono::milliseconds(SIM_CONNECT_TIMEOUT).count()) + " ms"};
-  }
-  return {};
 }
 
 /// One log being played: its reader and the record it holds next.

@@ -16,6 +16,7 @@
 #include "command_request.hpp"
 #include "diagnostics.hpp"
 #include "stop_signal.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/services.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/signals/table.hpp"
@@ -124,7 +125,7 @@ std::string rangeText(const signals::SignalInfo& signal) {
 
 /// "at 2026-11-21T06:00:01.234Z (0.52 s ago)"
 std::string whenText(std::int64_t monotonicNs) {
-  const std::int64_t age = signals::monotonicNowNs() - monotonicNs;
+  const std::int64_t age = clock::monotonicNs() - monotonicNs;
   return "at " + formatUtc(monotonicToRealtimeNs(monotonicNs)) + " (" + formatDuration(age) + " ago)";
 }
 

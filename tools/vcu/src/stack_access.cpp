@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -20,6 +21,8 @@
 #include <iterator>
 
 #include "diagnostics.hpp"
+#include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/signals/table.hpp"
@@ -255,14 +258,8 @@ Result<double> parseValue(const signals::SignalInfo& signal, std::string_view te
   return Error{message};
 }
 
-std::int64_t realtimeNowNs() noexcept {
-  timespec now{};
-  ::clock_gettime(CLOCK_REALTIME, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-
 std::int64_t monotonicToRealtimeNs(std::int64_t monotonicNs) noexcept {
-  return realtimeNowNs() - (signals::monotonicNowNs() - monotonicNs);
+  return clock::realtimeNs() - (clock::monotonicNs() - monotonicNs);
 }
 
 std::string formatDuration(std::int64_t nanoseconds) {
@@ -278,6 +275,29 @@ std::string formatDuration(std::int64_t nanoseconds) {
     std::snprintf(text.data(), text.size(), "%ld h %ld min", whole / 3600, (whole % 3600) / 60);
   }
   return text.data();
+}
+
+/// How long a new sim link may take to be connected (normally < 0.1 s).
+constexpr auto SIM_CONNECT_TIMEOUT = std::chrono::seconds(2);
+
+/// Why a fresh sim link may need a wait: a frame published before the link's publisher
+/// is connected to a peer is not delivered to it (sim_link.hpp), and the Link interface
+/// has no peer count. The frame-stream contract allows ~100 ms for the connection. (RouDi
+/// 2.0.3 connects a new port to the existing ones before create() returns; its periodic
+/// discovery pass, which catches anything left over, handles the publishers it finds
+/// before the subscribers.) Either way a probe publisher on the same wire topic, created
+/// after the link, gets its first subscriber (at least the link's own receive side) no
+/// earlier than the link's publisher was connected to every subscriber that existed
+/// before it. So the wait is a readiness signal, not a guessed sleep (on RouDi 2.0.3 it
+/// ends at the first look). The probe never publishes and is gone when this returns.
+Status waitUntilSimLinkConnected(const std::string& simBus) {
+  auto probeResult = ipc::FramePublisher::create(ipc::FrameTopic{"sim", simBus, ipc::FrameStream::SimWire});
+  if (!probeResult) return probeResult.error();
+  if (!probeResult->waitForSubscribers(SIM_CONNECT_TIMEOUT)) {
+    return Error{"sim:" + simBus + ": iox-roudi did not connect the link within " +
+                 std::to_string(std::chrono::milliseconds(SIM_CONNECT_TIMEOUT).count()) + " ms"};
+  }
+  return {};
 }
 
 }  // namespace openvcu::cli

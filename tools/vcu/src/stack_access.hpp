@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/service/logger.hpp"
@@ -86,11 +87,13 @@ Result<double> parseValue(const signals::SignalInfo& signal, std::string_view te
 
 /// "2026-11-21T06:00:01.234Z" for CLOCK_REALTIME ns (the log's time format).
 using service::formatUtc;
-/// CLOCK_REALTIME ns now.
-std::int64_t realtimeNowNs() noexcept;
 /// A table time stamp (CLOCK_MONOTONIC ns) as CLOCK_REALTIME ns, through the current offset.
 std::int64_t monotonicToRealtimeNs(std::int64_t monotonicNs) noexcept;
 /// "0.52 s", "3 min 5 s", "2 h 4 min" for a duration in ns.
 std::string formatDuration(std::int64_t nanoseconds);
+
+/// Waits until iox-roudi connected a sim link opened just now to its peers: a frame
+/// published before that is not delivered (shared/can_links sim link). At most 2 s.
+Status waitUntilSimLinkConnected(const std::string& simBus);
 
 }  // namespace openvcu::cli

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "diagnostics.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "text_table.hpp"
 
@@ -168,7 +169,7 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
                                  " s (is the stack running? events: " + maybeStack->config.lcmUrl + ")");
     return ExitCode::Failure;
   }
-  const std::int64_t now = realtimeNowNs();
+  const std::int64_t now = clock::realtimeNs();
   TextTable table({"SERVICE", "PID", "UPTIME", "LAST BEAT", "STATUS", "COUNTERS"});
   for (const auto& [key, heartbeat] : latest) {
     std::vector<ipc::Counter> counters = heartbeat.counters;

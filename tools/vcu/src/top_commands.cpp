@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "diagnostics.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/service/process_stats.hpp"
 #include "openvcu/ipc/event_bus.hpp"
@@ -104,7 +105,7 @@ class Top {
       auto table = signals::SignalTable::open(m_stack.catalog, m_stack.config.instance, signals::OpenMode::AttachOnly);
       if (table) m_table.emplace(std::move(*table));
     }
-    std::string out = "openvcu top: instance " + m_stack.config.instance + ", " + formatUtc(realtimeNowNs()) + "\n\n";
+    std::string out = "openvcu top: instance " + m_stack.config.instance + ", " + formatUtc(clock::realtimeNs()) + "\n\n";
     services(out);
     out += "\n";
     vehicle(out);
@@ -122,7 +123,7 @@ class Top {
   }
 
   void services(std::string& out) {
-    const std::int64_t now = realtimeNowNs();
+    const std::int64_t now = clock::realtimeNs();
     const auto clock = std::chrono::steady_clock::now();
     const double ticksPerSecond = service::clockTicksPerSecond();
     TextTable table({"SERVICE", "PID", "UPTIME", "RESTARTS", "BEAT", "CPU %", "RSS MB", "STATUS"});
@@ -175,7 +176,7 @@ class Top {
       if (const auto bus = m_table->readBus(*index); bus && bus->updates > 0) {
         const auto number = static_cast<std::size_t>(bus->value);
         state = number < m_stateNames.size() ? m_stateNames[number] : std::to_string(number);
-        state += " (for " + formatDuration(signals::monotonicNowNs() - bus->timestampNs) + ")";
+        state += " (for " + formatDuration(clock::monotonicNs() - bus->timestampNs) + ")";
       }
     }
     out += "FSM         " + state + "\n";

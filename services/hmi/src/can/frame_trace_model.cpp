@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <string>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/runtime.hpp"
 #include "openvcu/service/options.hpp"
 #include "openvcu/ipc/waiter.hpp"
@@ -20,7 +21,7 @@ constexpr auto WAIT_TIMEOUT = std::chrono::milliseconds(200);  // bounds the rea
 
 FrameTraceModel::FrameTraceModel(QObject* parent) : QAbstractListModel(parent), m_ring(RING), m_shown(SHOWN) {
   m_visible.reserve(SHOWN);
-  m_rateSinceNs = signals::monotonicNowNs();
+  m_rateSinceNs = clock::monotonicNs();
   StackConnection* stack = StackConnection::instance();
   if (!stack) return;
   m_decoder = std::make_unique<trace::FrameDecoder>(stack->config().database, dbc::MatchMode::J1939);
@@ -128,7 +129,7 @@ void FrameTraceModel::push(const Entry* entries, std::size_t count) noexcept {
 }
 
 void FrameTraceModel::collect() {
-  const std::int64_t now = signals::monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   std::uint64_t taken = 0;
   if (m_active && !m_paused) {
     const std::lock_guard lock(m_mutex);

@@ -3,12 +3,13 @@
 #include <algorithm>
 
 #include "common/display_logic.hpp"
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::hmi {
 namespace {
 
 double nowSeconds() noexcept {
-  return static_cast<double>(signals::monotonicNowNs()) / 1e9;
+  return static_cast<double>(clock::monotonicNs()) / 1e9;
 }
 
 }  // namespace
@@ -84,12 +85,12 @@ void SignalPlot::sample() {
   const signals::SignalTable* table = stack ? stack->table() : nullptr;
   ModelStatus::Value status = table ? ModelStatus::Ready : ModelStatus::NotConnected;
   const double now = nowSeconds();
-  const std::int64_t nowNs = signals::monotonicNowNs();
+  const std::int64_t nowNs = clock::monotonicNs();
   for (auto& series : m_series) {
     if (!table) break;
     const auto slot = table->read(series->index);
     if (!slot) continue;
-    const auto value = shownValue(*slot);
+    const auto value = shownValue(stack->catalog()[series->index], *slot);
     if (!value) {
       status = ModelStatus::Stale;
       continue;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/model_helpers.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/j1939/id.hpp"
 
@@ -162,7 +163,7 @@ void SignalTreeModel::refresh() {
     Q_EMIT statusChanged();
   }
   if (!stack || !stack->table()) return;
-  const std::int64_t now = signals::monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   // Only the visible rows are read: the tree may hold thousands of signals.
   for (std::size_t row = 0; row < m_visible.size(); ++row) {
     Node& node = m_nodes[static_cast<std::size_t>(m_visible[row])];
@@ -172,7 +173,9 @@ void SignalTreeModel::refresh() {
       if (!slot) continue;
       const ValueStatus valueStatus = classify(*slot, now, staleAfterFor(stack->catalog()[*node.index], 2'000'000'000));
       QString text = QStringLiteral("--");
-      if (const auto shown = shownValue(*slot)) text = toQ(formatValue(stack->catalog()[*node.index], *shown, ""));
+      if (const auto shown = shownValue(stack->catalog()[*node.index], *slot)) {
+        text = toQ(formatValue(stack->catalog()[*node.index], *shown, ""));
+      }
       changed = text != node.value || valueStatus != node.status;
       node.value = text;
       node.status = valueStatus;

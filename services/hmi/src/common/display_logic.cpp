@@ -60,8 +60,9 @@ ValueStatus classify(const signals::SlotSnapshot& slot, std::int64_t nowNs, std:
   return ValueStatus::NotConnected;
 }
 
-std::optional<double> shownValue(const signals::SlotSnapshot& slot) noexcept {
+std::optional<double> shownValue(const signals::SignalInfo& signal, const signals::SlotSnapshot& slot) noexcept {
   if (slot.bus.updates > 0) return slot.bus.value;
+  if (signal.direction == signals::SignalDirection::Received) return std::nullopt;
   if (const auto command = signals::effectiveCommand(slot)) return command->value;
   return std::nullopt;
 }

@@ -55,10 +55,13 @@ enum class ValueStatus : std::uint8_t {
 [[nodiscard]] std::int64_t staleAfterFor(const signals::SignalInfo& signal, std::int64_t busTimeoutNs) noexcept;
 
 /// The one place that decides which value of a slot the HMI shows (the dashboard, the
-/// status table, the DBC tree, the header, the live plot, the operator switches): the bus
-/// value once one was received, else the effective command (override, then command
-/// plane: signals::effectiveCommand); empty when nothing was ever written.
-[[nodiscard]] std::optional<double> shownValue(const signals::SlotSnapshot& slot) noexcept;
+/// status table, the DBC tree, the header, the live plot, the operator switches), by the
+/// signal's direction in the catalog: the bus value once one was received (what another
+/// node sent, what can-tx sent, a status); for a transmitted or internal signal without
+/// one, the effective command (override, then command plane: signals::effectiveCommand);
+/// a received signal shows only what came from the bus. Empty when nothing applies.
+[[nodiscard]] std::optional<double> shownValue(const signals::SignalInfo& signal,
+                                               const signals::SlotSnapshot& slot) noexcept;
 
 /// The value-table text of a value (shared/signals).
 using signals::valueText;

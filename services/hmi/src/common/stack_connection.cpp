@@ -6,6 +6,7 @@
 #include <QDateTime>
 #include <QJSEngine>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 
@@ -57,7 +58,7 @@ StackConnection::StackConnection(StackSettings settings, config::VehicleConfig v
   m_reconnectTimer.setInterval(1000);
   connect(&m_reconnectTimer, &QTimer::timeout, this, &StackConnection::everySecond);
   m_reconnectTimer.start();
-  m_startedNs = signals::monotonicNowNs();
+  m_startedNs = clock::monotonicNs();
   m_zone = m_settings.timeZone.empty() ? QTimeZone::systemTimeZone()
                                        : QTimeZone(QByteArray::fromStdString(m_settings.timeZone));
   m_heartbeatSlot = m_catalog.indexOf("internal.service.hmi.heartbeat");
@@ -80,7 +81,7 @@ void StackConnection::publishHeartbeat() {
       m_beats = previous && previous->updates > 0 ? static_cast<std::int64_t>(previous->value) : 0;
     }
     ++m_beats;
-    m_table->writeBus(*m_heartbeatSlot, static_cast<double>(m_beats), signals::monotonicNowNs(), HMI_WRITER,
+    m_table->writeBus(*m_heartbeatSlot, static_cast<double>(m_beats), clock::monotonicNs(), HMI_WRITER,
                       signals::Quality::Valid);
   }
   if (!m_events) return;
@@ -88,7 +89,7 @@ void StackConnection::publishHeartbeat() {
   beat.service = ISSUER;
   beat.instance = m_config.instance;
   beat.pid = static_cast<std::int32_t>(::getpid());
-  beat.uptimeMs = (signals::monotonicNowNs() - m_startedNs) / 1'000'000;
+  beat.uptimeMs = (clock::monotonicNs() - m_startedNs) / 1'000'000;
   beat.counters = {{"commands_pending", static_cast<std::int64_t>(m_commands.pending())},
                    {"event_errors", static_cast<std::int64_t>(m_events->decodeErrors() + m_events->callbackErrors() +
                                                               m_events->publishFailures())}};
@@ -174,7 +175,7 @@ void StackConnection::pumpEvents() {
 }
 
 std::int64_t StackConnection::sendCommand(ipc::CommandRequest request) {
-  const std::int64_t now = signals::monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   m_commands.prepare(request, now);
   request.timestampNs = 0;
   request.deadlineNs = m_commands.deadlineOf(request.requestId);  // the tracker's timeout, same clock
@@ -234,7 +235,7 @@ void StackConnection::onAck(const ipc::CommandAck& ack) {
 
 void StackConnection::expireCommands() {
   if (m_commands.pending() == 0) return;
-  for (auto& [id, outcome] : m_commands.expire(signals::monotonicNowNs())) {
+  for (auto& [id, outcome] : m_commands.expire(clock::monotonicNs())) {
     Q_EMIT commandFinished(id, false, QString::fromStdString(outcome.text));
   }
 }

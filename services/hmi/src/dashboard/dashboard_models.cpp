@@ -1,6 +1,7 @@
 #include "dashboard/dashboard_models.hpp"
 
 #include "common/model_helpers.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
 
 namespace openvcu::hmi {
@@ -56,9 +57,9 @@ void SignalValue::refresh() {
     status = ModelStatus::Error;
   } else if (const auto slot = readSlot(m_index)) {
     status =
-        ModelStatus::from(classify(*slot, signals::monotonicNowNs(),
+        ModelStatus::from(classify(*slot, clock::monotonicNs(),
                                    staleAfterFor(StackConnection::instance()->catalog()[*m_index], m_staleAfterNs)));
-    if (const auto shown = shownValue(*slot)) {
+    if (const auto shown = shownValue(StackConnection::instance()->catalog()[*m_index], *slot)) {
       value = *shown;
       text = toQ(formatValue(StackConnection::instance()->catalog()[*m_index], value, "%.1f"));
     }
@@ -191,7 +192,7 @@ void SignalListModel::refresh() {
   ModelStatus::Value status = ModelStatus::NotConnected;
   if (stack && stack->table()) status = ModelStatus::Ready;
   if (m_status == ModelStatus::Error) status = ModelStatus::Error;
-  const std::int64_t now = signals::monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   bool anyStale = false;
   for (std::size_t i = 0; i < m_rows.size(); ++i) {
     Row& row = m_rows[i];
@@ -200,7 +201,7 @@ void SignalListModel::refresh() {
     TextTone tone = TextTone::Neutral;
     if (const auto slot = readSlot(row.index)) {
       valueStatus = classify(*slot, now, staleAfterFor(stack->catalog()[*row.index], m_staleAfterNs));
-      if (const auto shown = shownValue(*slot)) {
+      if (const auto shown = shownValue(stack->catalog()[*row.index], *slot)) {
         signals::SignalInfo info = stack->catalog()[*row.index];
         if (!row.item.unit.empty()) info.unit = row.item.unit;
         const std::string formatted = formatValue(info, *shown, row.item.format);

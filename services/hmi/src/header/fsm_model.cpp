@@ -1,4 +1,5 @@
 #include "header/fsm_model.hpp"
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::hmi {
 namespace {
@@ -64,7 +65,7 @@ void FsmModel::refresh() {
   if (stack && stack->table() && m_stateIndex) {
     if (const auto bus = stack->table()->readBus(*m_stateIndex); bus && bus->updates > 0) {
       name = m_rules ? toQ(m_rules->stateName(bus->value)) : QString::number(bus->value);
-      age = durationText(signals::monotonicNowNs() - bus->timestampNs);
+      age = durationText(clock::monotonicNs() - bus->timestampNs);
       if (status != ModelStatus::Error)
         status = bus->quality == signals::Quality::Valid ? ModelStatus::Ready : ModelStatus::Stale;
     }

@@ -3,6 +3,7 @@
 #include <sys/sysinfo.h>
 #include <unistd.h>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/service/process_stats.hpp"
 
@@ -39,7 +40,7 @@ QVariant HealthModel::data(const QModelIndex& index, int role) const {
   if (!index.isValid() || index.row() >= rowCount()) return {};
   const ServiceHealth& service = m_tracker.services()[static_cast<std::size_t>(index.row())];
   const auto cpu = m_cpu.find(service.name);
-  const std::int64_t now = signals::monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   switch (role) {
     case NameRole:
     case Qt::DisplayRole:
@@ -81,20 +82,20 @@ QHash<int, QByteArray> HealthModel::roleNames() const {
 
 int HealthModel::connectionOf(const QString& name) const {
   const ServiceHealth* service = m_tracker.find(name.toStdString());
-  return static_cast<int>(service ? m_tracker.statusOf(*service, signals::monotonicNowNs())
+  return static_cast<int>(service ? m_tracker.statusOf(*service, clock::monotonicNs())
                                   : ValueStatus::NotConnected);
 }
 
 void HealthModel::onHeartbeat(const ipc::Heartbeat& beat) {
   const int before = rowCount();
-  if (m_tracker.onHeartbeat(beat, signals::monotonicNowNs())) {
+  if (m_tracker.onHeartbeat(beat, clock::monotonicNs())) {
     beginInsertRows({}, before, before);
     endInsertRows();
   }
 }
 
 void HealthModel::refresh() {
-  const std::int64_t now = signals::monotonicNowNs();
+  const std::int64_t now = clock::monotonicNs();
   // /proc once a second, not at display rate
   if (++m_tick % 10 == 1) {
     const double ticksPerSecond = service::clockTicksPerSecond();

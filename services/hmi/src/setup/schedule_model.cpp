@@ -83,8 +83,7 @@ void ScheduleModel::build() {
   for (const config::BusConfig& bus : vehicle.buses) {
     for (const std::size_t messageIndex : bus.messages) {
       const dbc::Message& message = vehicle.database.messages[messageIndex];
-      const auto senders = message.transmitters();
-      if (std::find(senders.begin(), senders.end(), vehicle.node) == senders.end()) continue;
+      if (!config::sentBy(message, vehicle.node)) continue;
       if (isSafetyHeader(message)) continue;  // sent with its SDM, not scheduled on its own
       const auto delta = deltaByMessage.find(message.name);
       appendRows(m_rows, messageIndex, delta != deltaByMessage.end(),

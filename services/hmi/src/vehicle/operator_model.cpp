@@ -121,7 +121,7 @@ void OperatorModel::refresh() {
     QString text = QStringLiteral("--");
     if (table) {
       if (const auto slot = table->read(row.index)) {
-        const auto shown = shownValue(*slot);
+        const auto shown = shownValue(stack->catalog()[row.index], *slot);
         on = shown && *shown == row.onValue;
         if (shown) text = toQ(formatValue(stack->catalog()[row.index], *shown, ""));
       }

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/config/services.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/fsm/machine.hpp"
@@ -61,7 +62,7 @@ class TableAccess final : public SignalAccess {
   /// Stamped with the time of the write itself (not the step's start), so that readers and
   /// the latency benchmark see when the command really changed.
   void writeCommand(signals::SignalIndex index, double value, std::int64_t /*stepNs*/) noexcept override {
-    m_table.writeCommand(index, value, signals::monotonicNowNs(), m_writer);
+    m_table.writeCommand(index, value, clock::monotonicNs(), m_writer);
   }
   void writeStatus(signals::SignalIndex index, double value, std::int64_t nowNs) noexcept override {
     m_table.writeBus(index, value, nowNs, m_writer, signals::Quality::Valid);

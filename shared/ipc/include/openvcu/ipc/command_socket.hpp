@@ -55,8 +55,6 @@ inline constexpr std::int64_t MAX_COMMAND_HORIZON_NS = 30'000'000'000;
 [[nodiscard]] std::vector<std::uint8_t> encodeCommandAck(const CommandAck& ack);
 [[nodiscard]] std::optional<CommandAck> decodeCommandAck(const void* data, std::size_t size);
 
-/// CLOCK_MONOTONIC now, in ns (the clock of deadlineNs).
-[[nodiscard]] std::int64_t monotonicNs() noexcept;
 
 /// Who is at the other end of a Unix socket (SO_PEERCRED).
 struct PeerCredentials {

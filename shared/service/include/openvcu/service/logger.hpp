@@ -93,7 +93,5 @@ class Logger {
 
 /// "2026-11-21T06:00:00.123Z" for CLOCK_REALTIME nanoseconds.
 [[nodiscard]] std::string formatUtc(std::int64_t realtimeNs);
-/// CLOCK_REALTIME in nanoseconds since the Unix epoch.
-[[nodiscard]] std::int64_t realtimeNowNs() noexcept;
 
 }  // namespace openvcu::service

@@ -13,10 +13,10 @@
 //   auto openResult = signals::SignalTable::open(*catalogResult, "hhea");
 //   if (!openResult) { std::cerr << openResult.error().toString() << '\n'; return 1; }
 //   SignalTable& table = *openResult;
-//   table.writeBus(soc, 87.5, signals::monotonicNowNs(), 0xF3, signals::Quality::Valid);
+//   table.writeBus(soc, 87.5, clock::monotonicNs(), 0xF3, signals::Quality::Valid);
 //   if (const auto maybeBus = table.readBus(soc)) use(maybeBus->value);
 //
-// Timestamps are the caller's; the stack uses CLOCK_MONOTONIC nanoseconds (monotonicNowNs()),
+// Timestamps are the caller's; the stack uses CLOCK_MONOTONIC nanoseconds (clock::monotonicNs()),
 // which every process on the host shares.
 
 #include <chrono>
@@ -28,6 +28,7 @@
 #include <string_view>
 #include <vector>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/signals/catalog.hpp"
 
@@ -95,8 +96,6 @@ struct EffectiveCommand {
 /// @note noexcept, allocation-free.
 [[nodiscard]] std::optional<EffectiveCommand> effectiveCommand(const SlotSnapshot& snapshot) noexcept;
 
-/// CLOCK_MONOTONIC in nanoseconds (vDSO, no system call on Linux).
-[[nodiscard]] std::int64_t monotonicNowNs() noexcept;
 
 /// How long a watch entry whose owner's pid is gone stays reserved after its last wait.
 inline constexpr std::chrono::seconds WATCH_LEASE{10};
