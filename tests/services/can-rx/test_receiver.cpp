@@ -4,6 +4,8 @@
 // (buses a and b), receive.json (factor 3, BMS_Safe safety group, two forwarding rules).
 
 #include <doctest/doctest.h>
+
+#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -62,32 +64,17 @@ can::ReceivedFrame frameOf(std::uint32_t id, std::vector<std::uint8_t> data, std
 }
 
 /// Loads the test configuration into a private table; the Receiver under test is `sut`.
-struct Fixture {
-  config::VehicleConfig vehicle;
-  signals::Catalog catalog;
-  std::optional<signals::SignalTable> table;
+struct Fixture : openvcu::testing::VehicleTable {
   Recorder outputs;
   std::optional<canrx::Receiver> sut;
-  std::string instance = "rxunit-" + std::to_string(::getpid());
 
-  Fixture() {
-    auto vehicleResult = config::loadVehicleConfig(CONFIG);
-    REQUIRE_MESSAGE(vehicleResult, (vehicleResult ? "" : vehicleResult.error().toString()));
-    vehicle = std::move(*vehicleResult);
-    auto catalogResult = config::buildCatalog(vehicle);
-    REQUIRE(catalogResult);
-    catalog = std::move(*catalogResult);
-    (void)signals::SignalTable::remove(instance);
-    auto tableResult = signals::SignalTable::open(catalog, instance);
-    REQUIRE_MESSAGE(tableResult, (tableResult ? "" : tableResult.error().toString()));
-    table.emplace(std::move(*tableResult));
+  Fixture() : VehicleTable(CONFIG, "rxunit-" + std::to_string(::getpid())) {
     auto receiveResult = config::loadReceiveConfig(vehicle);
     REQUIRE_MESSAGE(receiveResult, (receiveResult ? "" : receiveResult.error().toString()));
     auto receiverResult = canrx::Receiver::create(vehicle, std::move(*receiveResult), catalog, *table, outputs, START);
     REQUIRE(receiverResult);
     sut.emplace(std::move(*receiverResult));
   }
-  ~Fixture() { (void)signals::SignalTable::remove(instance); }
 
   signals::BusValue bus(std::string_view key) {
     const auto index = catalog.indexOf(key);

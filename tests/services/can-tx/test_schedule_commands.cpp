@@ -3,6 +3,8 @@
 // a refused command changes nothing (issue 20).
 
 #include <doctest/doctest.h>
+
+#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <filesystem>
@@ -49,10 +51,7 @@ struct Recorder final : cantx::ScheduleChangeSink {
   }
 };
 
-struct Fixture {
-  config::VehicleConfig vehicle;
-  signals::Catalog catalog;
-  std::optional<signals::SignalTable> table;
+struct Fixture : openvcu::testing::VehicleTable {
   cantx::Schedule schedule;
   cantx::Overlay overlay;
   NoPort port;
@@ -60,20 +59,9 @@ struct Fixture {
   Recorder sink;
   std::unique_ptr<cantx::Scheduler> scheduler;
   std::optional<cantx::ScheduleCommands> sut;
-  std::string instance = "txcmd-" + std::to_string(::getpid());
   std::filesystem::path directory = std::filesystem::temp_directory_path() / instance;
 
-  Fixture() {
-    auto vehicleResult = config::loadVehicleConfig(HHEA);
-    REQUIRE_MESSAGE(vehicleResult, (vehicleResult ? "" : vehicleResult.error().toString()));
-    vehicle = std::move(*vehicleResult);
-    auto catalogResult = config::buildCatalog(vehicle);
-    REQUIRE(catalogResult);
-    catalog = std::move(*catalogResult);
-    (void)signals::SignalTable::remove(instance);
-    auto tableResult = signals::SignalTable::open(catalog, instance);
-    REQUIRE(tableResult);
-    table.emplace(std::move(*tableResult));
+  Fixture() : VehicleTable(HHEA, "txcmd-" + std::to_string(::getpid())) {
     auto scheduleResult = cantx::loadSchedule(vehicle, catalog);
     REQUIRE_MESSAGE(scheduleResult, (scheduleResult ? "" : scheduleResult.error().toString()));
     schedule = std::move(*scheduleResult);
@@ -85,7 +73,6 @@ struct Fixture {
     sut.emplace(vehicle, catalog, schedule, overlay, *scheduler, sink);
   }
   ~Fixture() {
-    (void)signals::SignalTable::remove(instance);
     std::error_code ignored;
     std::filesystem::remove_all(directory, ignored);
   }

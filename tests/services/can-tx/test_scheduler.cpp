@@ -4,6 +4,8 @@
 // changes and the bus plane.
 
 #include <doctest/doctest.h>
+
+#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -60,33 +62,18 @@ struct Recorder final : cantx::TxPort {
 
 std::vector<std::uint8_t> bytes(const can::Frame& frame) { return {frame.data.begin(), frame.data.begin() + frame.length}; }
 
-struct Fixture {
-  config::VehicleConfig vehicle;
-  signals::Catalog catalog;
-  std::optional<signals::SignalTable> table;
+struct Fixture : openvcu::testing::VehicleTable {
   cantx::Schedule schedule;
   FakeClock clock;
   Recorder port;
   std::unique_ptr<cantx::Scheduler> sut;
-  std::string instance = "txunit-" + std::to_string(::getpid());
 
-  Fixture() {
-    auto vehicleResult = config::loadVehicleConfig(HHEA);
-    REQUIRE_MESSAGE(vehicleResult, (vehicleResult ? "" : vehicleResult.error().toString()));
-    vehicle = std::move(*vehicleResult);
-    auto catalogResult = config::buildCatalog(vehicle);
-    REQUIRE(catalogResult);
-    catalog = std::move(*catalogResult);
-    (void)signals::SignalTable::remove(instance);
-    auto tableResult = signals::SignalTable::open(catalog, instance);
-    REQUIRE(tableResult);
-    table.emplace(std::move(*tableResult));
+  Fixture() : VehicleTable(HHEA, "txunit-" + std::to_string(::getpid())) {
     auto scheduleResult = cantx::loadSchedule(vehicle, catalog);
     REQUIRE_MESSAGE(scheduleResult, (scheduleResult ? "" : scheduleResult.error().toString()));
     schedule = std::move(*scheduleResult);
     port.clock = &clock;
   }
-  ~Fixture() { (void)signals::SignalTable::remove(instance); }
 
   void start() {
     auto created = cantx::Scheduler::create(vehicle, schedule, catalog, *table, port, clock, START);

@@ -3,6 +3,8 @@
 // simulated chip, for the vcu-gpio unit tests.
 
 #include <doctest/doctest.h>
+
+#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <atomic>
@@ -24,30 +26,16 @@ inline constexpr std::int64_t SECOND = 1'000'000'000;
 inline constexpr std::int64_t MS = 1'000'000;
 inline constexpr signals::WriterId FSM = 3;
 
-struct Fixture {
-  config::VehicleConfig vehicle;
-  signals::Catalog catalog;
-  std::optional<signals::SignalTable> table;
-  std::string instance;
+struct Fixture : openvcu::testing::VehicleTable {
   std::unique_ptr<gpio::Chip> chip;
   std::unique_ptr<gpio::Controller> sut;
   std::vector<std::string> log;
 
-  Fixture() {
+  Fixture() : VehicleTable(HHEA, uniqueInstance()) {}
+  static std::string uniqueInstance() {
     static std::atomic<int> counter{0};
-    instance = "gpiounit-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
-    auto vehicleResult = config::loadVehicleConfig(HHEA);
-    REQUIRE_MESSAGE(vehicleResult, (vehicleResult ? "" : vehicleResult.error().toString()));
-    vehicle = std::move(*vehicleResult);
-    auto catalogResult = config::buildCatalog(vehicle);
-    REQUIRE(catalogResult);
-    catalog = std::move(*catalogResult);
-    (void)signals::SignalTable::remove(instance);
-    auto tableResult = signals::SignalTable::open(catalog, instance);
-    REQUIRE(tableResult);
-    table.emplace(std::move(*tableResult));
+    return "gpiounit-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
   }
-  ~Fixture() { (void)signals::SignalTable::remove(instance); }
   Fixture(const Fixture&) = delete;
   Fixture& operator=(const Fixture&) = delete;
 

@@ -9,6 +9,7 @@
 
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/fsm/machine.hpp"
+#include "vehicle_fixture.hpp"
 
 namespace fsmtest {
 
@@ -25,18 +26,8 @@ inline constexpr const char* CONTACTOR_A = "Vehicle_Control_Unit.PDU_Rx_1.Close_
 inline constexpr const char* START_STOP = "internal.operator.StartStop";
 inline constexpr const char* KEEP_ALIVE = "internal.tx.keepAlive";
 
-struct Hhea {
-  config::VehicleConfig vehicle;
-  signals::Catalog catalog;
-
-  Hhea() {
-    auto vehicleResult = config::loadVehicleConfig(HHEA);
-    REQUIRE_MESSAGE(vehicleResult, (vehicleResult ? "" : vehicleResult.error().toString()));
-    vehicle = std::move(*vehicleResult);
-    auto catalogResult = config::buildCatalog(vehicle);
-    REQUIRE(catalogResult);
-    catalog = std::move(*catalogResult);
-  }
+struct Hhea : openvcu::testing::VehicleTable {
+  Hhea() : VehicleTable(HHEA) {}
 
   signals::SignalIndex key(const std::string& name) const {
     const auto index = catalog.indexOf(name);
