@@ -3,6 +3,8 @@
 // The plot's ring and decimation are tested with shared/trace (tests/shared/trace).
 #include <doctest/doctest.h>
 
+#include "dashboard_test_catalog.hpp"
+
 #include <string>
 #include <vector>
 
@@ -16,20 +18,7 @@ namespace {
 constexpr std::int64_t SECOND_NS = 1'000'000'000;
 constexpr std::int64_t STALE_AFTER_NS = 2 * SECOND_NS;
 
-signals::Catalog smallCatalog() {
-  std::vector<signals::SignalInfo> infos;
-  infos.push_back({.key = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", .unit = "%", .minimum = 0, .maximum = 100});
-  signals::SignalInfo relay{
-      .key = "internal.relay.Cl15", .minimum = 0, .maximum = 1, .kind = signals::SignalKind::Internal};
-  relay.valueTexts = {{0, "Off"}, {1, "On"}};
-  infos.push_back(relay);
-  signals::SignalInfo contactor{.key = "internal.fault.Contactor", .kind = signals::SignalKind::Internal};
-  contactor.valueTexts = {{0, "Normal"}, {1, "Fault"}};
-  infos.push_back(contactor);
-  auto catalog = signals::Catalog::create(std::move(infos));
-  REQUIRE(catalog);
-  return std::move(*catalog);
-}
+signals::Catalog smallCatalog() { return openvcu::testing::dashboardCatalog(); }
 
 signals::SlotSnapshot busSlot(double value, std::int64_t timestampNs, signals::Quality quality) {
   signals::SlotSnapshot slot;

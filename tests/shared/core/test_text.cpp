@@ -65,3 +65,13 @@ TEST_CASE("the monotonic clock never goes back and the realtime clock is past 20
   CHECK(second >= first);
   CHECK(clock_::realtimeNs() > YEAR_2020_NS);
 }
+
+TEST_CASE("a code point is appended as UTF-8 of one to four bytes") {
+  std::string out;
+  text::appendUtf8(out, 'A');
+  text::appendUtf8(out, 0xE9);     // é
+  text::appendUtf8(out, 0x20AC);   // €
+  text::appendUtf8(out, 0x1F600);  // an emoji, outside the BMP
+  CHECK(out == "A\xC3\xA9\xE2\x82\xAC\xF0\x9F\x98\x80");
+  CHECK(text::isValidUtf8(out));
+}

@@ -2,6 +2,7 @@
 // path and reason, the overlay applied all-or-nothing and written atomically.
 
 #include <doctest/doctest.h>
+#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,19 +19,11 @@ namespace {
 
 const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
 
-struct Fixture {
-  config::VehicleConfig vehicle;
-  signals::Catalog catalog;
+struct Fixture : openvcu::testing::VehicleTable {
   std::filesystem::path folder =
       std::filesystem::temp_directory_path() / ("openvcu-txconfig-" + std::to_string(::getpid()));
 
-  Fixture() {
-    auto vehicleResult = config::loadVehicleConfig(HHEA);
-    REQUIRE(vehicleResult);
-    vehicle = std::move(*vehicleResult);
-    auto catalogResult = config::buildCatalog(vehicle);
-    REQUIRE(catalogResult);
-    catalog = std::move(*catalogResult);
+  Fixture() : VehicleTable(HHEA) {
     std::filesystem::create_directories(folder);
   }
   ~Fixture() {

@@ -3,6 +3,7 @@
 // schedule whose cyclic frames would take more than config::MAX_CYCLIC_BUS_LOAD of a bus.
 
 #include <doctest/doctest.h>
+#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <filesystem>
@@ -20,19 +21,11 @@ namespace {
 const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
 constexpr std::int64_t NS_PER_MS = 1'000'000;
 
-struct Fixture {
-  config::VehicleConfig vehicle;
-  signals::Catalog catalog;
+struct Fixture : openvcu::testing::VehicleTable {
   std::filesystem::path folder =
       std::filesystem::temp_directory_path() / ("openvcu-txinput-" + std::to_string(::getpid()));
 
-  Fixture() {
-    auto vehicleResult = config::loadVehicleConfig(HHEA);
-    REQUIRE(vehicleResult);
-    vehicle = std::move(*vehicleResult);
-    auto catalogResult = config::buildCatalog(vehicle);
-    REQUIRE(catalogResult);
-    catalog = std::move(*catalogResult);
+  Fixture() : VehicleTable(HHEA) {
     std::filesystem::create_directories(folder);
   }
   ~Fixture() {

@@ -175,19 +175,7 @@ class LoggerProcess {
   /// Starts `program -q -f -l URL FILE` with SIGINT and SIGTERM at their defaults.
   Status start(const std::string& program, const std::string& url, const std::string& file) {
     std::vector<std::string> argv{program, "--quiet", "--force", "--lcm-url=" + url, file};
-    std::vector<char*> args;
-    for (std::string& argument : argv) args.push_back(argument.data());
-    args.push_back(nullptr);
-    posix_spawnattr_t attributes;
-    posix_spawnattr_init(&attributes);
-    sigset_t defaults;
-    sigemptyset(&defaults);
-    sigaddset(&defaults, SIGINT);
-    sigaddset(&defaults, SIGTERM);
-    posix_spawnattr_setsigdefault(&attributes, &defaults);
-    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
-    const int rc = ::posix_spawnp(&m_pid, program.c_str(), nullptr, &attributes, args.data(), environ);
-    posix_spawnattr_destroy(&attributes);
+    const int rc = spawnProcess(argv, {SIGINT, SIGTERM}, true, &m_pid);
     if (rc != 0) {
       m_pid = -1;
       return Error{"cannot start " + program + ": " + std::strerror(rc) +

@@ -1,6 +1,8 @@
 #include "stack_access.hpp"
 
 #include <dirent.h>
+#include <signal.h>
+#include <spawn.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -298,6 +300,24 @@ Status waitUntilSimLinkConnected(const std::string& simBus) {
                  std::to_string(std::chrono::milliseconds(SIM_CONNECT_TIMEOUT).count()) + " ms"};
   }
   return {};
+}
+
+int spawnProcess(const std::vector<std::string>& argv, std::initializer_list<int> defaults, bool searchPath,
+                 pid_t* pid) {
+  std::vector<char*> args;
+  for (const std::string& argument : argv) args.push_back(const_cast<char*>(argument.c_str()));
+  args.push_back(nullptr);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t defaultSet;
+  sigemptyset(&defaultSet);
+  for (const int signal : defaults) sigaddset(&defaultSet, signal);
+  posix_spawnattr_setsigdefault(&attributes, &defaultSet);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
+  const int rc = searchPath ? ::posix_spawnp(pid, argv.front().c_str(), nullptr, &attributes, args.data(), environ)
+                            : ::posix_spawn(pid, argv.front().c_str(), nullptr, &attributes, args.data(), environ);
+  posix_spawnattr_destroy(&attributes);
+  return rc;
 }
 
 }  // namespace openvcu::cli

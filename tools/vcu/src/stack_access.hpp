@@ -18,7 +18,10 @@
 // instance, exactly as it does for the services; a stack found running keeps the
 // instance of its socket folder.
 
+#include <sys/types.h>
+
 #include <cstdint>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -91,6 +94,12 @@ using service::formatUtc;
 std::int64_t monotonicToRealtimeNs(std::int64_t monotonicNs) noexcept;
 /// "0.52 s", "3 min 5 s", "2 h 4 min" for a duration in ns.
 std::string formatDuration(std::int64_t nanoseconds);
+
+/// Starts argv[0] with `argv` (from PATH when `searchPath`), the signals in `defaults` at
+/// their default action in the child (a parent that ignores SIGINT must not pass that on).
+/// 0 and the child's pid in *pid, else the posix_spawn error number.
+int spawnProcess(const std::vector<std::string>& argv, std::initializer_list<int> defaults, bool searchPath,
+                 pid_t* pid);
 
 /// Waits until iox-roudi connected a sim link opened just now to its peers: a frame
 /// published before that is not delivered (shared/can_links sim link). At most 2 s.

@@ -217,21 +217,9 @@ ExitCode runSpy(const SpyOptions& options, Streams streams) {
   }
   streams.out.flush();
   streams.err.flush();
-  std::vector<char*> args;
-  for (const std::string& argument : argv) args.push_back(const_cast<char*>(argument.c_str()));
-  args.push_back(nullptr);
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  sigset_t defaults;
-  sigemptyset(&defaults);
-  sigaddset(&defaults, SIGINT);
-  sigaddset(&defaults, SIGQUIT);
-  posix_spawnattr_setsigdefault(&attributes, &defaults);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
   const IgnoreInterruptsScope ignoreInterrupts;
   pid_t pid = -1;
-  const int rc = ::posix_spawn(&pid, script.c_str(), nullptr, &attributes, args.data(), environ);
-  posix_spawnattr_destroy(&attributes);
+  const int rc = spawnProcess(argv, {SIGINT, SIGQUIT}, false, &pid);
   if (rc != 0) {
     reportError(streams.err, "cannot start " + script + ": " + std::strerror(rc));
     return ExitCode::Failure;

@@ -21,6 +21,9 @@ std::optional<std::string> didYouMean(std::string_view word, std::span<const std
 /// true when `bytes` is well-formed UTF-8.
 bool isValidUtf8(std::string_view bytes) noexcept;
 
+/// Appends the UTF-8 encoding of a Unicode code point (at most 0x10FFFF): 0xE9 -> "\xC3\xA9".
+void appendUtf8(std::string& out, std::uint32_t codePoint);
+
 /// Converts Windows-1252 (a superset of printable Latin-1) text to UTF-8.
 std::string cp1252ToUtf8(std::string_view bytes);
 

@@ -1,0 +1,29 @@
+#pragma once
+// A three-signal catalog for the dashboard's tests (the file's checks in shared/config and
+// the HMI's display logic): a DBC signal with a unit, a relay and a fault with value texts.
+
+#include <doctest/doctest.h>
+
+#include <utility>
+#include <vector>
+
+#include "openvcu/signals/catalog.hpp"
+
+namespace openvcu::testing {
+
+inline signals::Catalog dashboardCatalog() {
+  std::vector<signals::SignalInfo> infos;
+  infos.push_back({.key = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", .unit = "%", .minimum = 0, .maximum = 100});
+  signals::SignalInfo relay{
+      .key = "internal.relay.Cl15", .minimum = 0, .maximum = 1, .kind = signals::SignalKind::Internal};
+  relay.valueTexts = {{0, "Off"}, {1, "On"}};
+  infos.push_back(relay);
+  signals::SignalInfo contactor{.key = "internal.fault.Contactor", .kind = signals::SignalKind::Internal};
+  contactor.valueTexts = {{0, "Normal"}, {1, "Fault"}};
+  infos.push_back(contactor);
+  auto catalog = signals::Catalog::create(std::move(infos));
+  REQUIRE(catalog);
+  return std::move(*catalog);
+}
+
+}  // namespace openvcu::testing
