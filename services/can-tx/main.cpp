@@ -2,18 +2,15 @@
 // groups, computed fields), answers J1939 requests, sends one-shot frames for other
 // processes and commands safe values when a command writer dies. README.md.
 
-#include "can_tx_app.hpp"
 #include "openvcu/service/main.hpp"
+
+#include "can_tx_app.hpp"
 #include "scheduler.hpp"
 
 namespace service = openvcu::service;
 
 int main(int argc, char** argv) {
-  const service::ServiceInfo info{.name = "can-tx",
-                                  .program = {},
-                                  .description = "CAN transmit: the schedule, J1939-76 pairs, requests, one-shots",
-                                  .version = {},
-                                  .writerId = openvcu::cantx::CAN_TX_WRITER,
-                                  .usesFrameStreams = true};
-  return service::runApp<openvcu::cantx::CanTxApp>(info, argc, argv);
+  return service::runApp<openvcu::cantx::CanTxApp>(openvcu::config::ServiceId::CanTx,
+                                                   "CAN transmit: the schedule, J1939-76 pairs, requests, one-shots",
+                                                   true, argc, argv);
 }

@@ -2,17 +2,14 @@
 // OBC, DC-DC, Editron and four HVLP inverters) on the sim bus or a SocketCAN interface, with
 // fault injection. README.md.
 
-#include "ecu_sim_app.hpp"
 #include "openvcu/service/main.hpp"
+
+#include "ecu_sim_app.hpp"
 
 namespace service = openvcu::service;
 
 int main(int argc, char** argv) {
-  const service::ServiceInfo info{.name = "ecu-sim",
-                                  .program = {},
-                                  .description = "the simulated vehicle: every other node on the bus, with faults",
-                                  .version = {},
-                                  .writerId = openvcu::ecusim::ECU_SIM_WRITER,
-                                  .usesFrameStreams = true};
-  return service::runApp<openvcu::ecusim::EcuSimApp>(info, argc, argv);
+  return service::runApp<openvcu::ecusim::EcuSimApp>(openvcu::config::ServiceId::EcuSim,
+                                                     "the simulated vehicle: every other node on the bus, with faults",
+                                                     true, argc, argv);
 }

@@ -1,15 +1,14 @@
 // vcu-hmi: the Qt 6 Quick touchscreen dashboard over a running openvcu stack.
 // README.md says what it shows and commands; docs/design/hmi.md how it is built.
 #include <QtQml/qqmlextensionplugin.h>
+#include <linux/close_range.h>
+#include <unistd.h>
 
 #include <QCommandLineParser>
 #include <QGuiApplication>
 #include <QQmlApplicationEngine>
 #include <QQmlContext>
 #include <QQuickWindow>
-#include <linux/close_range.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>

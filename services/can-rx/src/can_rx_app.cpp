@@ -1,5 +1,7 @@
 #include "can_rx_app.hpp"
 
+#include "openvcu/service/app_impl.hpp"
+
 #include <array>
 #include <deque>
 #include <optional>
@@ -245,13 +247,6 @@ struct CanRxAppImpl final : ReceiverOutputs {
   }
 };
 
-Result<std::unique_ptr<CanRxApp>> CanRxApp::create(service::Service& runtime) {
-  auto impl = std::make_unique<CanRxAppImpl>(runtime);
-  if (Status opened = impl->open(); !opened) return opened.error();
-  return std::unique_ptr<CanRxApp>(new CanRxApp(std::move(impl)));
-}
-
-CanRxApp::CanRxApp(std::unique_ptr<CanRxAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
-CanRxApp::~CanRxApp() = default;
-
 }  // namespace openvcu::canrx
+
+template class openvcu::service::App<openvcu::canrx::CanRxAppImpl>;

@@ -11,6 +11,7 @@
 
 #include "openvcu/config/services.hpp"
 #include "openvcu/core/result.hpp"
+#include "openvcu/service/app.hpp"
 #include "openvcu/service/service.hpp"
 
 namespace openvcu::canrx {
@@ -20,18 +21,9 @@ inline constexpr signals::WriterId CAN_RX_WRITER = config::writerOf(config::Serv
 struct CanRxAppImpl;
 
 /// @note restricted thread-safe: lives on the service's loop thread.
-class CanRxApp {
- public:
-  /// Loads the receive settings, opens links and streams, registers with the loop and the
-  /// heartbeat. Errors name the file, the JSON path or the link.
-  static Result<std::unique_ptr<CanRxApp>> create(service::Service& runtime);
-  ~CanRxApp();
-  CanRxApp(const CanRxApp&) = delete;
-  CanRxApp& operator=(const CanRxApp&) = delete;
-
- private:
-  explicit CanRxApp(std::unique_ptr<CanRxAppImpl> impl) noexcept;
-  std::unique_ptr<CanRxAppImpl> m_impl;
-};
+using CanRxApp = service::App<CanRxAppImpl>;
 
 }  // namespace openvcu::canrx
+
+// Instantiated once, in can_rx_app.cpp (where CanRxAppImpl is defined).
+extern template class openvcu::service::App<openvcu::canrx::CanRxAppImpl>;

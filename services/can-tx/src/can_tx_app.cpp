@@ -1,5 +1,7 @@
 #include "can_tx_app.hpp"
 
+#include "openvcu/service/app_impl.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -387,13 +389,6 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   }
 };
 
-Result<std::unique_ptr<CanTxApp>> CanTxApp::create(service::Service& runtime) {
-  auto impl = std::make_unique<CanTxAppImpl>(runtime);
-  if (Status opened = impl->open(); !opened) return opened.error();
-  return std::unique_ptr<CanTxApp>(new CanTxApp(std::move(impl)));
-}
-
-CanTxApp::CanTxApp(std::unique_ptr<CanTxAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
-CanTxApp::~CanTxApp() = default;
-
 }  // namespace openvcu::cantx
+
+template class openvcu::service::App<openvcu::cantx::CanTxAppImpl>;

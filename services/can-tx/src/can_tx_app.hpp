@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "openvcu/core/result.hpp"
+#include "openvcu/service/app.hpp"
 #include "openvcu/service/service.hpp"
 
 namespace openvcu::cantx {
@@ -19,16 +20,9 @@ struct CanTxAppImpl;
 
 /// @note restricted thread-safe: lives on the service's loop thread (it owns the transmit
 ///       thread, which it stops before anything that thread uses goes away).
-class CanTxApp {
- public:
-  static Result<std::unique_ptr<CanTxApp>> create(service::Service& runtime);
-  ~CanTxApp();
-  CanTxApp(const CanTxApp&) = delete;
-  CanTxApp& operator=(const CanTxApp&) = delete;
-
- private:
-  explicit CanTxApp(std::unique_ptr<CanTxAppImpl> impl) noexcept;
-  std::unique_ptr<CanTxAppImpl> m_impl;
-};
+using CanTxApp = service::App<CanTxAppImpl>;
 
 }  // namespace openvcu::cantx
+
+// Instantiated once, in can_tx_app.cpp (where CanTxAppImpl is defined).
+extern template class openvcu::service::App<openvcu::cantx::CanTxAppImpl>;

@@ -1,5 +1,7 @@
 #include "ecu_sim_app.hpp"
 
+#include "openvcu/service/app_impl.hpp"
+
 #include <array>
 #include <atomic>
 #include <ctime>
@@ -219,13 +221,6 @@ struct EcuSimAppImpl {
   }
 };
 
-Result<std::unique_ptr<EcuSimApp>> EcuSimApp::create(service::Service& runtime) {
-  auto impl = std::make_unique<EcuSimAppImpl>(runtime);
-  if (Status opened = impl->open(); !opened) return opened.error();
-  return std::unique_ptr<EcuSimApp>(new EcuSimApp(std::move(impl)));
-}
-
-EcuSimApp::EcuSimApp(std::unique_ptr<EcuSimAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
-EcuSimApp::~EcuSimApp() = default;
-
 }  // namespace openvcu::ecusim
+
+template class openvcu::service::App<openvcu::ecusim::EcuSimAppImpl>;

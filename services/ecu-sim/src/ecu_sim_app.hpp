@@ -12,6 +12,7 @@
 
 #include "openvcu/core/result.hpp"
 #include "openvcu/config/services.hpp"
+#include "openvcu/service/app.hpp"
 #include "openvcu/service/service.hpp"
 
 namespace openvcu::ecusim {
@@ -21,16 +22,9 @@ inline constexpr signals::WriterId ECU_SIM_WRITER = config::writerOf(config::Ser
 struct EcuSimAppImpl;
 
 /// @note restricted thread-safe: lives on the service's loop thread; owns the simulation thread.
-class EcuSimApp {
- public:
-  static Result<std::unique_ptr<EcuSimApp>> create(service::Service& runtime);
-  ~EcuSimApp();
-  EcuSimApp(const EcuSimApp&) = delete;
-  EcuSimApp& operator=(const EcuSimApp&) = delete;
-
- private:
-  explicit EcuSimApp(std::unique_ptr<EcuSimAppImpl> impl) noexcept;
-  std::unique_ptr<EcuSimAppImpl> m_impl;
-};
+using EcuSimApp = service::App<EcuSimAppImpl>;
 
 }  // namespace openvcu::ecusim
+
+// Instantiated once, in ecu_sim_app.cpp (where EcuSimAppImpl is defined).
+extern template class openvcu::service::App<openvcu::ecusim::EcuSimAppImpl>;

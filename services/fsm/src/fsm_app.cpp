@@ -1,5 +1,7 @@
 #include "fsm_app.hpp"
 
+#include "openvcu/service/app_impl.hpp"
+
 #include <sys/eventfd.h>
 #include <unistd.h>
 
@@ -350,13 +352,6 @@ struct FsmAppImpl {
   }
 };
 
-Result<std::unique_ptr<FsmApp>> FsmApp::create(service::Service& runtime) {
-  auto impl = std::make_unique<FsmAppImpl>(runtime);
-  if (Status opened = impl->open(); !opened) return opened.error();
-  return std::unique_ptr<FsmApp>(new FsmApp(std::move(impl)));
-}
-
-FsmApp::FsmApp(std::unique_ptr<FsmAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
-FsmApp::~FsmApp() = default;
-
 }  // namespace openvcu::fsm
+
+template class openvcu::service::App<openvcu::fsm::FsmAppImpl>;

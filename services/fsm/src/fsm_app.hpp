@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "openvcu/core/result.hpp"
+#include "openvcu/service/app.hpp"
 #include "openvcu/service/service.hpp"
 
 namespace openvcu::fsm {
@@ -19,16 +20,9 @@ struct FsmAppImpl;
 
 /// @note restricted thread-safe: lives on the service's loop thread (it owns the engine
 ///       thread, which it stops before anything that thread uses goes away).
-class FsmApp {
- public:
-  static Result<std::unique_ptr<FsmApp>> create(service::Service& runtime);
-  ~FsmApp();
-  FsmApp(const FsmApp&) = delete;
-  FsmApp& operator=(const FsmApp&) = delete;
-
- private:
-  explicit FsmApp(std::unique_ptr<FsmAppImpl> impl) noexcept;
-  std::unique_ptr<FsmAppImpl> m_impl;
-};
+using FsmApp = service::App<FsmAppImpl>;
 
 }  // namespace openvcu::fsm
+
+// Instantiated once, in fsm_app.cpp (where FsmAppImpl is defined).
+extern template class openvcu::service::App<openvcu::fsm::FsmAppImpl>;

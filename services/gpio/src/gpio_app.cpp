@@ -1,5 +1,7 @@
 #include "gpio_app.hpp"
 
+#include "openvcu/service/app_impl.hpp"
+
 #include <poll.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
@@ -176,13 +178,6 @@ struct GpioAppImpl {
   }
 };
 
-Result<std::unique_ptr<GpioApp>> GpioApp::create(service::Service& runtime) {
-  auto impl = std::make_unique<GpioAppImpl>(runtime);
-  if (Status opened = impl->open(); !opened) return opened.error();
-  return std::unique_ptr<GpioApp>(new GpioApp(std::move(impl)));
-}
-
-GpioApp::GpioApp(std::unique_ptr<GpioAppImpl> impl) noexcept : m_impl(std::move(impl)) {}
-GpioApp::~GpioApp() = default;
-
 }  // namespace openvcu::gpio
+
+template class openvcu::service::App<openvcu::gpio::GpioAppImpl>;

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "openvcu/core/result.hpp"
+#include "openvcu/service/app.hpp"
 #include "openvcu/service/service.hpp"
 
 namespace openvcu::gpio {
@@ -18,17 +19,7 @@ namespace openvcu::gpio {
 struct GpioAppImpl;
 
 /// @note restricted thread-safe: lives on the service's loop thread; it owns its two threads.
-class GpioApp {
- public:
-  static Result<std::unique_ptr<GpioApp>> create(service::Service& runtime);
-  ~GpioApp();
-  GpioApp(const GpioApp&) = delete;
-  GpioApp& operator=(const GpioApp&) = delete;
-
- private:
-  explicit GpioApp(std::unique_ptr<GpioAppImpl> impl) noexcept;
-  std::unique_ptr<GpioAppImpl> m_impl;
-};
+using GpioApp = service::App<GpioAppImpl>;
 
 /// The command policy of vcu-gpio: it answers for the keys the catalog gives it (its lines'
 /// levels "internal.gpio.*" and the signals its input lines are bound to). Accepted: the simulated input levels (sim back end only) and
@@ -37,3 +28,6 @@ class GpioApp {
 service::CommandPolicy gpioCommandPolicy(const signals::Catalog& catalog, const config::GpioMap& map);
 
 }  // namespace openvcu::gpio
+
+// Instantiated once, in gpio_app.cpp (where GpioAppImpl is defined).
+extern template class openvcu::service::App<openvcu::gpio::GpioAppImpl>;
