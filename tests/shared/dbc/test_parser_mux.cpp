@@ -15,12 +15,16 @@ const Signal* signalOf(const ParseOutput& output, std::string_view name) {
   if (output.database.messages.empty()) return nullptr;
   return output.database.messages[0].findSignal(name);
 }
+
+/// Message "M" (ID 1, 8 bytes) whose first signal is the multiplexor "Selector" (bits 0..7),
+/// followed by `rest` (more SG_ lines and statements).
+ParseOutput withSelector(const std::string& rest) {
+  return parseText("BO_ 1 M: 8 Vcu\n SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n" + rest);
+}
 }  // namespace
 
 TEST_CASE("parser reads M as multiplexor and mN as multiplexed by it") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 Vcu\n"
-      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+  const ParseOutput sut = withSelector(
       " SG_ Page0 m0 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
       " SG_ Page17 m17 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
 
@@ -38,9 +42,7 @@ TEST_CASE("parser reads M as multiplexor and mN as multiplexed by it") {
 }
 
 TEST_CASE("parser reads mNM as a multiplexed multiplexor") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 Vcu\n"
-      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+  const ParseOutput sut = withSelector(
       " SG_ Sub m2M : 8|4@1+ (1,0) [0|0] \"\" Vcu\n"
       " SG_ Leaf m3 : 16|8@1+ (1,0) [0|0] \"\" Vcu\n"
       "SG_MUL_VAL_ 1 Sub Selector 2-2;\n"
@@ -87,9 +89,7 @@ TEST_CASE("parser warns about a multiplexed signal in a message without a multip
 }
 
 TEST_CASE("parser reads SG_MUL_VAL_ with one range") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 Vcu\n"
-      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+  const ParseOutput sut = withSelector(
       " SG_ Value m5 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
       "SG_MUL_VAL_ 1 Value Selector 5-9;\n");
 
@@ -102,9 +102,7 @@ TEST_CASE("parser reads SG_MUL_VAL_ with one range") {
 }
 
 TEST_CASE("parser reads SG_MUL_VAL_ with several ranges") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 Vcu\n"
-      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+  const ParseOutput sut = withSelector(
       " SG_ Value m8 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
       "SG_MUL_VAL_ 1 Value Selector 8-8, 16-16,24-31 ;\n");
 
@@ -147,20 +145,8 @@ TEST_CASE("parser uses the first multiplexor with a warning when several exist a
   CHECK(value->muxSwitch == "MuxA");
 }
 
-TEST_CASE("parser reports SG_MUL_VAL_ naming a multiplexor the message does not have") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 Vcu\n"
-      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
-      " SG_ Value m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
-      "SG_MUL_VAL_ 1 Value Nobody 1-1;\n");
-
-  CHECK(hasError(sut, "does not have"));
-}
-
 TEST_CASE("parser ignores SG_MUL_VAL_ for a signal that is not multiplexed, with a warning") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 Vcu\n"
-      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
+  const ParseOutput sut = withSelector(
       " SG_ Plain : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
       "SG_MUL_VAL_ 1 Plain Selector 1-1;\n");
 
@@ -171,14 +157,24 @@ TEST_CASE("parser ignores SG_MUL_VAL_ for a signal that is not multiplexed, with
   CHECK(plain->muxSwitch.empty());
 }
 
-TEST_CASE("parser reports an SG_MUL_VAL_ range whose upper bound is below its lower bound") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 Vcu\n"
-      " SG_ Selector M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
-      " SG_ Value m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n"
-      "SG_MUL_VAL_ 1 Value Selector 9-3;\n");
+TEST_CASE("parser reports a bad SG_MUL_VAL_ for a multiplexed signal") {
+  struct Row {
+    const char* name;
+    const char* mulVal;
+    const char* error;
+  };
+  const Row rows[] = {
+      {"naming a multiplexor the message does not have", "SG_MUL_VAL_ 1 Value Nobody 1-1;\n", "does not have"},
+      {"a range whose upper bound is below its lower bound", "SG_MUL_VAL_ 1 Value Selector 9-3;\n",
+       "upper bound below lower bound"},
+  };
+  for (const Row& row : rows) {
+    SUBCASE(row.name) {
+      const ParseOutput sut = withSelector(std::string(" SG_ Value m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n") + row.mulVal);
 
-  CHECK(hasError(sut, "upper bound below lower bound"));
+      CHECK(hasError(sut, row.error));
+    }
+  }
 }
 
 TEST_CASE("parser reports a multiplexor chain that loops") {
