@@ -194,9 +194,13 @@ std::optional<Integer> integerAt(std::string_view text, std::size_t& pos) noexce
 
 }  // namespace
 
-std::optional<std::uint64_t> Scanner::unsignedInteger() noexcept { return integerAt<std::uint64_t>(m_text, m_pos); }
+std::optional<std::uint64_t> Scanner::unsignedInteger() noexcept {
+  return integerAt<std::uint64_t>(m_text, m_pos);
+}
 
-std::optional<std::int64_t> Scanner::signedInteger() noexcept { return integerAt<std::int64_t>(m_text, m_pos); }
+std::optional<std::int64_t> Scanner::signedInteger() noexcept {
+  return integerAt<std::int64_t>(m_text, m_pos);
+}
 
 std::optional<std::string> Scanner::quoted(bool* unterminated) {
   if (m_pos >= m_text.size() || m_text[m_pos] != '"') return std::nullopt;
