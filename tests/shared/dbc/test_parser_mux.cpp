@@ -16,6 +16,13 @@ const Signal* signalOf(const ParseOutput& output, std::string_view name) {
   return output.database.messages[0].findSignal(name);
 }
 
+/// The signal `name` of the first message; fails the test when there is none.
+const Signal* requiredSignal(const ParseOutput& output, std::string_view name) {
+  const Signal* signal = signalOf(output, name);
+  REQUIRE(signal != nullptr);
+  return signal;
+}
+
 /// Message "M" (ID 1, 8 bytes) whose first signal is the multiplexor "Selector" (bits 0..7),
 /// followed by `rest` (more SG_ lines and statements).
 ParseOutput withSelector(const std::string& rest) {
@@ -29,10 +36,8 @@ TEST_CASE("parser reads M as multiplexor and mN as multiplexed by it") {
       " SG_ Page17 m17 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
 
   CHECK(sut.diagnostics.empty());
-  const Signal* selector = signalOf(sut, "Selector");
-  const Signal* page17 = signalOf(sut, "Page17");
-  REQUIRE(selector != nullptr);
-  REQUIRE(page17 != nullptr);
+  const Signal* selector = requiredSignal(sut, "Selector");
+  const Signal* page17 = requiredSignal(sut, "Page17");
   CHECK(selector->muxRole == MuxRole::Multiplexor);
   CHECK(page17->muxRole == MuxRole::Multiplexed);
   CHECK(page17->muxValue == 17);
@@ -49,10 +54,8 @@ TEST_CASE("parser reads mNM as a multiplexed multiplexor") {
       "SG_MUL_VAL_ 1 Leaf Sub 3-3;\n");
 
   CHECK(sut.diagnostics.empty());
-  const Signal* sub = signalOf(sut, "Sub");
-  const Signal* leaf = signalOf(sut, "Leaf");
-  REQUIRE(sub != nullptr);
-  REQUIRE(leaf != nullptr);
+  const Signal* sub = requiredSignal(sut, "Sub");
+  const Signal* leaf = requiredSignal(sut, "Leaf");
   CHECK(sub->muxRole == MuxRole::MultiplexedMultiplexor);
   CHECK(sub->muxValue == 2);
   CHECK(sub->muxSwitch == "Selector");
@@ -67,10 +70,8 @@ TEST_CASE("parser reads a bare m indicator as a multiplexor") {
       " SG_ Page1 m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
 
   CHECK(sut.diagnostics.empty());
-  const Signal* code = signalOf(sut, "Code");
-  const Signal* page1 = signalOf(sut, "Page1");
-  REQUIRE(code != nullptr);
-  REQUIRE(page1 != nullptr);
+  const Signal* code = requiredSignal(sut, "Code");
+  const Signal* page1 = requiredSignal(sut, "Page1");
   CHECK(code->muxRole == MuxRole::Multiplexor);
   CHECK(page1->muxSwitch == "Code");
 }
@@ -94,8 +95,7 @@ TEST_CASE("parser reads SG_MUL_VAL_ with one range") {
       "SG_MUL_VAL_ 1 Value Selector 5-9;\n");
 
   CHECK(sut.diagnostics.empty());
-  const Signal* value = signalOf(sut, "Value");
-  REQUIRE(value != nullptr);
+  const Signal* value = requiredSignal(sut, "Value");
   CHECK(value->extendedMux);
   CHECK(value->muxSwitch == "Selector");
   CHECK(value->muxRanges == std::vector<MuxRange>{{5, 9}});
@@ -107,8 +107,7 @@ TEST_CASE("parser reads SG_MUL_VAL_ with several ranges") {
       "SG_MUL_VAL_ 1 Value Selector 8-8, 16-16,24-31 ;\n");
 
   CHECK(sut.diagnostics.empty());
-  const Signal* value = signalOf(sut, "Value");
-  REQUIRE(value != nullptr);
+  const Signal* value = requiredSignal(sut, "Value");
   CHECK(value->muxRanges == std::vector<MuxRange>{{8, 8}, {16, 16}, {24, 31}});
 }
 
@@ -123,10 +122,8 @@ TEST_CASE("parser assigns two independent multiplexors through SG_MUL_VAL_") {
       "SG_MUL_VAL_ 1 ValueB MuxB 2-2;\n");
 
   CHECK(sut.diagnostics.empty());
-  const Signal* valueA = signalOf(sut, "ValueA");
-  const Signal* valueB = signalOf(sut, "ValueB");
-  REQUIRE(valueA != nullptr);
-  REQUIRE(valueB != nullptr);
+  const Signal* valueA = requiredSignal(sut, "ValueA");
+  const Signal* valueB = requiredSignal(sut, "ValueB");
   CHECK(valueA->muxSwitch == "MuxA");
   CHECK(valueB->muxSwitch == "MuxB");
 }
@@ -140,8 +137,7 @@ TEST_CASE("parser uses the first multiplexor with a warning when several exist a
 
   CHECK_FALSE(sut.hasErrors());
   CHECK(hasWarning(sut, "several multiplexors"));
-  const Signal* value = signalOf(sut, "Value");
-  REQUIRE(value != nullptr);
+  const Signal* value = requiredSignal(sut, "Value");
   CHECK(value->muxSwitch == "MuxA");
 }
 
@@ -151,8 +147,7 @@ TEST_CASE("parser ignores SG_MUL_VAL_ for a signal that is not multiplexed, with
       "SG_MUL_VAL_ 1 Plain Selector 1-1;\n");
 
   CHECK(hasWarning(sut, "not multiplexed"));
-  const Signal* plain = signalOf(sut, "Plain");
-  REQUIRE(plain != nullptr);
+  const Signal* plain = requiredSignal(sut, "Plain");
   CHECK_FALSE(plain->extendedMux);
   CHECK(plain->muxSwitch.empty());
 }
