@@ -492,23 +492,28 @@ class Parser {
     return true;
   }
 
-  bool transmitters(std::size_t start) {
-    detail::PendingTransmitters pending;
-    pending.where = where(start);
-    if (!messageId(pending.messageId)) return false;
-    if (!punct(':')) return false;
+  // Names separated by spaces or commas, up to ';', the end or a keyword at a line start.
+  bool nameList(std::vector<std::string>& names, std::string_view what) {
     while (true) {
       m_scan.skipSpace();
       if (m_scan.peek() == ',') {
         m_scan.setPosition(m_scan.position() + 1);
         continue;
       }
-      if (m_scan.peek() == ';' || m_scan.atEnd()) break;
-      if (m_scan.atLineStart() && isKeyword(m_scan.peekWord())) break;
+      if (m_scan.peek() == ';' || m_scan.atEnd()) return true;
+      if (m_scan.atLineStart() && isKeyword(m_scan.peekWord())) return true;
       const std::string_view w = m_scan.word();
-      if (w.empty()) return expected("node name");
-      pending.nodes.emplace_back(w);
+      if (w.empty()) return expected(what);
+      names.emplace_back(w);
     }
+  }
+
+  bool transmitters(std::size_t start) {
+    detail::PendingTransmitters pending;
+    pending.where = where(start);
+    if (!messageId(pending.messageId)) return false;
+    if (!punct(':')) return false;
+    if (!nameList(pending.nodes, "node name")) return false;
     if (!terminate("BO_TX_BU_")) return false;
     m_pending.transmitters.push_back(std::move(pending));
     return true;
@@ -703,18 +708,7 @@ class Parser {
     if (!name(group.name, "signal group name")) return false;
     if (!unsignedValue(group.repetitions, "repetitions")) return false;
     if (!punct(':')) return false;
-    while (true) {
-      m_scan.skipSpace();
-      if (m_scan.peek() == ',') {
-        m_scan.setPosition(m_scan.position() + 1);
-        continue;
-      }
-      if (m_scan.peek() == ';' || m_scan.atEnd()) break;
-      if (m_scan.atLineStart() && isKeyword(m_scan.peekWord())) break;
-      const std::string_view w = m_scan.word();
-      if (w.empty()) return expected("signal name");
-      group.signals.emplace_back(w);
-    }
+    if (!nameList(group.signals, "signal name")) return false;
     if (!terminate("SIG_GROUP_")) return false;
     m_out.database.signalGroups.push_back(std::move(group));
     return true;

@@ -175,28 +175,31 @@ std::optional<double> Scanner::number(bool* outOfRange) noexcept {
   return value;
 }
 
-std::optional<std::uint64_t> Scanner::unsignedInteger() noexcept {
-  std::size_t i = m_pos;
-  if (i < m_text.size() && m_text[i] == '+') ++i;
-  std::uint64_t value = 0;
-  const auto parsed = std::from_chars(m_text.data() + i, m_text.data() + m_text.size(), value);
+namespace {
+
+// An integer at `pos` (optional '+'), not followed by a word character or '.'; moves `pos`
+// past it on success and leaves it on failure.
+template <typename Integer>
+std::optional<Integer> integerAt(std::string_view text, std::size_t& pos) noexcept {
+  std::size_t i = pos;
+  if (i < text.size() && text[i] == '+') ++i;
+  Integer value = 0;
+  const auto parsed = std::from_chars(text.data() + i, text.data() + text.size(), value);
   if (parsed.ec != std::errc{}) return std::nullopt;
-  const auto end = static_cast<std::size_t>(parsed.ptr - m_text.data());
-  if (end < m_text.size() && (isWordChar(m_text[end]) || m_text[end] == '.')) return std::nullopt;
-  m_pos = end;
+  const auto end = static_cast<std::size_t>(parsed.ptr - text.data());
+  if (end < text.size() && (isWordChar(text[end]) || text[end] == '.')) return std::nullopt;
+  pos = end;
   return value;
 }
 
+}  // namespace
+
+std::optional<std::uint64_t> Scanner::unsignedInteger() noexcept {
+  return integerAt<std::uint64_t>(m_text, m_pos);
+}
+
 std::optional<std::int64_t> Scanner::signedInteger() noexcept {
-  std::size_t i = m_pos;
-  if (i < m_text.size() && m_text[i] == '+') ++i;
-  std::int64_t value = 0;
-  const auto parsed = std::from_chars(m_text.data() + i, m_text.data() + m_text.size(), value);
-  if (parsed.ec != std::errc{}) return std::nullopt;
-  const auto end = static_cast<std::size_t>(parsed.ptr - m_text.data());
-  if (end < m_text.size() && (isWordChar(m_text[end]) || m_text[end] == '.')) return std::nullopt;
-  m_pos = end;
-  return value;
+  return integerAt<std::int64_t>(m_text, m_pos);
 }
 
 std::optional<std::string> Scanner::quoted(bool* unterminated) {

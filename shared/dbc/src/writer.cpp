@@ -126,37 +126,23 @@ class Writer {
     }
   }
 
+  // "CM_ <target>"<text>";" for a non-empty comment; nothing for an empty one.
+  void comment(const std::string& target, const std::string& text) {
+    if (text.empty()) return;
+    m_out += "CM_ " + target;
+    quoted(text);
+    m_out += ";\n";
+  }
+
   void comments() {
-    if (!m_db.comment.empty()) {
-      m_out += "CM_ ";
-      quoted(m_db.comment);
-      m_out += ";\n";
-    }
-    for (const Node& node : m_db.nodes) {
-      if (node.comment.empty()) continue;
-      m_out += "CM_ BU_ " + node.name + ' ';
-      quoted(node.comment);
-      m_out += ";\n";
-    }
+    comment("", m_db.comment);
+    for (const Node& node : m_db.nodes) comment("BU_ " + node.name + ' ', node.comment);
     for (const Message& msg : m_db.messages) {
-      if (!msg.comment.empty()) {
-        m_out += "CM_ BO_ " + std::to_string(msg.declaredId) + ' ';
-        quoted(msg.comment);
-        m_out += ";\n";
-      }
-      for (const Signal& sig : msg.signals) {
-        if (sig.comment.empty()) continue;
-        m_out += "CM_ SG_ " + std::to_string(msg.declaredId) + ' ' + sig.name + ' ';
-        quoted(sig.comment);
-        m_out += ";\n";
-      }
+      const std::string id = std::to_string(msg.declaredId);
+      comment("BO_ " + id + ' ', msg.comment);
+      for (const Signal& sig : msg.signals) comment("SG_ " + id + ' ' + sig.name + ' ', sig.comment);
     }
-    for (const auto& env : m_db.environmentVariables) {
-      if (env.comment.empty()) continue;
-      m_out += "CM_ EV_ " + env.name + ' ';
-      quoted(env.comment);
-      m_out += ";\n";
-    }
+    for (const auto& env : m_db.environmentVariables) comment("EV_ " + env.name + ' ', env.comment);
   }
 
   static bool isRelation(ObjectType object) {

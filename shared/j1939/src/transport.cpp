@@ -36,6 +36,11 @@ constexpr std::uint8_t byteOf(std::uint32_t value, unsigned shift) noexcept {
   return static_cast<std::uint8_t>((value >> shift) & 0xFFu);
 }
 
+// A CTS granting `count` packets from `nextPacket` on (count 0 holds the session open).
+constexpr ControlData clearToSend(std::uint8_t count, std::uint8_t nextPacket, std::uint32_t pgn) noexcept {
+  return ControlData{TP_CM_CTS, count, nextPacket, RESERVED, RESERVED, byteOf(pgn, 0), byteOf(pgn, 8), byteOf(pgn, 16)};
+}
+
 constexpr std::uint32_t pgnField(std::span<const std::uint8_t> data) noexcept {
   return static_cast<std::uint32_t>(data[PGN_FIELD]) |
          (static_cast<std::uint32_t>(data[PGN_FIELD + 1]) << 8) |
@@ -433,29 +438,15 @@ void TpReceiver::sendCts(Session& session, std::int64_t nowNs, TpSink& sink) noe
                                       static_cast<std::size_t>(session.originatorLimit)});
   session.windowEnd = static_cast<std::uint16_t>(session.nextPacket + count - 1);
   session.deadlineNs = after(nowNs, TP_T2_NS);
-  const ControlData cts{TP_CM_CTS,
-                        static_cast<std::uint8_t>(count),
-                        static_cast<std::uint8_t>(session.nextPacket),
-                        RESERVED,
-                        RESERVED,
-                        byteOf(session.pgn, 0),
-                        byteOf(session.pgn, 8),
-                        byteOf(session.pgn, 16)};
-  sendControl(session.source, cts, sink);
+  sendControl(session.source,
+              clearToSend(static_cast<std::uint8_t>(count), static_cast<std::uint8_t>(session.nextPacket), session.pgn),
+              sink);
 }
 
 void TpReceiver::sendHold(Session& session, std::int64_t nowNs, TpSink& sink) noexcept {
   session.deadlineNs = after(nowNs, TP_TH_NS);
-  const ControlData hold{TP_CM_CTS,
-                         0,
-                         static_cast<std::uint8_t>(session.nextPacket),
-                         RESERVED,
-                         RESERVED,
-                         byteOf(session.pgn, 0),
-                         byteOf(session.pgn, 8),
-                         byteOf(session.pgn, 16)};
   ++m_counters.holdsSent;
-  sendControl(session.source, hold, sink);
+  sendControl(session.source, clearToSend(0, static_cast<std::uint8_t>(session.nextPacket), session.pgn), sink);
 }
 
 void TpReceiver::sendAbort(std::uint8_t destination, std::uint32_t pgn, TpAbortReason reason,

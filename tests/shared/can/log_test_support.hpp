@@ -2,6 +2,8 @@
 // Test helpers: read a whole log into owned records (LogRecord::channel is only valid
 // until the next next(), so the helpers copy it).
 
+#include <doctest/doctest.h>
+
 #include <cstdint>
 #include <sstream>
 #include <string>
@@ -46,6 +48,16 @@ inline ReadResult readText(const std::string& text, LogFormat format = LogFormat
   std::istringstream input(text);
   LogReader sut(input, "test.log", format);
   return readAll(sut);
+}
+
+/// The log fixtures (tests/data/logs/).
+inline const std::string LOG_FIXTURE_DIR = OPENVCU_SOURCE_DIR "/tests/data/logs/";
+
+/// Reads the whole fixture `name`; fails the test when it does not open.
+inline ReadResult readFixture(const std::string& name) {
+  auto openResult = LogReader::open(LOG_FIXTURE_DIR + name);
+  REQUIRE(openResult.ok());
+  return readAll(*openResult);
 }
 
 inline std::vector<std::uint8_t> payloadOf(const Frame& frame) {

@@ -12,19 +12,16 @@
 using namespace openvcu::can;
 using openvcu::can::test::payloadOf;
 using openvcu::can::test::readAll;
+using openvcu::can::test::readFixture;
 using openvcu::can::test::readText;
 
 namespace {
 using Bytes = std::vector<std::uint8_t>;
-const std::string LOG_DIR = OPENVCU_SOURCE_DIR "/tests/data/logs/";
 constexpr std::int64_t MARCH_1_2024_NS = 1709251200LL * 1'000'000'000;  // Begin Triggerblock date
 }  // namespace
 
 TEST_CASE("ASC fixture gives classic, remote, error and CAN FD frames and skips events") {
-  auto openResult = LogReader::open(LOG_DIR + "vector.asc");
-  REQUIRE(openResult.ok());
-
-  const auto result = readAll(*openResult);
+  const auto result = readFixture("vector.asc");
 
   CHECK(result.format == LogFormat::VectorAsc);
   REQUIRE(result.records.size() == 8);

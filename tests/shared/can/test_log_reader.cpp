@@ -10,18 +10,15 @@
 using namespace openvcu::can;
 using openvcu::can::test::payloadOf;
 using openvcu::can::test::readAll;
+using openvcu::can::test::readFixture;
 using openvcu::can::test::readText;
 
 namespace {
 using Bytes = std::vector<std::uint8_t>;
-const std::string LOG_DIR = OPENVCU_SOURCE_DIR "/tests/data/logs/";
 }  // namespace
 
 TEST_CASE("reader returns every frame of the candump -L fixture and skips comments") {
-  auto openResult = LogReader::open(LOG_DIR + "candump_l.log");
-  REQUIRE(openResult.ok());
-
-  const auto result = readAll(*openResult);
+  const auto result = readFixture("candump_l.log");
 
   CHECK(result.errorCount == 0);
   CHECK(result.format == LogFormat::Candump);
@@ -39,10 +36,7 @@ TEST_CASE("reader returns every frame of the candump -L fixture and skips commen
 }
 
 TEST_CASE("reader returns every frame of the candump console fixture") {
-  auto openResult = LogReader::open(LOG_DIR + "candump_console.log");
-  REQUIRE(openResult.ok());
-
-  const auto result = readAll(*openResult);
+  const auto result = readFixture("candump_console.log");
 
   CHECK(result.errorCount == 0);
   REQUIRE(result.records.size() == 8);
@@ -57,10 +51,7 @@ TEST_CASE("reader returns every frame of the candump console fixture") {
 }
 
 TEST_CASE("malformed lines are reported with line, column and reason and reading carries on") {
-  auto openResult = LogReader::open(LOG_DIR + "candump_malformed.log");
-  REQUIRE(openResult.ok());
-
-  const auto result = readAll(*openResult);
+  const auto result = readFixture("candump_malformed.log");
 
   REQUIRE(result.records.size() == 2);
   CHECK(result.records[0].line == 1);
@@ -68,7 +59,7 @@ TEST_CASE("malformed lines are reported with line, column and reason and reading
   CHECK(payloadOf(result.records[1].frame) == Bytes{0x33});
   CHECK(result.errorCount == 8);
   REQUIRE(result.errors.size() == 8);
-  const std::string file = LOG_DIR + "candump_malformed.log";
+  const std::string file = openvcu::can::test::LOG_FIXTURE_DIR + "candump_malformed.log";
   CHECK(result.errors[0].toString() == file + ":2:23: odd number of hex digits in data");
   CHECK(result.errors[1].toString() == file + ":3:17: data length 9 exceeds 8 for a classic frame");
   CHECK(result.errors[2].toString() == file + ":4:17: standard identifier 0x800 exceeds 0x7FF");
@@ -96,10 +87,7 @@ TEST_CASE("lastError keeps the most recent problem and next never throws") {
 }
 
 TEST_CASE("CRLF line endings and a missing final newline are read") {
-  auto openResult = LogReader::open(LOG_DIR + "candump_crlf_no_final_newline.log");
-  REQUIRE(openResult.ok());
-
-  const auto result = readAll(*openResult);
+  const auto result = readFixture("candump_crlf_no_final_newline.log");
 
   CHECK(result.errorCount == 0);
   REQUIRE(result.records.size() == 3);
@@ -158,10 +146,10 @@ TEST_CASE("channel view stays valid until the next call, also after moving the r
 }
 
 TEST_CASE("opening a missing file fails with the file name and the reason") {
-  const auto openResult = LogReader::open(LOG_DIR + "does_not_exist.log");
+  const auto openResult = LogReader::open(openvcu::can::test::LOG_FIXTURE_DIR + "does_not_exist.log");
 
   REQUIRE_FALSE(openResult.ok());
-  CHECK(openResult.error().location.file == LOG_DIR + "does_not_exist.log");
+  CHECK(openResult.error().location.file == openvcu::can::test::LOG_FIXTURE_DIR + "does_not_exist.log");
   CHECK(openResult.error().message.find("cannot open log") == 0);
 }
 

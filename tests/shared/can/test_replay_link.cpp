@@ -73,7 +73,9 @@ class TempDir {
   TempDir& operator=(const TempDir&) = delete;
 
   [[nodiscard]] bool ok() const { return !m_path.empty(); }
+  /// Writes `text` to `name` in the directory; fails the test when the directory was not made.
   std::string write(const std::string& name, const std::string& text) const {
+    REQUIRE(ok());
     const std::string path = m_path + "/" + name;
     std::ofstream(path, std::ios::binary) << text;
     return path;
@@ -144,7 +146,6 @@ std::string spacedLog(int frames, int spacingMs) {
 
 TEST_CASE("replay delivers the frames in log order with their logged time and data") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("drive.log",
                                      "(1436509052.249713) can0 18FEF100#0102030405060708\n"
                                      "(1436509052.250000) can0 123#R\n"
@@ -171,7 +172,6 @@ TEST_CASE("replay delivers the frames in log order with their logged time and da
 TEST_CASE("frames 20 ms apart are due exactly 20 ms apart and not delivered before") {
   constexpr int FRAMES = 4;
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("spaced.log", spacedLog(FRAMES, 20)), optionsAt(1.0));
   const int fd = sut->waitHandle().fd;
   std::vector<ReceivedFrame> one(1);
@@ -199,7 +199,6 @@ TEST_CASE("frames 20 ms apart are due exactly 20 ms apart and not delivered befo
 
 TEST_CASE("speed 2 halves the spacing of the due times") {
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("spaced.log", spacedLog(3, 20)), optionsAt(2.0));
 
   const auto frames = play(*sut, 3);
@@ -211,7 +210,6 @@ TEST_CASE("speed 2 halves the spacing of the due times") {
 
 TEST_CASE("speed 0 delivers everything at once and keeps the handle readable while frames remain") {
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("slow.log", spacedLog(10, 1000)), optionsAt(0.0));  // 1 s apart
   const int fd = sut->waitHandle().fd;
   std::vector<ReceivedFrame> batch(4);
@@ -230,7 +228,6 @@ TEST_CASE("speed 0 delivers everything at once and keeps the handle readable whi
 
 TEST_CASE("a looping replay emits ReplayRestarted and plays the log again") {
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("loop.log", spacedLog(3, 1)), optionsAt(0.0, true));
 
   const auto frames = play(*sut, 9, 4);
@@ -246,7 +243,6 @@ TEST_CASE("a looping replay emits ReplayRestarted and plays the log again") {
 
 TEST_CASE("each pass of a looping replay gets a new time base without a catch-up burst") {
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("loop.log", spacedLog(2, 20)), optionsAt(1.0, true));
 
   const auto frames = play(*sut, 4, 1);
@@ -260,7 +256,6 @@ TEST_CASE("each pass of a looping replay gets a new time base without a catch-up
 
 TEST_CASE("a looping replay whose file has gone finishes with the reason kept") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("gone.log", spacedLog(2, 1));
   auto sut = openOrFail(path, optionsAt(0.0, true));
   std::filesystem::remove(path);  // the open reader keeps reading the unlinked file
@@ -279,7 +274,6 @@ TEST_CASE("a looping replay whose file has gone finishes with the reason kept") 
 
 TEST_CASE("the end of the log emits ReplayFinished once, up() turns false and the handle goes quiet") {
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("end.log", spacedLog(2, 1)), optionsAt(1.0));
   CHECK(sut->up());
 
@@ -298,7 +292,6 @@ TEST_CASE("the end of the log emits ReplayFinished once, up() turns false and th
 
 TEST_CASE("only records of the selected channel are played") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("two.log",
                                      "(1.000000) can0 101#01\n"
                                      "(1.001000) can1 201#02\n"
@@ -318,7 +311,6 @@ TEST_CASE("only records of the selected channel are played") {
 TEST_CASE("skipping many records of other channels returns to the caller with the handle readable") {
   constexpr int OTHER_RECORDS = 3 * static_cast<int>(ReplayLink::SKIP_BUDGET);
   TempDir dir;
-  REQUIRE(dir.ok());
   std::string text = "(1.000000) can1 201#01\n";
   for (int i = 0; i < OTHER_RECORDS; ++i) text += "(1.000000) can0 101#00\n";
   text += "(1.000000) can1 202#02\n";
@@ -338,7 +330,6 @@ TEST_CASE("skipping many records of other channels returns to the caller with th
 
 TEST_CASE("filters drop frames in user space and count them") {
   TempDir dir;
-  REQUIRE(dir.ok());
   LinkOptions options = optionsAt(0.0);
   options.filters.push_back(IdFilter{0x102, 0x7FF, false});
   auto sut = openOrFail(dir.write("spaced.log", spacedLog(4, 1)), options);
@@ -364,7 +355,6 @@ TEST_CASE("a missing file fails to open with the file and the reason") {
 
 TEST_CASE("a log without any frame fails to open") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("empty.log", "# nothing recorded\n\n// still nothing\n");
 
   auto openResult = ReplayLink::open(path, optionsAt(1.0));
@@ -375,7 +365,6 @@ TEST_CASE("a log without any frame fails to open") {
 
 TEST_CASE("a log without frames of the selected channel fails to open naming the channel") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("can0.log", "(1.000000) can0 101#01\n(1.000000) can0 102#0\n");
   LinkOptions options = optionsAt(1.0);
   options.replayChannel = "can3";
@@ -391,7 +380,6 @@ TEST_CASE("a log without frames of the selected channel fails to open naming the
 
 TEST_CASE("a negative or NaN replay speed is refused") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("spaced.log", spacedLog(2, 20));
 
   CHECK_FALSE(ReplayLink::open(path, optionsAt(-1.0)).ok());
@@ -400,7 +388,6 @@ TEST_CASE("a negative or NaN replay speed is refused") {
 
 TEST_CASE("malformed lines are skipped, counted and reading carries on") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("bad.log",
                                      "(1.000000) can0 101#01\n"
                                      "(1.001000) can0 102#0\n"
@@ -420,7 +407,6 @@ TEST_CASE("malformed lines are skipped, counted and reading carries on") {
 
 TEST_CASE("frames without a timestamp play at once after the previous frame") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("console.log",
                                      "  can0  101   [1]  01\n"
                                      "  can0  102   [2]  02 03\n"
@@ -438,7 +424,6 @@ TEST_CASE("frames without a timestamp play at once after the previous frame") {
 
 TEST_CASE("the candump console format with timestamps plays with its timing") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("console.log",
                                      " (1436509052.249713)  can0  123   [2]  11 22\n"
                                      " (1436509052.269713)  can0  124   [1]  33\n");
@@ -453,7 +438,6 @@ TEST_CASE("the candump console format with timestamps plays with its timing") {
 
 TEST_CASE("a Vector ASC log plays with its timing and its channel numbers") {
   TempDir dir;
-  REQUIRE(dir.ok());
   const std::string path = dir.write("drive.asc",
                                      "date Fri Mar 1 00:00:00.000 2024\n"
                                      "base hex  timestamps absolute\n"
@@ -490,17 +474,30 @@ TEST_CASE("the ASC and candump fixtures play every frame the log reader reads") 
   }
 }
 
-TEST_CASE("timestamps that go back play at once and are counted") {
-  TempDir dir;
-  REQUIRE(dir.ok());
-  const std::string path = dir.write("jitter.log",
-                                     "(1.000000) can0 101#01\n"
-                                     "(1.020000) can0 102#02\n"
-                                     "(1.010000) can0 103#03\n"
-                                     "(1.030000) can0 104#04\n");
-  auto sut = openOrFail(path, optionsAt(1.0));
+namespace {
 
-  const auto frames = play(*sut, 4, 1);
+/// A log of four frames played at speed 1, one frame per receive, and the link that played it.
+struct PlayedFour {
+  std::unique_ptr<ReplayLink> sut;
+  std::vector<ReceivedFrame> frames;
+};
+
+PlayedFour playFour(const std::string& name, const std::string& text) {
+  TempDir dir;
+  PlayedFour played;
+  played.sut = openOrFail(dir.write(name, text), optionsAt(1.0));
+  played.frames = play(*played.sut, 4, 1);
+  return played;
+}
+
+}  // namespace
+
+TEST_CASE("timestamps that go back play at once and are counted") {
+  const auto [sut, frames] = playFour("jitter.log",
+                                      "(1.000000) can0 101#01\n"
+                                      "(1.020000) can0 102#02\n"
+                                      "(1.010000) can0 103#03\n"
+                                      "(1.030000) can0 104#04\n");
 
   REQUIRE(frames.size() == 4);
   const std::int64_t startNs = frames[0].monotonicNs;
@@ -511,16 +508,11 @@ TEST_CASE("timestamps that go back play at once and are counted") {
 }
 
 TEST_CASE("a step back of more than a second starts a new time base") {
-  TempDir dir;
-  REQUIRE(dir.ok());
-  const std::string path = dir.write("joined.log",
-                                     "(5.000000) can0 101#01\n"
-                                     "(5.020000) can0 102#02\n"
-                                     "(1.000000) can0 103#03\n"
-                                     "(1.010000) can0 104#04\n");
-  auto sut = openOrFail(path, optionsAt(1.0));
-
-  const auto frames = play(*sut, 4, 1);
+  const auto [sut, frames] = playFour("joined.log",
+                                      "(5.000000) can0 101#01\n"
+                                      "(5.020000) can0 102#02\n"
+                                      "(1.000000) can0 103#03\n"
+                                      "(1.010000) can0 104#04\n");
 
   REQUIRE(frames.size() == 4);
   const std::int64_t startNs = frames[0].monotonicNs;
@@ -531,7 +523,6 @@ TEST_CASE("a step back of more than a second starts a new time base") {
 
 TEST_CASE("send is not supported by a replay and is counted as a failure") {
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("spaced.log", spacedLog(1, 1)), optionsAt(1.0));
 
   CHECK(sut->send(Frame{}) == SendStatus::NotSupported);
@@ -541,7 +532,6 @@ TEST_CASE("send is not supported by a replay and is counted as a failure") {
 TEST_CASE("receive allocates nothing per frame once the replay is open") {
   constexpr int FRAMES = 3000;  // ~80 KiB: more than one fill of the reader's buffer
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("big.log", spacedLog(FRAMES, 1)), optionsAt(0.0));
   std::vector<ReceivedFrame> batch(64);
   std::size_t received = 0;
@@ -556,7 +546,6 @@ TEST_CASE("receive allocates nothing per frame once the replay is open") {
 
 TEST_CASE("receive into an empty span does nothing and keeps the frame") {
   TempDir dir;
-  REQUIRE(dir.ok());
   auto sut = openOrFail(dir.write("spaced.log", spacedLog(1, 1)), optionsAt(1.0));
   std::vector<ReceivedFrame> batch(1);
 

@@ -17,40 +17,33 @@ using namespace openvcu::dbc::test;
 
 // ------------------------------------------------------------------ byte orders
 
-TEST_CASE("codec decodes an Intel field LSB first") {
-  const ParseOutput parsed = oneMessage(" SG_ A : 8|16@1+ (1,0) [0|0] \"\" Vcu\n");
-  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+TEST_CASE("codec decodes unsigned fields in both byte orders") {
+  struct Row {
+    const char* name;
+    const char* signal;
+    const char* payload;
+    std::uint64_t expected;
+  };
+  const Row rows[] = {
+      {"an Intel field LSB first", " SG_ A : 8|16@1+ (1,0) [0|0] \"\" Vcu\n", "00 34 12 00 00 00 00 00", 0x1234u},
+      {"Motorola start 7 size 16 as bytes 0..1 big-endian", " SG_ A : 7|16@0+ (1,0) [0|0] \"\" Vcu\n",
+       "12 34 FF FF FF FF FF FF", 0x1234u},
+      // MSB is byte 1 bit 4: byte 1 bits 4..0 then byte 2 bits 7..1; the other bits are noise.
+      {"Motorola start 12 size 12 across the sawtooth byte boundary", " SG_ A : 12|12@0+ (1,0) [0|0] \"\" Vcu\n",
+       "FF F5 79 FF 00 00 00 00", 0xABCu},
+      {"Intel start 12 size 12 from the high nibble up", " SG_ A : 12|12@1+ (1,0) [0|0] \"\" Vcu\n",
+       "FF CF AB FF 00 00 00 00", 0xABCu},
+      {"a Motorola signal ending in the last bit of the frame", " SG_ A : 51|12@0+ (1,0) [0|0] \"\" Vcu\n",
+       "00 00 00 00 00 00 0A BC", 0xABCu},
+  };
+  for (const Row& row : rows) {
+    SUBCASE(row.name) {
+      const ParseOutput parsed = oneMessage(row.signal);
+      const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
 
-  CHECK(decodeOne(sut, hexBytes("00 34 12 00 00 00 00 00"), 0).rawUnsigned == 0x1234u);
-}
-
-TEST_CASE("codec decodes Motorola start 7 size 16 as bytes 0..1 big-endian") {
-  const ParseOutput parsed = oneMessage(" SG_ A : 7|16@0+ (1,0) [0|0] \"\" Vcu\n");
-  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
-
-  CHECK(decodeOne(sut, hexBytes("12 34 FF FF FF FF FF FF"), 0).rawUnsigned == 0x1234u);
-}
-
-TEST_CASE("codec decodes Motorola start 12 size 12 across the sawtooth byte boundary") {
-  // MSB is byte 1 bit 4: byte 1 bits 4..0 then byte 2 bits 7..1; the other bits are noise.
-  const ParseOutput parsed = oneMessage(" SG_ A : 12|12@0+ (1,0) [0|0] \"\" Vcu\n");
-  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
-
-  CHECK(decodeOne(sut, hexBytes("FF F5 79 FF 00 00 00 00"), 0).rawUnsigned == 0xABCu);
-}
-
-TEST_CASE("codec decodes Intel start 12 size 12 from the high nibble up") {
-  const ParseOutput parsed = oneMessage(" SG_ A : 12|12@1+ (1,0) [0|0] \"\" Vcu\n");
-  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
-
-  CHECK(decodeOne(sut, hexBytes("FF CF AB FF 00 00 00 00"), 0).rawUnsigned == 0xABCu);
-}
-
-TEST_CASE("codec decodes a Motorola signal ending in the last bit of the frame") {
-  const ParseOutput parsed = oneMessage(" SG_ A : 51|12@0+ (1,0) [0|0] \"\" Vcu\n");
-  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
-
-  CHECK(decodeOne(sut, hexBytes("00 00 00 00 00 00 0A BC"), 0).rawUnsigned == 0xABCu);
+      CHECK(decodeOne(sut, hexBytes(row.payload), 0).rawUnsigned == row.expected);
+    }
+  }
 }
 
 // ------------------------------------------------------------------ signs and widths

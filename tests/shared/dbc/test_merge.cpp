@@ -40,6 +40,15 @@ Database parsedDatabase(const std::string& text, std::string_view name) {
   return std::move(parsed.database);
 }
 
+/// The vehicle database as the merge target, a copy of it as it was, and a merge of
+/// "other.dbc" into it.
+struct MergeIntoVehicle {
+  Database sut = parsedDatabase(VEHICLE, "vehicle.dbc");
+  const Database before = sut;
+
+  Status mergeOther(const std::string& text) { return merge(sut, parsedDatabase(text, "other.dbc"), "other.dbc"); }
+};
+
 }  // namespace
 
 TEST_CASE("merge adds the other file's messages and nodes and keeps identical definitions once") {
@@ -84,18 +93,14 @@ TEST_CASE("merge keeps identical environment variables, signal groups and relati
   CHECK(sut == copy);
 }
 
-TEST_CASE("merge refuses a message with the same ID but another layout and leaves the target unchanged") {
-  Database sut = parsedDatabase(VEHICLE, "vehicle.dbc");
-  const Database before = sut;
-  const Database other = parsedDatabase(
+TEST_CASE_FIXTURE(MergeIntoVehicle,
+                  "merge refuses a message with the same ID but another layout and leaves the target unchanged") {
+  const Status status = mergeOther(
       "BU_: Vcu\n"
       "\n"
       "BO_ 256 VcuStatus: 8 Vcu\n"
       " SG_ State : 0|8@1+ (1,0) [0|255] \"\" Battery\n"
-      "BO_ 999 Extra: 8 Vcu\n",
-      "other.dbc");
-
-  const Status status = merge(sut, other, "other.dbc");
+      "BO_ 999 Extra: 8 Vcu\n");
 
   REQUIRE_FALSE(status.ok());
   CHECK(status.error().location.file == "other.dbc");
@@ -105,24 +110,17 @@ TEST_CASE("merge refuses a message with the same ID but another layout and leave
   CHECK(sut.findMessage("Extra") == nullptr);
 }
 
-TEST_CASE("merge refuses a message name already used for another ID") {
-  Database sut = parsedDatabase(VEHICLE, "vehicle.dbc");
-  const Database before = sut;
-  const Database other = parsedDatabase("BO_ 300 VcuStatus: 8 Vcu\n", "other.dbc");
-
-  const Status status = merge(sut, other, "other.dbc");
+TEST_CASE_FIXTURE(MergeIntoVehicle, "merge refuses a message name already used for another ID") {
+  const Status status = mergeOther("BO_ 300 VcuStatus: 8 Vcu\n");
 
   REQUIRE_FALSE(status.ok());
   CHECK(status.error().message.find("already used for ID 0x100") != std::string::npos);
   CHECK(sut == before);
 }
 
-TEST_CASE("merge refuses an attribute defined with another type and leaves the target unchanged") {
-  Database sut = parsedDatabase(VEHICLE, "vehicle.dbc");
-  const Database before = sut;
-  const Database other = parsedDatabase("BA_DEF_ BO_ \"GenMsgCycleTime\" FLOAT 0 65535;\n", "other.dbc");
-
-  const Status status = merge(sut, other, "other.dbc");
+TEST_CASE_FIXTURE(MergeIntoVehicle,
+                  "merge refuses an attribute defined with another type and leaves the target unchanged") {
+  const Status status = mergeOther("BA_DEF_ BO_ \"GenMsgCycleTime\" FLOAT 0 65535;\n");
 
   REQUIRE_FALSE(status.ok());
   CHECK(status.error().location.file == "other.dbc");

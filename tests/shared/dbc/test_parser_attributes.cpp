@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include <string>
+#include <utility>
 
 using namespace openvcu;
 using namespace openvcu::dbc;
@@ -26,6 +27,18 @@ const std::string TWO_MESSAGES =
     " SG_ S : 0|8@1+ (1,0) [0|0] \"\" Vcu\n"
     "BO_ 1809 Plain: 8 Vcu\n"
     " SG_ T : 0|8@1+ (1,0) [0|0] \"\" Vcu\n";
+
+/// TWO_MESSAGES' messages "Flagged" and "Plain" of a parse; fails the test unless both are
+/// there with their signal.
+std::pair<const Message*, const Message*> flaggedAndPlain(const ParseOutput& sut) {
+  const Message* flagged = sut.database.findMessage("Flagged");
+  const Message* plain = sut.database.findMessage("Plain");
+  REQUIRE(flagged != nullptr);
+  REQUIRE(plain != nullptr);
+  REQUIRE(!flagged->signals.empty());
+  REQUIRE(!plain->signals.empty());
+  return {flagged, plain};
+}
 
 /// The resolved frame format's DBC name ("J1939PG"), or "no such message".
 std::string formatOf(const ParseOutput& output, std::string_view name) {
@@ -66,12 +79,7 @@ TEST_CASE("parser resolves GenSigStartValue from the explicit value, else the de
                                     "BA_ \"GenSigStartValue\" SG_ 2364535585 S 42;\n");
 
   CHECK(sut.diagnostics.empty());
-  const Message* flagged = sut.database.findMessage("Flagged");
-  const Message* plain = sut.database.findMessage("Plain");
-  REQUIRE(flagged != nullptr);
-  REQUIRE(plain != nullptr);
-  REQUIRE(!flagged->signals.empty());
-  REQUIRE(!plain->signals.empty());
+  const auto [flagged, plain] = flaggedAndPlain(sut);
   CHECK(sut.database.startValueRaw(flagged->signals[0]) == EXPLICIT_START);
   CHECK(sut.database.startValueRaw(plain->signals[0]) == DEFAULT_START);
 }
@@ -160,12 +168,7 @@ TEST_CASE("parser sets displayName from SystemSignalLongSymbol and SystemMessage
                                     "BA_ \"SystemMessageLongSymbol\" BO_ 1809 \"Plain_Message_With_A_Very_Long_Name_Beyond_32\";\n");
 
   CHECK(sut.diagnostics.empty());
-  const Message* flagged = sut.database.findMessage("Flagged");
-  const Message* plain = sut.database.findMessage("Plain");
-  REQUIRE(flagged != nullptr);
-  REQUIRE(plain != nullptr);
-  REQUIRE(!flagged->signals.empty());
-  REQUIRE(!plain->signals.empty());
+  const auto [flagged, plain] = flaggedAndPlain(sut);
   CHECK(flagged->signals[0].displayName == "Engine's Speed (long name)");
   CHECK(flagged->signals[0].name == "S");
   CHECK(plain->signals[0].displayName == "T");

@@ -87,86 +87,61 @@ std::vector<std::filesystem::path> fixtureFiles() {
 
 // ------------------------------------------------------------------ exact locations
 
-TEST_CASE("parser reports a missing BO_ colon at the length token") {
-  const ParseOutput sut = parseText("BU_: A\nBO_ 100 Msg 8 Node\n");
+namespace {
 
-  CHECK(firstError(sut) == "test.dbc:2:13: expected ':', found '8'");
-}
+/// One malformed input and the first error the parser must report for it.
+struct FirstErrorCase {
+  const char* name;
+  std::string_view text;
+  std::string_view expected;
+};
 
-TEST_CASE("parser reports an unknown statement at its first character") {
-  const ParseOutput afterNodes = parseText("BU_: A\n\nFOO bar;\n");
-  const ParseOutput indented = parseText("BO_ 1 M: 8 N\n\n  FOO bar;\n");
+constexpr FirstErrorCase FIRST_ERROR_CASES[] = {
+    {"a missing BO_ colon at the length token", "BU_: A\nBO_ 100 Msg 8 Node\n",
+     "test.dbc:2:13: expected ':', found '8'"},
+    {"an unknown statement at its first character (after nodes)", "BU_: A\n\nFOO bar;\n",
+     "test.dbc:3:1: unknown statement 'FOO'"},
+    {"an unknown statement at its first character (indented)", "BO_ 1 M: 8 N\n\n  FOO bar;\n",
+     "test.dbc:3:3: unknown statement 'FOO'"},
+    {"an unexpected character where a statement should start", "BU_: A\n  @\n",
+     "test.dbc:2:3: unexpected character '@'"},
+    {"a bad byte order at the digit", "BO_ 1 M: 8 N\n SG_ S : 0|8@2+ (1,0) [0|0] \"\" N\n",
+     "test.dbc:2:14: expected byte order 0 (Motorola) or 1 (Intel), found '2'"},
+    {"a missing sign at the character after the byte order", "BO_ 1 M: 8 N\n SG_ S : 0|8@1 (1,0) [0|0] \"\" N\n",
+     "test.dbc:2:16: expected '+' (unsigned) or '-' (signed), found '('"},
+    {"a string that is never closed at its opening quote", "VAL_TABLE_ T 1 \"open\n",
+     "test.dbc:1:16: string never closed"},
+    {"a message ID beyond 32 bits at the number", "BO_ 4294967296 X: 8 N\n",
+     "test.dbc:1:5: message ID 4294967296 exceeds 32 bits"},
+    {"SG_ outside a message at the keyword", "BU_: N\n SG_ S : 0|8@1+ (1,0) [0|0] \"\" N\n",
+     "test.dbc:2:2: SG_ outside a BO_ message"},
+    {"text after a BO_ header at the extra word", "BO_ 1 X: 8 N extra\n", "test.dbc:1:14: unexpected text after BO_"},
+    {"a missing a semicolon that is not followed by a statement", "BA_DEF_ BO_ \"A\" INT 0 10 junk\n",
+     "test.dbc:1:26: expected ';', found 'j'"},
+    {"the right line after multi-line strings, block comments and CRLF",
+     "CM_ \"line one\r\nline two\r\nline three\";\r\n"
+     "/* a comment\r\n over two lines */\r\n"
+     "BO_ 1 X 8 N\r\n",
+     "test.dbc:6:9: expected ':', found '8'"},
+    {"resolution errors on the line of the referring statement",
+     "BO_ 1 M: 8 N\n"
+     " SG_ Sel M : 0|8@1+ (1,0) [0|0] \"\" N\n"
+     " SG_ Val m1 : 8|8@1+ (1,0) [0|0] \"\" N\n"
+     "\n"
+     "SG_MUL_VAL_ 1 Val Missing 1-1;\n",
+     "test.dbc:5:1: SG_MUL_VAL_ names multiplexor 'Missing' that message 'M' does not have"},
+};
 
-  CHECK(firstError(afterNodes) == "test.dbc:3:1: unknown statement 'FOO'");
-  CHECK(firstError(indented) == "test.dbc:3:3: unknown statement 'FOO'");
-}
+}  // namespace
 
-TEST_CASE("parser reports an unexpected character where a statement should start") {
-  const ParseOutput sut = parseText("BU_: A\n  @\n");
+TEST_CASE("parser reports each malformed statement as file:line:col at the right place") {
+  for (const FirstErrorCase& row : FIRST_ERROR_CASES) {
+    SUBCASE(row.name) {
+      const ParseOutput sut = parseText(row.text);
 
-  CHECK(firstError(sut) == "test.dbc:2:3: unexpected character '@'");
-}
-
-TEST_CASE("parser reports a bad byte order at the digit") {
-  const ParseOutput sut = parseText("BO_ 1 M: 8 N\n SG_ S : 0|8@2+ (1,0) [0|0] \"\" N\n");
-
-  CHECK(firstError(sut) == "test.dbc:2:14: expected byte order 0 (Motorola) or 1 (Intel), found '2'");
-}
-
-TEST_CASE("parser reports a missing sign at the character after the byte order") {
-  const ParseOutput sut = parseText("BO_ 1 M: 8 N\n SG_ S : 0|8@1 (1,0) [0|0] \"\" N\n");
-
-  CHECK(firstError(sut) == "test.dbc:2:16: expected '+' (unsigned) or '-' (signed), found '('");
-}
-
-TEST_CASE("parser reports a string that is never closed at its opening quote") {
-  const ParseOutput sut = parseText("VAL_TABLE_ T 1 \"open\n");
-
-  CHECK(firstError(sut) == "test.dbc:1:16: string never closed");
-}
-
-TEST_CASE("parser reports a message ID beyond 32 bits at the number") {
-  const ParseOutput sut = parseText("BO_ 4294967296 X: 8 N\n");
-
-  CHECK(firstError(sut) == "test.dbc:1:5: message ID 4294967296 exceeds 32 bits");
-}
-
-TEST_CASE("parser reports SG_ outside a message at the keyword") {
-  const ParseOutput sut = parseText("BU_: N\n SG_ S : 0|8@1+ (1,0) [0|0] \"\" N\n");
-
-  CHECK(firstError(sut) == "test.dbc:2:2: SG_ outside a BO_ message");
-}
-
-TEST_CASE("parser reports text after a BO_ header at the extra word") {
-  const ParseOutput sut = parseText("BO_ 1 X: 8 N extra\n");
-
-  CHECK(firstError(sut) == "test.dbc:1:14: unexpected text after BO_");
-}
-
-TEST_CASE("parser reports a missing a semicolon that is not followed by a statement") {
-  const ParseOutput sut = parseText("BA_DEF_ BO_ \"A\" INT 0 10 junk\n");
-
-  CHECK(firstError(sut) == "test.dbc:1:26: expected ';', found 'j'");
-}
-
-TEST_CASE("parser counts lines correctly after multi-line strings, block comments and CRLF") {
-  const ParseOutput sut = parseText(
-      "CM_ \"line one\r\nline two\r\nline three\";\r\n"
-      "/* a comment\r\n over two lines */\r\n"
-      "BO_ 1 X 8 N\r\n");
-
-  CHECK(firstError(sut) == "test.dbc:6:9: expected ':', found '8'");
-}
-
-TEST_CASE("parser reports resolution errors on the line of the referring statement") {
-  const ParseOutput sut = parseText(
-      "BO_ 1 M: 8 N\n"
-      " SG_ Sel M : 0|8@1+ (1,0) [0|0] \"\" N\n"
-      " SG_ Val m1 : 8|8@1+ (1,0) [0|0] \"\" N\n"
-      "\n"
-      "SG_MUL_VAL_ 1 Val Missing 1-1;\n");
-
-  CHECK(firstError(sut) == "test.dbc:5:1: SG_MUL_VAL_ names multiplexor 'Missing' that message 'M' does not have");
+      CHECK(firstError(sut) == row.expected);
+    }
+  }
 }
 
 TEST_CASE("parser reports a warning with its location and the warning prefix") {

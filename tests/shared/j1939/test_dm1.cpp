@@ -10,19 +10,19 @@
 
 using namespace openvcu::j1939;
 
+namespace {
+doctest::String toDoctest(std::string_view name) {
+  return {name.data(), static_cast<doctest::String::size_type>(name.size())};
+}
+}  // namespace
+
 template <>
 struct doctest::StringMaker<LampStatus> {
-  static doctest::String convert(LampStatus status) {
-    const std::string_view name = lampStatusName(status);
-    return {name.data(), static_cast<doctest::String::size_type>(name.size())};
-  }
+  static doctest::String convert(LampStatus status) { return toDoctest(lampStatusName(status)); }
 };
 template <>
 struct doctest::StringMaker<LampFlash> {
-  static doctest::String convert(LampFlash flash) {
-    const std::string_view name = lampFlashName(flash);
-    return {name.data(), static_cast<doctest::String::size_type>(name.size())};
-  }
+  static doctest::String convert(LampFlash flash) { return toDoctest(lampFlashName(flash)); }
 };
 
 namespace {

@@ -81,6 +81,14 @@ void synchronise(SafetyPairChecker& checker, Sender& sender) {
   REQUIRE(sender.sendTo(checker) == SafetyResult::Ok);
 }
 
+/// A checker with CHECKER_CONFIG and a sender whose first pair has synchronised it.
+struct SynchronisedChecker {
+  SafetyPairChecker sut{CHECKER_CONFIG};
+  Sender sender;
+
+  SynchronisedChecker() { synchronise(sut, sender); }
+};
+
 }  // namespace
 
 TEST_CASE("CRC-32 of J1939-76 matches the three known answers") {
@@ -207,10 +215,7 @@ TEST_CASE("checker accepts the thesis pair as a reference with any sequence numb
   CHECK(sut.onData(THESIS_SDM_DATA, HEADER_TO_DATA_NS) == SafetyResult::Synchronising);
 }
 
-TEST_CASE("checker reports a CRC mismatch when one data bit flips") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reports a CRC mismatch when one data bit flips") {
   const SafetyPayload header = sender.builder.nextHeader(THESIS_SDM_DATA);
   SafetyPayload corrupted = THESIS_SDM_DATA;
   corrupted[3] ^= 0x10;
@@ -219,20 +224,14 @@ TEST_CASE("checker reports a CRC mismatch when one data bit flips") {
   CHECK(sut.count(SafetyResult::CrcMismatch) == 1);
 }
 
-TEST_CASE("checker reports a sequence error when a pair is skipped") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reports a sequence error when a pair is skipped") {
   (void)sender.builder.nextHeader(THESIS_SDM_DATA);  // this pair is lost on the bus
 
   CHECK(sender.sendTo(sut) == SafetyResult::SequenceError);
   CHECK(sut.count(SafetyResult::SequenceError) == 1);
 }
 
-TEST_CASE("checker reports a repetition when the same sequence number comes twice") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reports a repetition when the same sequence number comes twice") {
   const SafetyPayload header = sender.builder.nextHeader(THESIS_SDM_DATA);
 
   CHECK(sender.sendHeader(sut, header) == SafetyResult::Ok);
@@ -240,34 +239,21 @@ TEST_CASE("checker reports a repetition when the same sequence number comes twic
   CHECK(sut.count(SafetyResult::Repetition) == 1);
 }
 
-TEST_CASE("checker reports a timeout when the SDM comes later than the SRVT") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker measures the SDM against the SRVT from its header") {
   const std::int64_t headerNs = sender.nowNs + CYCLE_NS;
 
   sut.onHeader(sender.builder.nextHeader(THESIS_SDM_DATA), headerNs);
 
-  CHECK(sut.onData(THESIS_SDM_DATA, headerNs + SRVT_NS + 1) == SafetyResult::Timeout);
-  CHECK(sut.count(SafetyResult::Timeout) == 1);
+  SUBCASE("checker reports a timeout when the SDM comes later than the SRVT") {
+    CHECK(sut.onData(THESIS_SDM_DATA, headerNs + SRVT_NS + 1) == SafetyResult::Timeout);
+    CHECK(sut.count(SafetyResult::Timeout) == 1);
+  }
+  SUBCASE("checker accepts an SDM exactly at the SRVT") {
+    CHECK(sut.onData(THESIS_SDM_DATA, headerNs + SRVT_NS) == SafetyResult::Ok);
+  }
 }
 
-TEST_CASE("checker accepts an SDM exactly at the SRVT") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
-  const std::int64_t headerNs = sender.nowNs + CYCLE_NS;
-
-  sut.onHeader(sender.builder.nextHeader(THESIS_SDM_DATA), headerNs);
-
-  CHECK(sut.onData(THESIS_SDM_DATA, headerNs + SRVT_NS) == SafetyResult::Ok);
-}
-
-TEST_CASE("checker reports a missing header when an SDM comes without an SHM") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
-
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reports a missing header when an SDM comes without an SHM") {
   CHECK(sut.onData(THESIS_SDM_DATA, sender.nowNs + CYCLE_NS) == SafetyResult::MissingHeader);
   CHECK(sut.count(SafetyResult::MissingHeader) == 1);
 }
@@ -278,30 +264,21 @@ TEST_CASE("checker reports a missing header when an SDM comes before its SHM") {
   CHECK(sut.onData(THESIS_SDM_DATA, 0) == SafetyResult::MissingHeader);
 }
 
-TEST_CASE("checker reports a cycle timeout when an SHM comes later than the SCT") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reports a cycle timeout when an SHM comes later than the SCT") {
   sender.nowNs += SCT_NS;  // the next SHM comes SCT + one cycle after the previous one
 
   CHECK(sender.sendTo(sut) == SafetyResult::CycleTimeout);
   CHECK(sut.count(SafetyResult::CycleTimeout) == 1);
 }
 
-TEST_CASE("checker reports a header mismatch when the inverted source address is wrong") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reports a header mismatch when the inverted source address is wrong") {
   SafetyPayload header = sender.builder.nextHeader(THESIS_SDM_DATA);
   header[1] = 0xFF;  // the original's defect: FF instead of ~SA
 
   CHECK(sender.sendHeader(sut, header) == SafetyResult::HeaderMismatch);
 }
 
-TEST_CASE("checker reports a header mismatch when the data page bit is wrong") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reports a header mismatch when the data page bit is wrong") {
   SafetyPayload header = sender.builder.nextHeader(THESIS_SDM_DATA);
   header[0] &= 0xFE;  // claims DP = 1
 
@@ -332,10 +309,7 @@ TEST_CASE("checker accepts the sequence wrapping from 31 to 0") {
   CHECK(sender.sendTo(sut) == SafetyResult::Ok);             // 1
 }
 
-TEST_CASE("checker recovers from a fault on the second consecutive good pair") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker recovers from a fault on the second consecutive good pair") {
   (void)sender.builder.nextHeader(THESIS_SDM_DATA);
 
   CHECK(sender.sendTo(sut) == SafetyResult::SequenceError);
@@ -365,11 +339,7 @@ TEST_CASE("checker says the header is overdue before the first SHM and after the
   CHECK(sut.headerOverdue(HEADER_NS + SCT_NS + 1));
 }
 
-TEST_CASE("checker reset forgets the reference but keeps the counters") {
-  SafetyPairChecker sut{CHECKER_CONFIG};
-  Sender sender;
-  synchronise(sut, sender);
-
+TEST_CASE_FIXTURE(SynchronisedChecker, "checker reset forgets the reference but keeps the counters") {
   sut.reset();
 
   CHECK(sender.sendTo(sut) == SafetyResult::Synchronising);

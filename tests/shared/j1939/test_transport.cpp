@@ -186,11 +186,15 @@ void checkCountersBalance(const TpReceiver& receiver) {
             counters.sessionsReplaced + counters.sessionsDropped + receiver.activeSessions());
 }
 
+/// A receiver with the VCU's configuration and the sink that records what it does.
+struct VcuReceiver {
+  TpReceiver sut{VCU_CONFIG};
+  RecordingSink sink;
+};
+
 }  // namespace
 
-TEST_CASE("BAM of three packets is reassembled into the announced 20 bytes") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "BAM of three packets is reassembled into the announced 20 bytes") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(BAM_CM_ID, FrameData{0x20, 0x14, 0x00, 0x03, 0xFF, 0xCA, 0xFE, 0x00}, START_NS, sink);
@@ -215,9 +219,7 @@ TEST_CASE("BAM of three packets is reassembled into the announced 20 bytes") {
   CHECK(sut.counters().sessionsCompleted == 1);
 }
 
-TEST_CASE("RTS to us is answered with a CTS for all packets and the transfer with an EndOfMsgAck") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "RTS to us is answered with a CTS for all packets and the transfer with an EndOfMsgAck") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(RTS_CM_ID, FrameData{0x10, 0x14, 0x00, 0x03, 0xFF, 0xEB, 0xFE, 0x00}, START_NS, sink);
@@ -285,19 +287,14 @@ TEST_CASE("the originator's packet limit in the RTS caps each CTS") {
   CHECK(sink.messages[0].data == payload);
 }
 
-TEST_CASE("an RTS whose packet limit byte is 0 is served as if it had no limit") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "an RTS whose packet limit byte is 0 is served as if it had no limit") {
   sut.onFrame(RTS_CM_ID, rts(20, PGN_COMPONENT_ID, 0), START_NS, sink);
 
   REQUIRE(sink.frames.size() == 1);
   CHECK(sink.frames[0] == expectedCts(REPLY_TO_ORIGINATOR, 3, 1, PGN_COMPONENT_ID));
 }
 
-TEST_CASE("a BAM from 0x10 and an RTS/CTS transfer from 0x20 interleaved both complete") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a BAM from 0x10 and an RTS/CTS transfer from 0x20 interleaved both complete") {
   const Bytes broadcastPayload = countingPayload(26);  // 4 packets
   Bytes directedPayload = countingPayload(30);         // 5 packets
   std::reverse(directedPayload.begin(), directedPayload.end());
@@ -324,9 +321,7 @@ TEST_CASE("a BAM from 0x10 and an RTS/CTS transfer from 0x20 interleaved both co
   CHECK(sink.count(TpEventKind::Ignored) == 0);
 }
 
-TEST_CASE("a BAM and an RTS/CTS transfer from the same source run side by side") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a BAM and an RTS/CTS transfer from the same source run side by side") {
   const Bytes broadcastPayload = countingPayload(14);
   const Bytes directedPayload = countingPayload(9);
   constexpr std::uint32_t SAME_SOURCE_BAM_CM = 0x1CECFF20;
@@ -346,9 +341,7 @@ TEST_CASE("a BAM and an RTS/CTS transfer from the same source run side by side")
   CHECK(sink.messages[1].data == directedPayload);
 }
 
-TEST_CASE("an Abort from the originator ends the session without an EndOfMsgAck") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "an Abort from the originator ends the session without an EndOfMsgAck") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(RTS_CM_ID, rts(payload.size(), PGN_COMPONENT_ID), START_NS, sink);
@@ -368,9 +361,7 @@ TEST_CASE("an Abort from the originator ends the session without an EndOfMsgAck"
   CHECK(sut.activeSessions() == 0);
 }
 
-TEST_CASE("an Abort naming another PGN leaves the session running") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "an Abort naming another PGN leaves the session running") {
   const Bytes payload = countingPayload(9);
 
   sut.onFrame(RTS_CM_ID, rts(payload.size(), PGN_COMPONENT_ID), START_NS, sink);
@@ -382,9 +373,7 @@ TEST_CASE("an Abort naming another PGN leaves the session running") {
   CHECK(sink.messages[0].data == payload);
 }
 
-TEST_CASE("a packet out of sequence makes us abort with reason bad sequence number") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a packet out of sequence makes us abort with reason bad sequence number") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(RTS_CM_ID, rts(payload.size(), PGN_COMPONENT_ID), START_NS, sink);
@@ -400,9 +389,7 @@ TEST_CASE("a packet out of sequence makes us abort with reason bad sequence numb
   CHECK(sut.activeSessions() == 0);
 }
 
-TEST_CASE("sequence number 0 is a bad sequence number") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "sequence number 0 is a bad sequence number") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(RTS_CM_ID, rts(payload.size(), PGN_COMPONENT_ID), START_NS, sink);
@@ -414,9 +401,7 @@ TEST_CASE("sequence number 0 is a bad sequence number") {
         expectedAbort(REPLY_TO_ORIGINATOR, TpAbortReason::BadSequenceNumber, PGN_COMPONENT_ID));
 }
 
-TEST_CASE("the previous packet received again is ignored and the transfer completes") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "the previous packet received again is ignored and the transfer completes") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(RTS_CM_ID, rts(payload.size(), PGN_COMPONENT_ID), START_NS, sink);
@@ -431,9 +416,7 @@ TEST_CASE("the previous packet received again is ignored and the transfer comple
   CHECK(sink.frames.back() == expectedEndOfMsgAck(REPLY_TO_ORIGINATOR, 20, PGN_COMPONENT_ID));
 }
 
-TEST_CASE("an older packet received again makes us abort with reason duplicate sequence number") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "an older packet received again makes us abort with reason duplicate sequence number") {
   const Bytes payload = countingPayload(30);
 
   sut.onFrame(RTS_CM_ID, rts(payload.size(), PGN_COMPONENT_ID), START_NS, sink);
@@ -446,9 +429,7 @@ TEST_CASE("an older packet received again makes us abort with reason duplicate s
   CHECK(sink.count(TpEventKind::AbortSent) == 1);
 }
 
-TEST_CASE("a BAM packet out of sequence drops the BAM without sending anything") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a BAM packet out of sequence drops the BAM without sending anything") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(BAM_CM_ID, bam(payload.size(), PGN_DM1_BROADCAST), START_NS, sink);
@@ -462,9 +443,7 @@ TEST_CASE("a BAM packet out of sequence drops the BAM without sending anything")
   CHECK(sut.counters().sessionsDropped == 1);
 }
 
-TEST_CASE("a BAM without a packet for T1 times out silently") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a BAM without a packet for T1 times out silently") {
   const Bytes payload = countingPayload(20);
   const std::int64_t packetNs = START_NS + PACKET_GAP_NS;
 
@@ -484,10 +463,7 @@ TEST_CASE("a BAM without a packet for T1 times out silently") {
   CHECK_FALSE(sut.nextDeadlineNs().has_value());
 }
 
-TEST_CASE("a BAM whose first packet does not come within T1 times out") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "a BAM whose first packet does not come within T1 times out") {
   sut.onFrame(BAM_CM_ID, bam(20, PGN_DM1_BROADCAST), START_NS, sink);
   CHECK(sut.nextDeadlineNs() == START_NS + TP_T1_NS);
   sut.poll(START_NS + TP_T1_NS, sink);
@@ -495,9 +471,7 @@ TEST_CASE("a BAM whose first packet does not come within T1 times out") {
   CHECK(sink.count(TpEventKind::Timeout) == 1);
 }
 
-TEST_CASE("an RTS/CTS transfer without a packet for T1 is aborted with reason timeout") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "an RTS/CTS transfer without a packet for T1 is aborted with reason timeout") {
   const Bytes payload = countingPayload(20);
   const std::int64_t packetNs = START_NS + 10 * MS;
 
@@ -517,10 +491,7 @@ TEST_CASE("an RTS/CTS transfer without a packet for T1 is aborted with reason ti
                                   PGN_COMPONENT_ID, TpAbortReason::Timeout});
 }
 
-TEST_CASE("no packet within T2 after our CTS aborts with reason timeout") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "no packet within T2 after our CTS aborts with reason timeout") {
   sut.onFrame(RTS_CM_ID, rts(20, PGN_COMPONENT_ID), START_NS, sink);
   CHECK(sut.nextDeadlineNs() == START_NS + TP_T2_NS);
   sut.poll(START_NS + TP_T1_NS, sink);  // T1 does not apply before the first packet
@@ -544,9 +515,7 @@ TEST_CASE("T2 runs again after each CTS of a later window") {
   CHECK(sut.nextDeadlineNs() == windowEndNs + TP_T2_NS);
 }
 
-TEST_CASE("a packet that comes after its deadline is judged after the timeout") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a packet that comes after its deadline is judged after the timeout") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(BAM_CM_ID, bam(payload.size(), PGN_DM1_BROADCAST), START_NS, sink);
@@ -631,9 +600,7 @@ TEST_CASE("an RTS while every buffer is busy is held with CTS(0) repeated every 
   checkCountersBalance(sut);
 }
 
-TEST_CASE("an RTS addressed to another node is not answered") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "an RTS addressed to another node is not answered") {
   constexpr std::uint32_t RTS_TO_OTHER = 0x1CEC3020;  // from 0x20 to 0x30
   constexpr std::uint32_t DT_TO_OTHER = 0x1CEB3020;
   const Bytes payload = countingPayload(9);
@@ -649,10 +616,7 @@ TEST_CASE("an RTS addressed to another node is not answered") {
   CHECK(sut.activeSessions() == 0);
 }
 
-TEST_CASE("our own CTS looped back by the bus is not taken for a frame to us") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "our own CTS looped back by the bus is not taken for a frame to us") {
   sut.onFrame(RTS_CM_ID, rts(20, PGN_COMPONENT_ID), START_NS, sink);
   const TpFrame cts = sink.frames.at(0);
   sut.onFrame(cts.canId, cts.data, START_NS + MS, sink);
@@ -662,9 +626,7 @@ TEST_CASE("our own CTS looped back by the bus is not taken for a frame to us") {
   CHECK(sut.counters().framesNotForUs == 1);
 }
 
-TEST_CASE("an RTS to the global address or a BAM to one address is ignored") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "an RTS to the global address or a BAM to one address is ignored") {
   constexpr std::uint32_t RTS_TO_GLOBAL = 0x1CECFF20;
 
   sut.onFrame(RTS_TO_GLOBAL, rts(20, PGN_COMPONENT_ID), START_NS, sink);
@@ -675,9 +637,7 @@ TEST_CASE("an RTS to the global address or a BAM to one address is ignored") {
   CHECK(sut.activeSessions() == 0);
 }
 
-TEST_CASE("a new RTS for another PGN while a session runs is refused with reason already in session") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a new RTS for another PGN while a session runs is refused with reason already in session") {
   const Bytes payload = countingPayload(20);
 
   sut.onFrame(RTS_CM_ID, rts(payload.size(), PGN_COMPONENT_ID), START_NS, sink);
@@ -695,9 +655,7 @@ TEST_CASE("a new RTS for another PGN while a session runs is refused with reason
                                   PGN_VEHICLE_ID, TpAbortReason::AlreadyInSession});
 }
 
-TEST_CASE("a new RTS for the same PGN replaces the running session without an Abort") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a new RTS for the same PGN replaces the running session without an Abort") {
   const Bytes oldPayload = countingPayload(20);
   const Bytes newPayload = countingPayload(9);
 
@@ -717,9 +675,7 @@ TEST_CASE("a new RTS for the same PGN replaces the running session without an Ab
   checkCountersBalance(sut);
 }
 
-TEST_CASE("a new BAM from the same source replaces the old one") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a new BAM from the same source replaces the old one") {
   const Bytes oldPayload = countingPayload(20);
   Bytes newPayload = countingPayload(14);
   std::fill(newPayload.begin(), newPayload.end(), std::uint8_t{0xA5});
@@ -738,10 +694,7 @@ TEST_CASE("a new BAM from the same source replaces the old one") {
   CHECK(sink.events[1].kind == TpEventKind::Completed);
 }
 
-TEST_CASE("an RTS announcing more than 1785 bytes is refused with reason 9") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "an RTS announcing more than 1785 bytes is refused with reason 9") {
   sut.onFrame(RTS_CM_ID, FrameData{0x10, 0xFA, 0x06, 0xFF, 0xFF, 0xEB, 0xFE, 0x00}, START_NS, sink);
 
   REQUIRE(sink.frames.size() == 1);
@@ -753,9 +706,7 @@ TEST_CASE("an RTS announcing more than 1785 bytes is refused with reason 9") {
   CHECK(sut.counters().announcementsRefused == 1);
 }
 
-TEST_CASE("an RTS whose size and packet count disagree is refused with reason 250") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "an RTS whose size and packet count disagree is refused with reason 250") {
   FrameData wrongCount = rts(20, PGN_COMPONENT_ID);
   wrongCount[3] = 4;  // 20 bytes need 3 packets
   FrameData tooShort = rts(8, PGN_COMPONENT_ID);
@@ -769,10 +720,7 @@ TEST_CASE("an RTS whose size and packet count disagree is refused with reason 25
   CHECK(sut.activeSessions() == 0);
 }
 
-TEST_CASE("a BAM that is oversized or inconsistent is refused without a frame") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "a BAM that is oversized or inconsistent is refused without a frame") {
   sut.onFrame(BAM_CM_ID, FrameData{0x20, 0xFA, 0x06, 0xFF, 0xFF, 0xCA, 0xFE, 0x00}, START_NS, sink);
   sut.onFrame(BAM_CM_ID, FrameData{0x20, 0x14, 0x00, 0x02, 0xFF, 0xCA, 0xFE, 0x00}, START_NS, sink);
 
@@ -820,9 +768,7 @@ TEST_CASE("the largest message, 1785 bytes in 255 packets, arrives in windows of
   CHECK(sink.messages[0].data == payload);
 }
 
-TEST_CASE("a last packet without its padding is accepted") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "a last packet without its padding is accepted") {
   const Bytes payload = countingPayload(10);  // packet 2 carries 3 bytes
   const FrameData last = packet(payload, 2);
 
@@ -834,9 +780,7 @@ TEST_CASE("a last packet without its padding is accepted") {
   CHECK(sink.messages[0].data == payload);
 }
 
-TEST_CASE("TP frames shorter than 8 bytes never crash and change nothing") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "TP frames shorter than 8 bytes never crash and change nothing") {
   const Bytes payload = countingPayload(20);
   const FrameData announcement = rts(payload.size(), PGN_COMPONENT_ID);
   const FrameData broadcast = bam(payload.size(), PGN_DM1_BROADCAST);
@@ -864,9 +808,7 @@ TEST_CASE("TP frames shorter than 8 bytes never crash and change nothing") {
   CHECK(sink.messages.size() == 2);
 }
 
-TEST_CASE("frames longer than 8 bytes are ignored") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "frames longer than 8 bytes are ignored") {
   const std::array<std::uint8_t, 12> longRts{0x10, 0x14, 0x00, 0x03, 0xFF, 0xEB, 0xFE, 0x00,
                                              0, 0, 0, 0};
 
@@ -876,9 +818,7 @@ TEST_CASE("frames longer than 8 bytes are ignored") {
   CHECK(sink.count(TpEventKind::Ignored) == 1);
 }
 
-TEST_CASE("frames of other PGNs return without being counted") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
+TEST_CASE_FIXTURE(VcuReceiver, "frames of other PGNs return without being counted") {
   constexpr std::uint32_t DM1_SINGLE_FRAME = 0x18FECA10;
   constexpr std::uint32_t DATA_PAGE_1_LOOKALIKE = 0x1DEC2120;  // PGN 0x1EC00, not TP.CM
   constexpr FrameData ANY{0x10, 0x14, 0x00, 0x03, 0xFF, 0xEB, 0xFE, 0x00};
@@ -891,10 +831,7 @@ TEST_CASE("frames of other PGNs return without being counted") {
   CHECK(sut.counters() == TpCounters{});
 }
 
-TEST_CASE("a packet for no session is ignored with reason unexpected data packet") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "a packet for no session is ignored with reason unexpected data packet") {
   sut.onFrame(RTS_DT_ID, packet(countingPayload(9), 1), START_NS, sink);
 
   REQUIRE(sink.events.size() == 1);
@@ -903,10 +840,7 @@ TEST_CASE("a packet for no session is ignored with reason unexpected data packet
   CHECK(sink.frames.empty());
 }
 
-TEST_CASE("CTS and EndOfMsgAck sent to us are ignored because we never originate") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "CTS and EndOfMsgAck sent to us are ignored because we never originate") {
   sut.onFrame(RTS_CM_ID, FrameData{0x11, 0x02, 0x01, 0xFF, 0xFF, 0xEB, 0xFE, 0x00}, START_NS, sink);
   sut.onFrame(RTS_CM_ID, FrameData{0x13, 0x14, 0x00, 0x03, 0xFF, 0xEB, 0xFE, 0x00}, START_NS, sink);
 
@@ -944,10 +878,7 @@ TEST_CASE("a receiver with no buffers refuses everything and holds nothing") {
   CHECK_FALSE(sut.nextDeadlineNs().has_value());
 }
 
-TEST_CASE("nextDeadlineNs is empty while no session is open and the earliest otherwise") {
-  TpReceiver sut(VCU_CONFIG);
-  RecordingSink sink;
-
+TEST_CASE_FIXTURE(VcuReceiver, "nextDeadlineNs is empty while no session is open and the earliest otherwise") {
   CHECK_FALSE(sut.nextDeadlineNs().has_value());
   sut.onFrame(RTS_CM_ID, rts(20, PGN_COMPONENT_ID), START_NS, sink);          // T2
   sut.onFrame(BAM_CM_ID, bam(20, PGN_DM1_BROADCAST), START_NS + 100 * MS, sink);  // T1
