@@ -274,16 +274,27 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
 }
 
+/// A stack, a spy on its commandFinished and a vcu-fsm that refuses every command with "no".
+struct RefusingFsm {
+  std::unique_ptr<StackConnection> stack = openStack();
+  QSignalSpy finished{stack.get(), &StackConnection::commandFinished};
+  FakeCommandService fsm{*stack, "vcu-fsm"};
+  RefusingFsm() { fsm.answer(false, "no"); }
+  /// Sends `kind` for internal.operator.StartStop = 1; the request id.
+  std::int64_t sendStartStop(ipc::CommandKind kind) {
+    ipc::CommandRequest request;
+    request.kind = kind;
+    request.key = "internal.operator.StartStop";
+    request.value = 1;
+    return stack->sendCommand(request);
+  }
+};
+
 TEST_CASE("a refused command shows the responder's reason") {
-  auto stack = openStack();
-  QSignalSpy finished(stack.get(), &StackConnection::commandFinished);
-  FakeCommandService fsm(*stack, "vcu-fsm");
-  fsm.answer(false, "no");
-  ipc::CommandRequest request;
-  request.kind = ipc::CommandKind::SetSignal;
-  request.key = "internal.operator.StartStop";
-  request.value = 1;
-  const std::int64_t id = stack->sendCommand(request);
+  RefusingFsm refusing;
+  const std::int64_t id = refusing.sendStartStop(ipc::CommandKind::SetSignal);
+  const QSignalSpy& finished = refusing.finished;
+  FakeCommandService& fsm = refusing.fsm;
   REQUIRE(deliverUntil([&] { return finished.count() == 1; }));
   REQUIRE(fsm.requests().size() == 1);
   CHECK(fsm.requests()[0].requestId == id);
@@ -293,15 +304,10 @@ TEST_CASE("a refused command shows the responder's reason") {
 }
 
 TEST_CASE("a forged acceptance on the event bus does not finish an HMI command: only the command socket answers") {
-  auto stack = openStack();
-  QSignalSpy finished(stack.get(), &StackConnection::commandFinished);
-  FakeCommandService fsm(*stack, "vcu-fsm");
-  fsm.answer(false, "no");
-  ipc::CommandRequest request;
-  request.kind = ipc::CommandKind::OperatorSwitch;
-  request.key = "internal.operator.StartStop";
-  request.value = 1;
-  const std::int64_t id = stack->sendCommand(request);
+  RefusingFsm refusing;
+  const std::int64_t id = refusing.sendStartStop(ipc::CommandKind::OperatorSwitch);
+  StackConnection* stack = refusing.stack.get();
+  const QSignalSpy& finished = refusing.finished;
   stack->events()->publish(
       ipc::CommandAck{.requestId = id, .issuer = "vcu-hmi", .responder = "vcu-fsm", .accepted = true, .reason = {}});
   deliver(*stack);  // the forged ack is handled here, before the socket's answer

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <string>
 
+#include "common/model_helpers.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/runtime.hpp"
 #include "openvcu/service/options.hpp"
@@ -19,7 +20,7 @@ constexpr auto WAIT_TIMEOUT = std::chrono::milliseconds(200);  // bounds the rea
 
 }  // namespace
 
-FrameTraceModel::FrameTraceModel(QObject* parent) : QAbstractListModel(parent), m_ring(RING), m_shown(SHOWN) {
+FrameTraceModel::FrameTraceModel(QObject* parent) : StatusListModel(parent), m_ring(RING), m_shown(SHOWN) {
   m_visible.reserve(SHOWN);
   m_rateSinceNs = clock::monotonicNs();
   StackConnection* stack = StackConnection::instance();
@@ -224,7 +225,7 @@ void FrameTraceModel::setNodeFilter(const QString& filter) {
 }
 
 int FrameTraceModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_visible.size());
+  return listRowCount(parent, m_visible.size());
 }
 
 QVariant FrameTraceModel::data(const QModelIndex& index, int role) const {

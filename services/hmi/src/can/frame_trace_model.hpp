@@ -20,6 +20,7 @@
 
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #include "openvcu/can/frame.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/trace/frame_decoder.hpp"
@@ -27,7 +28,7 @@
 
 namespace openvcu::hmi {
 
-class FrameTraceModel : public QAbstractListModel {
+class FrameTraceModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(bool active READ active WRITE setActive NOTIFY filterChanged)
@@ -36,8 +37,6 @@ class FrameTraceModel : public QAbstractListModel {
   Q_PROPERTY(QString pgnFilter READ pgnFilter WRITE setPgnFilter NOTIFY filterChanged)
   Q_PROPERTY(QString nodeFilter READ nodeFilter WRITE setNodeFilter NOTIFY filterChanged)
   Q_PROPERTY(double framesPerSecond READ framesPerSecond NOTIFY statusChanged)
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
  public:
   static constexpr std::size_t RING = 8192;  ///< frames between two display ticks, at most
   static constexpr std::size_t SHOWN = 300;  ///< newest frames kept for the view
@@ -75,8 +74,6 @@ class FrameTraceModel : public QAbstractListModel {
   [[nodiscard]] QString nodeFilter() const { return m_nodeFilter; }
   void setNodeFilter(const QString& filter);
   [[nodiscard]] double framesPerSecond() const noexcept { return m_rate; }
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
 
   /// Adds frames as the receiving thread does (tests without iceoryx). Thread-safe.
   void push(const Entry* entries, std::size_t count) noexcept;
@@ -85,7 +82,6 @@ class FrameTraceModel : public QAbstractListModel {
 
  Q_SIGNALS:
   void filterChanged();
-  void statusChanged();
 
  private:
   void connectFrames();
@@ -118,8 +114,6 @@ class FrameTraceModel : public QAbstractListModel {
   double m_rate{};
   std::uint64_t m_rateCount{};
   std::int64_t m_rateSinceNs{};
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi

@@ -10,7 +10,7 @@
 
 namespace openvcu::hmi {
 
-SignalTreeModel::SignalTreeModel(QObject* parent) : QAbstractListModel(parent) {
+SignalTreeModel::SignalTreeModel(QObject* parent) : StatusListModel(parent) {
   build();
   rebuildVisible();
   if (StackConnection* stack = StackConnection::instance()) {
@@ -117,7 +117,7 @@ void SignalTreeModel::toggle(int row) {
 }
 
 int SignalTreeModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_visible.size());
+  return listRowCount(parent, m_visible.size());
 }
 
 QVariant SignalTreeModel::data(const QModelIndex& index, int role) const {

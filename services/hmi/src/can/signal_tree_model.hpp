@@ -13,6 +13,7 @@
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "common/display_logic.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #endif
 
 namespace openvcu::hmi {
@@ -21,12 +22,10 @@ namespace openvcu::hmi {
 /// ListView: expand/collapse per row, a search that shows matching signals with their
 /// parents. Message rows show ID, PGN, DBC cycle and the measured rate (updates of the
 /// message's first signal per second); signal rows the current value.
-class SignalTreeModel : public QAbstractListModel {
+class SignalTreeModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(QString search READ search WRITE setSearch NOTIFY searchChanged)
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
  public:
   enum Role {
     DepthRole = Qt::UserRole + 1,
@@ -44,14 +43,11 @@ class SignalTreeModel : public QAbstractListModel {
   [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
   [[nodiscard]] QString search() const { return m_search; }
   void setSearch(const QString& search);
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   Q_INVOKABLE void toggle(int row);
   /// Nodes of the whole tree (for tests): buses + nodes + messages + signals.
   [[nodiscard]] std::size_t nodeCount() const noexcept { return m_nodes.size(); }
  Q_SIGNALS:
   void searchChanged();
-  void statusChanged();
 
  private:
   struct Node {
@@ -78,8 +74,6 @@ class SignalTreeModel : public QAbstractListModel {
   std::vector<Node> m_nodes;
   std::vector<int> m_visible;
   QString m_search;
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi

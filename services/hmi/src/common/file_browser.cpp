@@ -4,6 +4,7 @@
 #include <QFileInfo>
 #include <algorithm>
 
+#include "common/model_helpers.hpp"
 #include "common/stack_connection.hpp"
 
 namespace openvcu::hmi {
@@ -29,24 +30,24 @@ FileBrowserModel::FileBrowserModel(QObject* parent) : QAbstractListModel(parent)
 }
 
 int FileBrowserModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_entries.size());
+  return listRowCount(parent, m_entries.size());
 }
 
 QVariant FileBrowserModel::data(const QModelIndex& index, int role) const {
-  if (!index.isValid() || index.row() >= static_cast<int>(m_entries.size())) return {};
-  const Entry& entry = m_entries[static_cast<std::size_t>(index.row())];
+  const Entry* entry = rowAt(m_entries, index);
+  if (!entry) return {};
   switch (role) {
     case NameRole:
     case Qt::DisplayRole:
-      return entry.name;
+      return entry->name;
     case PathRole:
-      return entry.path;
+      return entry->path;
     case IsFolderRole:
-      return entry.folder;
+      return entry->folder;
     case SizeRole:
-      return entry.folder ? QString() : sizeText(entry.size);
+      return entry->folder ? QString() : sizeText(entry->size);
     case ModifiedRole:
-      return entry.modified.isValid() ? entry.modified.toString(QStringLiteral("yyyy-MM-dd hh:mm")) : QString();
+      return entry->modified.isValid() ? entry->modified.toString(QStringLiteral("yyyy-MM-dd hh:mm")) : QString();
     default:
       return {};
   }

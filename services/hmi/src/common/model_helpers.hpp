@@ -1,12 +1,14 @@
 #pragma once
-// Small helpers the Qt models share: texts for durations, clock times and hex IDs, a table
-// slot read through the stack connection, and the FSM file's rules for the operator
-// switches and the state name.
+// Small helpers the Qt models share: the rows of a flat list model, texts for durations,
+// clock times and hex IDs, a table slot read through the stack connection, and the FSM
+// file's rules for the operator switches and the state name.
 // @note GUI thread only.
 
+#include <QModelIndex>
 #include <QString>
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "common/display_logic.hpp"
@@ -14,6 +16,25 @@
 #endif
 
 namespace openvcu::hmi {
+
+/// rowCount() of a flat list model with `count` rows: 0 under a valid parent.
+[[nodiscard]] inline int listRowCount(const QModelIndex& parent, std::size_t count) noexcept {
+  return parent.isValid() ? 0 : static_cast<int>(count);
+}
+
+/// The row `index` points at in a flat list of `count` rows; empty for an invalid index or
+/// one past the end.
+[[nodiscard]] inline std::optional<std::size_t> listRow(const QModelIndex& index, std::size_t count) noexcept {
+  if (!index.isValid() || index.row() >= static_cast<int>(count)) return std::nullopt;
+  return static_cast<std::size_t>(index.row());
+}
+
+/// The element of `rows` that `index` points at; null for an invalid index or one past the end.
+template <class Row>
+[[nodiscard]] const Row* rowAt(const std::vector<Row>& rows, const QModelIndex& index) noexcept {
+  const std::optional<std::size_t> row = listRow(index, rows.size());
+  return row ? &rows[*row] : nullptr;
+}
 
 /// "12.3 s", "4 min 5 s", "2 h 4 min".
 [[nodiscard]] QString durationText(std::int64_t nanoseconds);

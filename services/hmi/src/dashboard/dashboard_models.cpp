@@ -92,42 +92,42 @@ DashboardSettings::DashboardSettings(QObject* parent) : QObject(parent) {
 
 // ---- SignalListModel -----------------------------------------------------------------
 
-SignalListModel::SignalListModel(QObject* parent) : QAbstractListModel(parent) {
+SignalListModel::SignalListModel(QObject* parent) : StatusListModel(parent) {
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::displayTick, this, &SignalListModel::refresh);
   }
 }
 
 int SignalListModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_rows.size());
+  return listRowCount(parent, m_rows.size());
 }
 
 QVariant SignalListModel::data(const QModelIndex& index, int role) const {
-  if (!index.isValid() || index.row() >= static_cast<int>(m_rows.size())) return {};
-  const Row& row = m_rows[static_cast<std::size_t>(index.row())];
+  const Row* row = rowAt(m_rows, index);
+  if (!row) return {};
   switch (role) {
     case KeyRole:
-      return toQ(row.item.key);
+      return toQ(row->item.key);
     case LabelRole:
     case Qt::DisplayRole:
-      return toQ(row.item.label);
+      return toQ(row->item.label);
     case TextRole:
-      return row.text;
+      return row->text;
     case StatusRole:
-      return static_cast<int>(row.status);
+      return static_cast<int>(row->status);
     case ToneRole:
-      return static_cast<int>(row.tone);
+      return static_cast<int>(row->tone);
     case DetailRole: {
       StackConnection* stack = StackConnection::instance();
-      if (!stack || !row.index) return QStringLiteral("unknown signal");
-      const signals::SignalInfo& info = stack->catalog()[*row.index];
+      if (!stack || !row->index) return QStringLiteral("unknown signal");
+      const signals::SignalInfo& info = stack->catalog()[*row->index];
       QString detail = toQ(info.key) + QStringLiteral("\nrange ") + QString::number(info.minimum) +
                        QStringLiteral(" .. ") + QString::number(info.maximum) + QLatin1Char(' ') + toQ(info.unit);
       if (!info.comment.empty()) detail += QLatin1Char('\n') + toQ(info.comment);
       for (const auto& [number, text] : info.valueTexts) {
         detail += QStringLiteral("\n%1 = %2").arg(number).arg(toQ(text));
       }
-      detail += QStringLiteral("\nstatus: ") + toQ(std::string(statusName(row.status)));
+      detail += QStringLiteral("\nstatus: ") + toQ(std::string(statusName(row->status)));
       return detail;
     }
     default:

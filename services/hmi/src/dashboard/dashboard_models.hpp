@@ -17,6 +17,7 @@
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "common/display_logic.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #include "openvcu/config/dashboard.hpp"
 #endif
 
@@ -114,13 +115,11 @@ class DashboardSettings : public QObject {
 /// A list of signals with their current text, status and tone. Either `keys` (the
 /// vehicle status table: labels are the keys' last components) or `dashboard: true` (the
 /// tiles of the dashboard file). Rows change only when their text or status changes.
-class SignalListModel : public QAbstractListModel {
+class SignalListModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(QStringList keys READ keys WRITE setKeys NOTIFY keysChanged)
   Q_PROPERTY(bool dashboard READ dashboard WRITE setDashboard NOTIFY keysChanged)
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
  public:
   enum Role { KeyRole = Qt::UserRole + 1, LabelRole, TextRole, StatusRole, ToneRole, DetailRole };
   explicit SignalListModel(QObject* parent = nullptr);
@@ -131,13 +130,10 @@ class SignalListModel : public QAbstractListModel {
   void setKeys(const QStringList& keys);
   [[nodiscard]] bool dashboard() const noexcept { return m_dashboard; }
   void setDashboard(bool dashboard);
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   /// Reads the table now (also on every display tick).
   Q_INVOKABLE void refresh();
  Q_SIGNALS:
   void keysChanged();
-  void statusChanged();
 
  private:
   struct Row {
@@ -151,8 +147,6 @@ class SignalListModel : public QAbstractListModel {
   std::vector<Row> m_rows;
   bool m_dashboard{};
   std::int64_t m_staleAfterNs{2'000'000'000};
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi

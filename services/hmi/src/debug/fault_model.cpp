@@ -11,7 +11,9 @@ constexpr std::string_view FAULT_RESET_KEY = "internal.operator.FaultReset";
 
 }  // namespace
 
-FaultModel::FaultModel(QObject* parent) : QAbstractListModel(parent) {
+FaultModel::FaultModel(QObject* parent) : StatusListModel(parent) {
+  // the base's status and errorString are notified with countChanged(), where this model sets them
+  connect(this, &FaultModel::countChanged, this, &StatusListModel::statusChanged);
   StackConnection* stack = StackConnection::instance();
   if (!stack) return;
   const signals::Catalog& catalog = stack->catalog();
@@ -32,7 +34,7 @@ FaultModel::FaultModel(QObject* parent) : QAbstractListModel(parent) {
 }
 
 int FaultModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_faults.size());
+  return listRowCount(parent, m_faults.size());
 }
 
 QVariant FaultModel::data(const QModelIndex& index, int role) const {

@@ -14,6 +14,7 @@
 #include "common/display_logic.hpp"
 #include "common/model_helpers.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #include "openvcu/ipc/events.hpp"
 #endif
 
@@ -22,13 +23,11 @@ namespace openvcu::hmi {
 /// Active faults from LCM fault events (raised adds, cleared removes), plus the DM1
 /// summary of every node from the table (internal.dm1.<Node>.activeDtcs > 0).
 /// `resetFaults()` publishes the operator's FaultReset switch.
-class FaultModel : public QAbstractListModel {
+class FaultModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(int activeCount READ activeCount NOTIFY countChanged)
   Q_PROPERTY(QString lastResult READ lastResult NOTIFY countChanged)
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY countChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY countChanged)
  public:
   enum Role { NameRole = Qt::UserRole + 1, SourceRole, SeverityRole, TextRole, TimeRole };
   explicit FaultModel(QObject* parent = nullptr);
@@ -37,8 +36,6 @@ class FaultModel : public QAbstractListModel {
   [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
   [[nodiscard]] int activeCount() const noexcept { return static_cast<int>(m_faults.size()); }
   [[nodiscard]] QString lastResult() const { return m_lastResult; }
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   Q_INVOKABLE QString resetFaults();
   void onFault(const ipc::FaultEvent& event);
   void refresh();
@@ -50,8 +47,6 @@ class FaultModel : public QAbstractListModel {
   std::vector<std::pair<std::string, sig::SignalIndex>> m_dm1;  ///< node -> activeDtcs slot
   qint64 m_pendingId{-1};
   QString m_lastResult;
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi

@@ -7,7 +7,7 @@
 
 namespace openvcu::hmi {
 
-LogModel::LogModel(QObject* parent) : QAbstractListModel(parent) {
+LogModel::LogModel(QObject* parent) : StatusListModel(parent) {
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::logRecord, this, &LogModel::add);
     m_status = stack->events() ? ModelStatus::Ready : ModelStatus::NotConnected;
@@ -20,7 +20,7 @@ LogModel::LogModel(QObject* parent) : QAbstractListModel(parent) {
 }
 
 int LogModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_shown.size());
+  return listRowCount(parent, m_shown.size());
 }
 
 QVariant LogModel::data(const QModelIndex& index, int role) const {

@@ -12,6 +12,7 @@
 #include "common/display_logic.hpp"
 #include "common/model_helpers.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #include "openvcu/ipc/events.hpp"
 #endif
 
@@ -19,14 +20,12 @@ namespace openvcu::hmi {
 
 /// The log of every service (LCM log records), newest last, filtered by service and
 /// minimum level; `exportTo(path)` writes the filtered lines.
-class LogModel : public QAbstractListModel {
+class LogModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(QString serviceFilter READ serviceFilter WRITE setServiceFilter NOTIFY filterChanged)
   Q_PROPERTY(int minimumLevel READ minimumLevel WRITE setMinimumLevel NOTIFY filterChanged)
   Q_PROPERTY(QStringList services READ services NOTIFY servicesChanged)
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
  public:
   enum Role { TimeRole = Qt::UserRole + 1, ServiceRole, LevelRole, LevelNameRole, TextRole };
   static constexpr std::size_t CAPACITY = 5000;
@@ -39,15 +38,12 @@ class LogModel : public QAbstractListModel {
   [[nodiscard]] int minimumLevel() const noexcept { return m_minimum; }
   void setMinimumLevel(int level);
   [[nodiscard]] QStringList services() const;
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   /// Writes the shown lines to `path`; "" on success, else the reason.
   Q_INVOKABLE QString exportTo(const QString& path) const;
   void add(const ipc::LogRecord& record);
  Q_SIGNALS:
   void filterChanged();
   void servicesChanged();
-  void statusChanged();
 
  private:
   void reselect();
@@ -56,8 +52,6 @@ class LogModel : public QAbstractListModel {
   QString m_service;
   int m_minimum{0};
   std::size_t m_serviceCount{};
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi

@@ -8,7 +8,9 @@ constexpr std::size_t HISTORY = 200;
 
 }  // namespace
 
-FsmModel::FsmModel(QObject* parent) : QAbstractListModel(parent) {
+FsmModel::FsmModel(QObject* parent) : StatusListModel(parent) {
+  // the base's status and errorString are notified with stateChanged(), where this model sets them
+  connect(this, &FsmModel::stateChanged, this, &StatusListModel::statusChanged);
   StackConnection* stack = StackConnection::instance();
   if (!stack) return;
   m_rules = loadRules(m_error);
@@ -19,22 +21,22 @@ FsmModel::FsmModel(QObject* parent) : QAbstractListModel(parent) {
 }
 
 int FsmModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_history.size());
+  return listRowCount(parent, m_history.size());
 }
 
 QVariant FsmModel::data(const QModelIndex& index, int role) const {
-  if (!index.isValid() || index.row() >= static_cast<int>(m_history.size())) return {};
-  const ipc::FsmTransition& transition = m_history[static_cast<std::size_t>(index.row())];
+  const ipc::FsmTransition* transition = rowAt(m_history, index);
+  if (!transition) return {};
   switch (role) {
     case TimeRole:
-      return clockText(transition.timestampNs);
+      return clockText(transition->timestampNs);
     case FromRole:
-      return transition.fromState.empty() ? QStringLiteral("(start)") : toQ(transition.fromState);
+      return transition->fromState.empty() ? QStringLiteral("(start)") : toQ(transition->fromState);
     case ToRole:
     case Qt::DisplayRole:
-      return toQ(transition.toState);
+      return toQ(transition->toState);
     case CauseRole:
-      return toQ(transition.cause);
+      return toQ(transition->cause);
     default:
       return {};
   }

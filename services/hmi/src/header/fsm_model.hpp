@@ -13,6 +13,7 @@
 #include "common/display_logic.hpp"
 #include "common/model_helpers.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #include "openvcu/ipc/events.hpp"
 #endif
 
@@ -20,13 +21,11 @@ namespace openvcu::hmi {
 
 /// The FSM state (internal.fsm.state by name, since when) and the transitions heard on
 /// LCM since the HMI started (newest first).
-class FsmModel : public QAbstractListModel {
+class FsmModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(QString stateName READ stateName NOTIFY stateChanged)
   Q_PROPERTY(QString stateAge READ stateAge NOTIFY stateChanged)
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY stateChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY stateChanged)
  public:
   enum Role { TimeRole = Qt::UserRole + 1, FromRole, ToRole, CauseRole };
   explicit FsmModel(QObject* parent = nullptr);
@@ -35,8 +34,6 @@ class FsmModel : public QAbstractListModel {
   [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
   [[nodiscard]] QString stateName() const { return m_stateName; }
   [[nodiscard]] QString stateAge() const { return m_stateAge; }
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   void addTransition(const ipc::FsmTransition& transition);
   void refresh();
  Q_SIGNALS:
@@ -48,8 +45,6 @@ class FsmModel : public QAbstractListModel {
   std::optional<sig::SignalIndex> m_stateIndex;
   QString m_stateName{QStringLiteral("--")};
   QString m_stateAge;
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi

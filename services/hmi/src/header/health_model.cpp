@@ -24,7 +24,7 @@ std::vector<std::string> expectedServices() {
 }  // namespace
 
 HealthModel::HealthModel(QObject* parent)
-    : QAbstractListModel(parent), m_tracker(expectedServices(), HEARTBEAT_STALE_NS) {
+    : StatusListModel(parent), m_tracker(expectedServices(), HEARTBEAT_STALE_NS) {
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::heartbeat, this, &HealthModel::onHeartbeat);
     connect(stack, &StackConnection::displayTick, this, &HealthModel::refresh);
@@ -33,7 +33,7 @@ HealthModel::HealthModel(QObject* parent)
 }
 
 int HealthModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_tracker.services().size());
+  return listRowCount(parent, m_tracker.services().size());
 }
 
 QVariant HealthModel::data(const QModelIndex& index, int role) const {

@@ -13,6 +13,7 @@
 #include "common/display_logic.hpp"
 #include "common/model_helpers.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #include "openvcu/ipc/events.hpp"
 #endif
 
@@ -22,11 +23,9 @@ namespace openvcu::hmi {
 /// heard), then whatever else sends heartbeats. CPU and RSS from /proc for local pids.
 /// Aggregate status: Ready when every expected service beats, Stale when one is late,
 /// NotConnected when none is heard. `connectionSummary` is for the header.
-class HealthModel : public QAbstractListModel {
+class HealthModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
   Q_PROPERTY(QString systemText READ systemText NOTIFY statusChanged)
  public:
   enum Role {
@@ -44,17 +43,12 @@ class HealthModel : public QAbstractListModel {
   [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
   [[nodiscard]] QVariant data(const QModelIndex& index, int role) const override;
   [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   /// "up 2 h 4 min, load 0.52, memory 812 / 24105 MB"
   [[nodiscard]] QString systemText() const { return m_systemText; }
   /// The connection status of service `name` ("vcu-fsm"), NotConnected when unknown.
   Q_INVOKABLE int connectionOf(const QString& name) const;
   void onHeartbeat(const ipc::Heartbeat& beat);
   void refresh();
- Q_SIGNALS:
-  void statusChanged();
-
  private:
   struct Cpu {
     std::int64_t ticks{-1};
@@ -65,8 +59,6 @@ class HealthModel : public QAbstractListModel {
   HealthTracker m_tracker;
   std::map<std::string, Cpu> m_cpu;
   int m_tick{};
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
   QString m_systemText;
 };
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 
+#include "common/model_helpers.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/config/transmit_limits.hpp"
@@ -36,7 +37,7 @@ bool isSafetyHeader(const dbc::Message& message) {
 
 // ---- ScheduleModel ----------------------------------------------------------------------
 
-ScheduleModel::ScheduleModel(QObject* parent) : QAbstractListModel(parent) {
+ScheduleModel::ScheduleModel(QObject* parent) : StatusListModel(parent) {
   build();
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::displayTick, this, &ScheduleModel::refresh);
@@ -201,44 +202,44 @@ QString ScheduleModel::setEnabled(int row, bool enabled) {
 }
 
 int ScheduleModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_rows.size());
+  return listRowCount(parent, m_rows.size());
 }
 
 QVariant ScheduleModel::data(const QModelIndex& index, int role) const {
-  if (!index.isValid() || index.row() >= static_cast<int>(m_rows.size())) return {};
-  const Row& row = m_rows[static_cast<std::size_t>(index.row())];
+  const Row* row = rowAt(m_rows, index);
+  if (!row) return {};
   switch (role) {
     case MessageRole:
-      return row.message;
+      return row->message;
     case SignalRole:
     case Qt::DisplayRole:
-      return row.signal;
+      return row->signal;
     case CycleRole:
-      return row.cycleMs;
+      return row->cycleMs;
     case PairRole:
-      return row.pair;
+      return row->pair;
     case DeltaRole:
-      return row.deltaUs;
+      return row->deltaUs;
     case ValueRole:
-      return row.value;
+      return row->value;
     case OverrideRole:
-      return row.overrideText;
+      return row->overrideText;
     case OverriddenRole:
-      return row.overridden;
+      return row->overridden;
     case KeyRole:
-      return row.key;
+      return row->key;
     case RangeRole: {
       StackConnection* stack = StackConnection::instance();
-      if (!stack || !row.index) return QString();
-      const signals::SignalInfo& info = stack->catalog()[*row.index];
+      if (!stack || !row->index) return QString();
+      const signals::SignalInfo& info = stack->catalog()[*row->index];
       return QStringLiteral("%1 .. %2 %3").arg(info.minimum).arg(info.maximum).arg(toQ(info.unit));
     }
     case LiveRole:
-      return row.live;
+      return row->live;
     case EnabledRole:
-      return row.enabled;
+      return row->enabled;
     case AddedRole:
-      return row.added;
+      return row->added;
     default:
       return {};
   }
@@ -358,27 +359,23 @@ std::optional<double> ScheduleModel::checkedValue(int row, const QString& text, 
 }
 
 QString ScheduleModel::setOverride(int row, const QString& value) {
-  QString refusal;
-  const auto number = checkedValue(row, value, &refusal);
-  if (!number) return refusal;
-  const Row& entry = m_rows[static_cast<std::size_t>(row)];
-  ipc::CommandRequest request;
-  request.kind = ipc::CommandKind::SetOverride;
-  request.key = entry.key.toStdString();
-  request.value = *number;
-  return send(std::move(request), QStringLiteral("override %1 = %2").arg(entry.signal).arg(*number));
+  return sendValue(row, value, ipc::CommandKind::SetOverride, QStringLiteral("override %1 = %2"));
 }
 
 QString ScheduleModel::setDefault(int row, const QString& value) {
+  return sendValue(row, value, ipc::CommandKind::ScheduleDefault, QStringLiteral("schedule value of %1 = %2"));
+}
+
+QString ScheduleModel::sendValue(int row, const QString& value, ipc::CommandKind kind, const QString& what) {
   QString refusal;
   const auto number = checkedValue(row, value, &refusal);
   if (!number) return refusal;
   const Row& entry = m_rows[static_cast<std::size_t>(row)];
   ipc::CommandRequest request;
-  request.kind = ipc::CommandKind::ScheduleDefault;
+  request.kind = kind;
   request.key = entry.key.toStdString();
   request.value = *number;
-  return send(std::move(request), QStringLiteral("schedule value of %1 = %2").arg(entry.signal).arg(*number));
+  return send(std::move(request), what.arg(entry.signal).arg(*number));
 }
 
 QString ScheduleModel::clearOverride(int row) {

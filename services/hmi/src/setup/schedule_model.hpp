@@ -13,6 +13,7 @@
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "common/display_logic.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #endif
 
 namespace openvcu::hmi {
@@ -26,11 +27,9 @@ namespace openvcu::hmi {
 /// setCycle (ScheduleCycle), setEnabled (ScheduleEnable), addMessage (ScheduleAdd),
 /// setDefault (ScheduleDefault), setOverride / clearOverride; each is checked here first
 /// (range, integer ms) and then acknowledged or refused by the stack.
-class ScheduleModel : public QAbstractListModel {
+class ScheduleModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
   Q_PROPERTY(QString lastResult READ lastResult NOTIFY statusChanged)
  public:
   enum Role {
@@ -52,8 +51,6 @@ class ScheduleModel : public QAbstractListModel {
   [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
   [[nodiscard]] QVariant data(const QModelIndex& index, int role) const override;
   [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   [[nodiscard]] QString lastResult() const { return m_lastResult; }
   /// Each returns "" when sent (the outcome follows in lastResult) or the local refusal.
   Q_INVOKABLE QString setCycle(int row, const QString& milliseconds);
@@ -72,9 +69,6 @@ class ScheduleModel : public QAbstractListModel {
   Q_INVOKABLE int rowOfMessage(const QString& message) const;
   /// Applies vcu-can-tx's live schedule (tests call it directly).
   void applySchedule(const ipc::TxSchedule& live);
- Q_SIGNALS:
-  void statusChanged();
-
  private:
   struct Row {
     std::size_t messageIndex{};
@@ -100,6 +94,9 @@ class ScheduleModel : public QAbstractListModel {
   /// The number typed for row `row` (a number or a value text), checked against the DBC
   /// range; empty with *refusal set otherwise.
   std::optional<double> checkedValue(int row, const QString& text, QString* refusal) const;
+  /// Checks `value` for `row` and sends `kind` with it; `what` has %1 (the signal) and %2
+  /// (the value). "" once sent, else the refusal.
+  QString sendValue(int row, const QString& value, ipc::CommandKind kind, const QString& what);
   std::vector<Row> m_rows;
   struct Pending {
     int row{};
@@ -107,8 +104,6 @@ class ScheduleModel : public QAbstractListModel {
     QString what;
   };
   std::map<qint64, Pending> m_pending;
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
   QString m_lastResult;
 };
 

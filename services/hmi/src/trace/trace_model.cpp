@@ -4,6 +4,8 @@
 #include <QMetaObject>
 #include <QUrl>
 
+#include "common/model_helpers.hpp"
+
 namespace openvcu::hmi {
 namespace {
 
@@ -14,7 +16,9 @@ QString localPath(const QString& pathOrUrl) {
 
 }  // namespace
 
-TraceModel::TraceModel(QObject* parent) : QAbstractListModel(parent) {
+TraceModel::TraceModel(QObject* parent) : StatusListModel(parent) {
+  // the base's status and errorString are notified with loaded(), where this model sets them
+  connect(this, &TraceModel::loaded, this, &StatusListModel::statusChanged);
   if (StackConnection* stack = StackConnection::instance()) {
     m_decoder = std::make_unique<trace::FrameDecoder>(stack->config().database, dbc::MatchMode::J1939);
   }
@@ -83,7 +87,7 @@ void TraceModel::finish(std::shared_ptr<Loaded> result) {
 }
 
 int TraceModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_log.frames.size());
+  return listRowCount(parent, m_log.frames.size());
 }
 
 QString TraceModel::decoded(std::size_t row) const {

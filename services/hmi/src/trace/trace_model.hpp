@@ -18,6 +18,7 @@
 
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #include "openvcu/trace/frame_decoder.hpp"
 #include "openvcu/trace/log.hpp"
 #include "openvcu/trace/sample_ring.hpp"
@@ -26,15 +27,13 @@
 namespace openvcu::hmi {
 
 /// The trace viewer's model: one row per frame of the opened log.
-class TraceModel : public QAbstractListModel {
+class TraceModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(double progress READ progress NOTIFY progressChanged)
   Q_PROPERTY(bool loading READ loading NOTIFY progressChanged)
   Q_PROPERTY(QString fileName READ fileName NOTIFY loaded)
   Q_PROPERTY(QString summary READ summary NOTIFY loaded)
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY loaded)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY loaded)
  public:
   /// Frames kept from one log (trace::LoadOptions::maxFrames).
   static constexpr std::size_t MAX_FRAMES = trace::LoadOptions{}.maxFrames;
@@ -48,8 +47,6 @@ class TraceModel : public QAbstractListModel {
   [[nodiscard]] bool loading() const noexcept { return m_loading; }
   [[nodiscard]] QString fileName() const { return m_fileName; }
   [[nodiscard]] QString summary() const { return m_summary; }
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   /// Starts loading `path` (a local path or file: URL); false when a load is running.
   Q_INVOKABLE bool open(const QString& path);
   /// Writes the log decoded as CSV (t,bus,id,ext,msg,signal,raw,physical: one row per
@@ -84,8 +81,6 @@ class TraceModel : public QAbstractListModel {
   QTimer m_progressTimer;
   QString m_fileName;
   QString m_summary;
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi

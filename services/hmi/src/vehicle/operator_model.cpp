@@ -10,7 +10,7 @@ constexpr std::string_view FAULT_RESET_KEY = "internal.operator.FaultReset";
 
 }  // namespace
 
-OperatorModel::OperatorModel(QObject* parent) : QAbstractListModel(parent) {
+OperatorModel::OperatorModel(QObject* parent) : StatusListModel(parent) {
   StackConnection* stack = StackConnection::instance();
   if (!stack) return;
   m_rules = loadRules(m_error);
@@ -44,28 +44,28 @@ OperatorModel::OperatorModel(QObject* parent) : QAbstractListModel(parent) {
 }
 
 int OperatorModel::rowCount(const QModelIndex& parent) const {
-  return parent.isValid() ? 0 : static_cast<int>(m_rows.size());
+  return listRowCount(parent, m_rows.size());
 }
 
 QVariant OperatorModel::data(const QModelIndex& index, int role) const {
-  if (!index.isValid() || index.row() >= static_cast<int>(m_rows.size())) return {};
-  const Row& row = m_rows[static_cast<std::size_t>(index.row())];
+  const Row* row = rowAt(m_rows, index);
+  if (!row) return {};
   switch (role) {
     case KeyRole:
-      return row.key;
+      return row->key;
     case LabelRole:
     case Qt::DisplayRole:
-      return row.label;
+      return row->label;
     case OnRole:
-      return row.on;
+      return row->on;
     case StateTextRole:
-      return row.stateText;
+      return row->stateText;
     case EnabledRole:
-      return row.enabled;
+      return row->enabled;
     case ResultRole:
-      return row.result;
+      return row->result;
     case PendingRole:
-      return row.pendingId >= 0;
+      return row->pendingId >= 0;
     default:
       return {};
   }

@@ -13,6 +13,7 @@
 #include "common/display_logic.hpp"
 #include "common/model_helpers.hpp"
 #include "common/stack_connection.hpp"
+#include "common/status_list_model.hpp"
 #endif
 
 namespace openvcu::hmi {
@@ -21,27 +22,20 @@ namespace openvcu::hmi {
 /// current position from the table, enabled when the FSM's current state reads the switch
 /// (a transition may follow) or the switch is on (it can always be switched off), and the
 /// answer to the last command. `toggle(row)` publishes an OperatorSwitch command.
-class OperatorModel : public QAbstractListModel {
+class OperatorModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
-  Q_PROPERTY(openvcu::hmi::ModelStatus::Value status READ status NOTIFY statusChanged)
-  Q_PROPERTY(QString errorString READ errorString NOTIFY statusChanged)
  public:
   enum Role { KeyRole = Qt::UserRole + 1, LabelRole, OnRole, StateTextRole, EnabledRole, ResultRole, PendingRole };
   explicit OperatorModel(QObject* parent = nullptr);
   [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
   [[nodiscard]] QVariant data(const QModelIndex& index, int role) const override;
   [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
-  [[nodiscard]] ModelStatus::Value status() const noexcept { return m_status; }
-  [[nodiscard]] QString errorString() const { return m_error; }
   /// Publishes the opposite position of row `row`; "" when sent, else why not.
   Q_INVOKABLE QString toggle(int row);
   /// Row of a key, -1 if none (tests, QML lookups).
   Q_INVOKABLE int rowOf(const QString& key) const;
   void refresh();
- Q_SIGNALS:
-  void statusChanged();
-
  private:
   struct Row {
     QString key;
@@ -57,8 +51,6 @@ class OperatorModel : public QAbstractListModel {
   std::vector<Row> m_rows;
   std::optional<FsmRules> m_rules;
   std::optional<sig::SignalIndex> m_stateIndex;
-  ModelStatus::Value m_status{ModelStatus::NotConnected};
-  QString m_error;
 };
 
 }  // namespace openvcu::hmi
