@@ -37,6 +37,8 @@ PACKAGES=(
   qml6-module-qtquick-templates qml6-module-qtqml-workerscript qml6-module-qtqml-models
   qml6-module-qtcharts qml6-module-qttest qml6-module-qtquick-shapes qt6-qpa-plugins
   libgl-dev fonts-dejavu-core x11-apps imagemagick
+  # vcu trace report: opened in Debian's headless Chromium by its test, pixels read with PIL
+  chromium python3-pil
 )
 
 missing=()
