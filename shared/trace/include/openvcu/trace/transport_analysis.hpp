@@ -60,6 +60,7 @@ struct TransportCounts {
   std::uint64_t incomplete{};    ///< still open when the log ended
   std::uint64_t replaced{};
   std::uint64_t protocolErrors{};  ///< bad/duplicate sequence, unexpected packets
+  std::uint64_t refused{};         ///< announcements not followed: invalid, or the session pool was full
   std::uint64_t dm1Messages{};     ///< DM1 + DM2 decoded (single frame or reassembled)
   std::uint64_t dtcIntervalsSkipped{};
 };
