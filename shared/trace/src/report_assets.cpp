@@ -33,7 +33,7 @@ std::string_view reportScript() noexcept {
   // Zoom/pan: every svg.tsvg has data-t0/-t1 (its time range) and data-l/-w (its plot
   // area in px). A view [v0, v1] maps a drawn x to a*x+b; groups .zx get that transform,
   // elements with data-x are moved (and their labels hidden when they would overlap),
-  // groups .xa get new ticks.
+  // groups .xa get new ticks. A URL ending in #view=T0,T1 opens with that range.
   return R"js(
 (function () {
   'use strict';
@@ -74,28 +74,36 @@ std::string_view reportScript() noexcept {
       svg.querySelectorAll('.zx').forEach(function (g) {
         g.setAttribute('transform', 'matrix(' + a + ' 0 0 1 ' + b + ' 0)');
       });
-      var ends = {};
+      var lanes = {};
       svg.querySelectorAll('[data-x]').forEach(function (e) {
-        var x = a * +e.getAttribute('data-x') + b;
-        var label = e, key;
+        var x = a * +e.getAttribute('data-x') + b, key, label, offset;
         if (e.tagName === 'g') {
           var y = +e.getAttribute('data-y');
           e.setAttribute('transform', 'translate(' + x + ' ' + y + ')');
           label = e.querySelector('text');
           key = 'e' + y;
-          x += 7;
+          offset = 7;
         } else {
           e.setAttribute('x', x);
+          label = e;
           key = 'l' + e.getAttribute('y');
+          offset = 0;
         }
-        if (!label) return;
-        var end = ends[key] === undefined ? -Infinity : ends[key];
-        if (x >= end + 4) {
-          label.removeAttribute('display');
-          ends[key] = x + label.textContent.length * 6.5;
-        } else {
-          label.setAttribute('display', 'none');
-        }
+        (lanes[key] = lanes[key] || []).push({x: x, start: x + offset, label: label});
+      });
+      // the rule of labelsShown() in svg_chart.cpp: after the previous label, before the next anchor
+      Object.keys(lanes).forEach(function (key) {
+        var items = lanes[key], end = -Infinity;
+        items.forEach(function (item, k) {
+          if (!item.label) return;
+          var labelEnd = item.start + item.label.textContent.length * 6.5;
+          if (item.start >= end + 4 && (k + 1 === items.length || items[k + 1].x - 6 > labelEnd)) {
+            item.label.removeAttribute('display');
+            end = labelEnd;
+          } else {
+            item.label.setAttribute('display', 'none');
+          }
+        });
       });
       svg.querySelectorAll('.xa').forEach(function (g) {
         while (g.firstChild) g.removeChild(g.firstChild);
@@ -148,6 +156,9 @@ std::string_view reportScript() noexcept {
     svg.addEventListener('pointercancel', end);
     svg.addEventListener('dblclick', function () { view = full.slice(); apply(); });
   });
+  // report.html#view=300,320 opens with that time range
+  var wanted = /view=(-?[0-9.e+-]+),(-?[0-9.e+-]+)/.exec(window.location.hash);
+  if (view && wanted && +wanted[2] > +wanted[1]) view = clamp([+wanted[1], +wanted[2]]);
   if (view) apply();
 
   function layout() {

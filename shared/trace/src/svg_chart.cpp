@@ -19,7 +19,11 @@ constexpr int TIME_AXIS_BOTTOM = 34;
 constexpr int LANE_PX = 26;
 constexpr int BAR_ROW_PX = 22;
 constexpr std::size_t MAX_LABEL_CHARS = 28;
-constexpr std::size_t MAX_LANE_NAME_CHARS = 26;
+constexpr std::size_t MAX_LANE_NAME_CHARS = 28;
+/// Average advance of a character at 11 px (lane labels).
+constexpr double LABEL_CHAR_PX = 6.5;
+/// The label of an event starts this far right of its marker.
+constexpr double EVENT_LABEL_OFFSET = 7;
 constexpr std::string_view GRID_COLOUR = "#dddddd";
 constexpr std::string_view AXIS_COLOUR = "#555555";
 constexpr std::string_view TEXT_COLOUR = "#222222";
@@ -254,6 +258,23 @@ std::vector<std::pair<double, double>> drawnPoints(const std::vector<std::pair<d
     points.emplace_back(t, decimated[i * 3 + 2]);
   }
   return points;
+}
+
+/// Which labels of a lane to show: a label (at x + offset, anchors sorted by x) shows when it
+/// starts after the previous shown label and ends before the next anchor (the report's
+/// script applies the same rule after a zoom).
+std::vector<bool> labelsShown(const std::vector<double>& xs, const std::vector<std::string>& labels, double offset) {
+  std::vector<bool> shown(xs.size());
+  double end = -INFINITY;
+  for (std::size_t k = 0; k < xs.size(); ++k) {
+    const double start = xs[k] + offset;
+    const double labelEnd = start + static_cast<double>(displayChars(labels[k])) * LABEL_CHAR_PX;
+    const bool roomBefore = start >= end + 4;
+    const bool roomAfter = k + 1 == xs.size() || xs[k + 1] - 6 > labelEnd;
+    shown[k] = roomBefore && roomAfter;
+    if (shown[k]) end = labelEnd;
+  }
+  return shown;
 }
 
 }  // namespace
@@ -595,7 +616,7 @@ std::string lanesSvg(const LanesChartSpec& spec) {
     out += "<text";
     appendAttr(out, "x", scale.left - 8);
     appendAttr(out, "y", laneTop + LANE_PX / 2.0 + 4);
-    out += " text-anchor=\"end\" fill=\"#222222\">";
+    out += " text-anchor=\"end\" font-size=\"11\" fill=\"#222222\">";
     appendTitle(out, spec.lanes[i].name);
     appendXmlEscaped(out, shortened(spec.lanes[i].name, MAX_LANE_NAME_CHARS));
     out += "</text>";
@@ -637,50 +658,58 @@ std::string lanesSvg(const LanesChartSpec& spec) {
   // Labels and event markers keep their size: moved one by one (data-x).
   for (std::size_t i = 0; i < spec.lanes.size(); ++i) {
     const double laneMiddle = TOP + static_cast<double>(i) * LANE_PX + LANE_PX / 2.0;
-    double labelEnd = -INFINITY;
-    const auto labelFits = [&](double x, std::size_t chars) {
-      const bool fits = x >= labelEnd + 4;
-      if (fits) labelEnd = x + static_cast<double>(chars) * CHAR_PX * 0.92;
-      return fits;
-    };
+    std::vector<const LaneInterval*> intervals;
     for (const LaneInterval& interval : spec.lanes[i].intervals) {
-      if (!std::isfinite(interval.startS) || interval.label.empty()) continue;
-      const std::string label = shortened(interval.label, MAX_LABEL_CHARS);
-      const double x = scale.x(interval.startS) + 3;
+      if (std::isfinite(interval.startS) && !interval.label.empty()) intervals.push_back(&interval);
+    }
+    std::stable_sort(intervals.begin(), intervals.end(),
+                     [](const LaneInterval* a, const LaneInterval* b) { return a->startS < b->startS; });
+    std::vector<double> xs;
+    std::vector<std::string> labels;
+    for (const LaneInterval* interval : intervals) {
+      xs.push_back(scale.x(interval->startS) + 3);
+      labels.push_back(shortened(interval->label, MAX_LABEL_CHARS));
+    }
+    std::vector<bool> shown = labelsShown(xs, labels, 0);
+    for (std::size_t k = 0; k < intervals.size(); ++k) {
       out += "<text class=\"lbl\"";
-      appendAttr(out, "data-x", x);
-      appendAttr(out, "x", x);
+      appendAttr(out, "data-x", xs[k]);
+      appendAttr(out, "x", xs[k]);
       appendAttr(out, "y", laneMiddle + 4);
       out += " font-size=\"11\" fill=\"#000000\"";
-      if (!labelFits(x, displayChars(label))) out += " display=\"none\"";
+      if (!shown[k]) out += " display=\"none\"";
       out += '>';
-      appendXmlEscaped(out, label);
+      appendXmlEscaped(out, labels[k]);
       out += "</text>";
     }
-    labelEnd = -INFINITY;
     std::vector<const LaneEvent*> events;
     for (const LaneEvent& event : spec.lanes[i].events) {
       if (std::isfinite(event.s)) events.push_back(&event);
     }
     std::stable_sort(events.begin(), events.end(), [](const LaneEvent* a, const LaneEvent* b) { return a->s < b->s; });
+    xs.clear();
+    labels.clear();
     for (const LaneEvent* event : events) {
-      const double x = scale.x(event->s);
-      const std::string label = shortened(event->label, MAX_LABEL_CHARS);
+      xs.push_back(scale.x(event->s));
+      labels.push_back(shortened(event->label, MAX_LABEL_CHARS));
+    }
+    shown = labelsShown(xs, labels, EVENT_LABEL_OFFSET);
+    for (std::size_t k = 0; k < events.size(); ++k) {
       out += "<g class=\"ev\"";
-      appendAttr(out, "data-x", x);
+      appendAttr(out, "data-x", xs[k]);
       appendAttr(out, "data-y", laneMiddle);
       out += " transform=\"translate(";
-      appendCoord(out, x);
+      appendCoord(out, xs[k]);
       out += ' ';
       appendCoord(out, laneMiddle);
       out += ")\">";
-      appendTitle(out, formatFixed(event->s, 3) + " s: " + event->label);
+      appendTitle(out, formatFixed(events[k]->s, 3) + " s: " + events[k]->label);
       out += "<path d=\"M0 -8L5 0L0 8L-5 0Z\" fill=\"";
-      out += severityColour(event->severity);
+      out += severityColour(events[k]->severity);
       out += "\"/><text x=\"7\" y=\"4\" font-size=\"11\" fill=\"#222222\"";
-      if (!labelFits(x + 7, displayChars(label))) out += " display=\"none\"";
+      if (!shown[k]) out += " display=\"none\"";
       out += '>';
-      appendXmlEscaped(out, label);
+      appendXmlEscaped(out, labels[k]);
       out += "</text></g>";
     }
   }
