@@ -347,6 +347,8 @@ void appendDtcSection(std::string& out, const ReportInput& input, double t0, dou
   std::map<Key, std::size_t> laneOf;
   LanesChartSpec spec{.id = "dtc-timeline", .t0 = t0, .t1 = t1, .width = CHART_WIDTH};
   std::uint64_t notDrawn = 0;
+  const bool severalBuses = std::any_of(input.dtcs.begin(), input.dtcs.end(),
+                                        [&](const DtcInterval& dtc) { return dtc.bus != input.dtcs.front().bus; });
   for (const DtcInterval& dtc : input.dtcs) {
     const Key key{dtc.bus, dtc.source, dtc.spn, dtc.fmi, dtc.previouslyActive};
     auto found = laneOf.find(key);
@@ -356,8 +358,9 @@ void appendDtcSection(std::string& out, const ReportInput& input, double t0, dou
         continue;
       }
       found = laneOf.emplace(key, spec.lanes.size()).first;
-      spec.lanes.push_back({busName(input, dtc.bus) + " SA " + hex(dtc.source, 2) + " SPN " + std::to_string(dtc.spn) +
-                                " FMI " + std::to_string(dtc.fmi) + (dtc.previouslyActive ? " (DM2)" : ""),
+      spec.lanes.push_back({(severalBuses ? busName(input, dtc.bus) + " " : std::string()) + "SPN " +
+                                std::to_string(dtc.spn) + " FMI " + std::to_string(dtc.fmi) + " (" +
+                                hex(dtc.source, 2) + (dtc.previouslyActive ? ", DM2)" : ")"),
                             {},
                             {}});
     }
@@ -369,7 +372,7 @@ void appendDtcSection(std::string& out, const ReportInput& input, double t0, dou
     interval.severity = dtc.previouslyActive ? Severity::Info : Severity::Warning;
     spec.lanes[found->second].intervals.push_back(std::move(interval));
   }
-  std::string caption = "DTC timeline: each row one DTC of one ECU (bus, source address, SPN, FMI); a bar from "
+  std::string caption = "DTC timeline: each row one DTC (SPN, FMI) of one ECU (source address; the bus when several); a bar from "
                         "the DM1 that raised it to the DM1 that no longer lists it (fading out: still active at "
                         "the end). DM2 rows (previously active) are blue.";
   if (notDrawn) caption += " " + count(notDrawn) + " intervals of further DTCs are only in the table.";

@@ -97,7 +97,7 @@ std::string_view reportScript() noexcept {
         items.forEach(function (item, k) {
           if (!item.label) return;
           var labelEnd = item.start + item.label.textContent.length * 6.5;
-          if (item.start >= end + 4 && (k + 1 === items.length || items[k + 1].x - 6 > labelEnd)) {
+          if (item.start >= end + 4 && (k + 1 === items.length ? labelEnd <= L + W : items[k + 1].x - 6 > labelEnd)) {
             item.label.removeAttribute('display');
             end = labelEnd;
           } else {

@@ -261,16 +261,18 @@ std::vector<std::pair<double, double>> drawnPoints(const std::vector<std::pair<d
 }
 
 /// Which labels of a lane to show: a label (at x + offset, anchors sorted by x) shows when it
-/// starts after the previous shown label and ends before the next anchor (the report's
+/// starts after the previous shown label and ends before the next anchor or, the last one,
+/// before `right` (the plot's end) (the report's
 /// script applies the same rule after a zoom).
-std::vector<bool> labelsShown(const std::vector<double>& xs, const std::vector<std::string>& labels, double offset) {
+std::vector<bool> labelsShown(const std::vector<double>& xs, const std::vector<std::string>& labels, double offset,
+                              double right) {
   std::vector<bool> shown(xs.size());
   double end = -INFINITY;
   for (std::size_t k = 0; k < xs.size(); ++k) {
     const double start = xs[k] + offset;
     const double labelEnd = start + static_cast<double>(displayChars(labels[k])) * LABEL_CHAR_PX;
     const bool roomBefore = start >= end + 4;
-    const bool roomAfter = k + 1 == xs.size() || xs[k + 1] - 6 > labelEnd;
+    const bool roomAfter = k + 1 == xs.size() ? labelEnd <= right : xs[k + 1] - 6 > labelEnd;
     shown[k] = roomBefore && roomAfter;
     if (shown[k]) end = labelEnd;
   }
@@ -670,7 +672,7 @@ std::string lanesSvg(const LanesChartSpec& spec) {
       xs.push_back(scale.x(interval->startS) + 3);
       labels.push_back(shortened(interval->label, MAX_LABEL_CHARS));
     }
-    std::vector<bool> shown = labelsShown(xs, labels, 0);
+    std::vector<bool> shown = labelsShown(xs, labels, 0, scale.left + scale.width);
     for (std::size_t k = 0; k < intervals.size(); ++k) {
       out += "<text class=\"lbl\"";
       appendAttr(out, "data-x", xs[k]);
@@ -693,7 +695,7 @@ std::string lanesSvg(const LanesChartSpec& spec) {
       xs.push_back(scale.x(event->s));
       labels.push_back(shortened(event->label, MAX_LABEL_CHARS));
     }
-    shown = labelsShown(xs, labels, EVENT_LABEL_OFFSET);
+    shown = labelsShown(xs, labels, EVENT_LABEL_OFFSET, scale.left + scale.width);
     for (std::size_t k = 0; k < events.size(); ++k) {
       out += "<g class=\"ev\"";
       appendAttr(out, "data-x", xs[k]);

@@ -48,7 +48,7 @@ struct AxisTicks {
 /// Ticks at 1, 2 or 5 x 10^n covering [low, high] with at most about `maxTicks` steps;
 /// an empty range (low == high) is widened around its value; non-finite input gives [0, 1].
 [[nodiscard]] AxisTicks niceTicks(double low, double high, std::size_t maxTicks);
-/// Decimals a tick label needs for `step` (0.25 -> 2, 20 -> 0).
+/// Decimals a tick label needs for a step of niceTicks() (0.5 -> 1, 0.02 -> 2, 20 -> 0).
 [[nodiscard]] int tickDecimals(double step);
 /// `value` with `decimals` decimals, locale-independent ("-0" printed as "0").
 [[nodiscard]] std::string formatFixed(double value, int decimals);
