@@ -1,149 +1,23 @@
+// Time charts of svg_chart.hpp: the time series line chart and the lanes chart, which share
+// one x layout and carry their time range for the report's zoom script.
 #include "openvcu/trace/svg_chart.hpp"
 
 #include <algorithm>
-#include <array>
-#include <charconv>
 #include <cmath>
 
 #include "openvcu/core/text.hpp"
 #include "openvcu/trace/sample_ring.hpp"
+#include "svg_writer.hpp"
 
 namespace openvcu::trace {
 namespace {
 
-/// Average advance of a character of DejaVu Sans at 12 px (for layout estimates).
-constexpr double CHAR_PX = 7.0;
-constexpr int FONT_PX = 12;
-constexpr int LEGEND_TOP = 28;
-constexpr int TIME_AXIS_BOTTOM = 34;
 constexpr int LANE_PX = 26;
-constexpr int BAR_ROW_PX = 22;
-constexpr std::size_t MAX_LABEL_CHARS = 28;
 constexpr std::size_t MAX_LANE_NAME_CHARS = 28;
 /// Average advance of a character at 11 px (lane labels).
 constexpr double LABEL_CHAR_PX = 6.5;
 /// The label of an event starts this far right of its marker.
 constexpr double EVENT_LABEL_OFFSET = 7;
-constexpr std::string_view GRID_COLOUR = "#dddddd";
-constexpr std::string_view AXIS_COLOUR = "#555555";
-constexpr std::string_view TEXT_COLOUR = "#222222";
-
-/// A coordinate with one decimal ("12.5", "40"): enough for pixels, short to write.
-void appendCoord(std::string& out, double value) {
-  if (!std::isfinite(value)) value = 0;
-  const double rounded = std::round(value * 10.0) / 10.0;
-  std::array<char, 32> buffer{};
-  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), rounded == 0 ? 0.0 : rounded,
-                                    std::chars_format::fixed, 1);
-  std::string_view text(buffer.data(), static_cast<std::size_t>(result.ptr - buffer.data()));
-  if (text.size() > 2 && text.substr(text.size() - 2) == ".0") text.remove_suffix(2);
-  out += text;
-}
-
-void appendAttr(std::string& out, std::string_view name, double value) {
-  out += ' ';
-  out += name;
-  out += "=\"";
-  appendCoord(out, value);
-  out += '"';
-}
-
-void appendAttr(std::string& out, std::string_view name, std::string_view value) {
-  out += ' ';
-  out += name;
-  out += "=\"";
-  appendXmlEscaped(out, value);
-  out += '"';
-}
-
-/// Code points of UTF-8 text (continuation bytes not counted).
-std::size_t displayChars(std::string_view text) {
-  return static_cast<std::size_t>(
-      std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
-}
-
-/// At most `maxChars` code points of `text`, with "…" when cut.
-std::string shortened(std::string_view text, std::size_t maxChars) {
-  if (displayChars(text) <= maxChars) return std::string(text);
-  std::size_t chars = 0;
-  std::size_t end = 0;
-  for (; end < text.size(); ++end) {
-    if ((static_cast<unsigned char>(text[end]) & 0xC0) != 0x80) {
-      if (chars == maxChars - 1) break;
-      ++chars;
-    }
-  }
-  return std::string(text.substr(0, end)) + "\xE2\x80\xA6";
-}
-
-void openSvg(std::string& out, std::string_view cssClass, std::string_view id, double width, double height) {
-  out += "<svg";
-  appendAttr(out, "class", cssClass);
-  appendAttr(out, "id", id);
-  appendAttr(out, "width", width);
-  appendAttr(out, "height", height);
-  out += " viewBox=\"0 0 ";
-  appendCoord(out, width);
-  out += ' ';
-  appendCoord(out, height);
-  out += "\" font-family=\"DejaVu Sans, sans-serif\" font-size=\"";
-  out += std::to_string(FONT_PX);
-  out += "\" role=\"img\">";
-}
-
-void appendText(std::string& out, double x, double y, std::string_view text, std::string_view anchor = "start",
-                std::string_view extra = {}) {
-  out += "<text";
-  appendAttr(out, "x", x);
-  appendAttr(out, "y", y);
-  if (anchor != "start") appendAttr(out, "text-anchor", anchor);
-  out += " fill=\"";
-  out += TEXT_COLOUR;
-  out += '"';
-  if (!extra.empty()) {
-    out += ' ';
-    out += extra;
-  }
-  out += '>';
-  appendXmlEscaped(out, text);
-  out += "</text>";
-}
-
-void appendLine(std::string& out, double x1, double y1, double x2, double y2, std::string_view colour) {
-  out += "<line";
-  appendAttr(out, "x1", x1);
-  appendAttr(out, "y1", y1);
-  appendAttr(out, "x2", x2);
-  appendAttr(out, "y2", y2);
-  out += " stroke=\"";
-  out += colour;
-  out += "\"/>";
-}
-
-void appendTitle(std::string& out, std::string_view text) {
-  out += "<title>";
-  appendXmlEscaped(out, text);
-  out += "</title>";
-}
-
-/// A legend row at the top: a square and the name of each series.
-void appendLegend(std::string& out, double left, const std::vector<std::string>& names) {
-  double x = left;
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    out += "<rect";
-    appendAttr(out, "x", x);
-    appendAttr(out, "y", 8);
-    out += " width=\"12\" height=\"12\" fill=\"";
-    out += seriesColour(i);
-    out += "\"/>";
-    const std::string name = shortened(names[i], MAX_LABEL_CHARS * 2);
-    appendText(out, x + 16, 18, name);
-    x += 16 + static_cast<double>(displayChars(name)) * CHAR_PX + 18;
-  }
-}
-
-/// A tick label of the time axis ("12.5 s" style: the unit is on the axis title).
-std::string tickLabel(double value, double step) { return formatFixed(value, tickDecimals(step)); }
 
 /// The time range a chart draws (never empty).
 std::pair<double, double> timeRange(double t0, double t1) {
@@ -206,25 +80,6 @@ void appendClip(std::string& out, std::string_view id, double x, double y, doubl
   out += "/></clipPath></defs>";
 }
 
-/// Horizontal grid lines and labels of a value axis, and its rotated title.
-void appendValueAxis(std::string& out, const AxisTicks& ticks, double left, double right, double top, double height,
-                     std::string_view label) {
-  const auto y = [&](double v) { return top + height - (v - ticks.low) / (ticks.high - ticks.low) * height; };
-  for (double value : ticks.values) {
-    appendLine(out, left, y(value), right, y(value), GRID_COLOUR);
-    appendText(out, left - 6, y(value) + 4, tickLabel(value, ticks.step), "end");
-  }
-  appendLine(out, left, top, left, top + height, AXIS_COLOUR);
-  std::string rotate = "transform=\"rotate(-90 ";
-  const double labelX = left - 52;
-  const double labelY = top + height / 2;
-  appendCoord(rotate, labelX);
-  rotate += ' ';
-  appendCoord(rotate, labelY);
-  rotate += ")\"";
-  appendText(out, labelX, labelY, label, "middle", rotate);
-}
-
 /// The finite samples of a series inside [t0, t1], in time order.
 std::vector<std::pair<double, double>> visibleSamples(const TimeSeries& series, double t0, double t1) {
   std::vector<std::pair<double, double>> samples;
@@ -280,97 +135,6 @@ std::vector<bool> labelsShown(const std::vector<double>& xs, const std::vector<s
 }
 
 }  // namespace
-
-AxisTicks niceTicks(double low, double high, std::size_t maxTicks) {
-  AxisTicks ticks;
-  if (!std::isfinite(low) || !std::isfinite(high)) {
-    low = 0;
-    high = 1;
-  }
-  if (high < low) std::swap(low, high);
-  if (high == low) {
-    const double pad = low == 0 ? 1.0 : std::fabs(low) * 0.1;
-    low -= pad;
-    high += pad;
-  }
-  maxTicks = std::max<std::size_t>(maxTicks, 1);
-  const double raw = (high - low) / static_cast<double>(maxTicks);
-  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
-  const double residual = raw / magnitude;
-  double step = 10 * magnitude;
-  for (double candidate : {1.0, 2.0, 5.0}) {
-    if (residual <= candidate * (1 + 1e-9)) {
-      step = candidate * magnitude;
-      break;
-    }
-  }
-  const double first = std::floor(low / step + 1e-9);
-  const double last = std::ceil(high / step - 1e-9);
-  ticks.step = step;
-  ticks.low = first * step;
-  ticks.high = last * step;
-  for (double i = first; i <= last; ++i) {
-    const double value = i * step;
-    ticks.values.push_back(std::fabs(value) < step * 1e-9 ? 0.0 : value);
-  }
-  return ticks;
-}
-
-int tickDecimals(double step) {
-  if (!(step > 0) || !std::isfinite(step)) return 0;
-  return std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
-}
-
-std::string formatFixed(double value, int decimals) {
-  if (std::isnan(value)) return "nan";
-  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  std::array<char, 64> buffer{};
-  const auto result =
-      std::to_chars(buffer.data(), buffer.data() + buffer.size(), value, std::chars_format::fixed, decimals);
-  if (result.ec != std::errc{}) return text::number(value);
-  std::string text(buffer.data(), result.ptr);
-  if (text.front() == '-' && text.find_first_not_of("-0.") == std::string::npos) text.erase(0, 1);
-  return text;
-}
-
-void appendXmlEscaped(std::string& out, std::string_view input) {
-  std::string converted;
-  if (!text::isValidUtf8(input)) {
-    converted = text::cp1252ToUtf8(input);
-    input = converted;
-  }
-  for (char c : input) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\n') {
-          out += "\xEF\xBF\xBD";  // U+FFFD: XML 1.0 has no control characters
-        } else {
-          out += c;
-        }
-    }
-  }
-}
-
-std::string_view seriesColour(std::size_t index) {
-  // Okabe & Ito's palette for colour-blind readers (black last).
-  static constexpr std::array<std::string_view, 8> PALETTE{"#0072B2", "#E69F00", "#009E73", "#D55E00",
-                                                           "#CC79A7", "#56B4E9", "#8C6D00", "#000000"};
-  return PALETTE[index % PALETTE.size()];
-}
-
-std::string_view severityColour(Severity severity) {
-  switch (severity) {
-    case Severity::Info: return "#0072B2";
-    case Severity::Warning: return "#E69F00";
-    case Severity::Fault: return "#D55E00";
-  }
-  return "#000000";
-}
 
 std::string timeSeriesSvg(const TimeChartSpec& spec) {
   const auto [t0, t1] = timeRange(spec.t0, spec.t1);
@@ -429,155 +193,6 @@ std::string timeSeriesSvg(const TimeChartSpec& spec) {
     out += "</polyline>";
   }
   out += "</g></g></svg>";
-  return out;
-}
-
-std::string verticalBarsSvg(const BarChartSpec& spec) {
-  const std::size_t count = spec.categories.size();
-  const std::size_t seriesCount = std::max<std::size_t>(spec.series.size(), 1);
-  constexpr double LEFT = 80;
-  constexpr double RIGHT = 16;
-  const double plotWidth = std::max(static_cast<double>(spec.width) - LEFT - RIGHT,
-                                    static_cast<double>(count) * MIN_CATEGORY_PX);
-  const double width = LEFT + RIGHT + plotWidth;
-  const double group = count == 0 ? plotWidth : plotWidth / static_cast<double>(count);
-  std::size_t longest = 0;
-  for (const std::string& category : spec.categories) {
-    longest = std::max(longest, std::min(displayChars(category), MAX_LABEL_CHARS));
-  }
-  const bool rotated = static_cast<double>(longest) * CHAR_PX + 6 > group;
-  const double labelRoom = rotated ? static_cast<double>(longest) * CHAR_PX * 0.87 + 20 : 24;
-  const double top = LEGEND_TOP;
-  const double plotHeight = std::max(120.0, static_cast<double>(spec.height) - top - 24);
-  const double height = top + plotHeight + labelRoom;
-
-  double low = 0;
-  double high = 0;
-  for (const BarSeries& series : spec.series) {
-    for (double v : series.values) {
-      if (!std::isfinite(v)) continue;
-      low = std::min(low, v);
-      high = std::max(high, v);
-    }
-  }
-  const AxisTicks ticks = niceTicks(low, high == low ? low + 1 : high, 6);
-  const auto y = [&](double v) { return top + plotHeight - (v - ticks.low) / (ticks.high - ticks.low) * plotHeight; };
-
-  std::string out;
-  out.reserve(2048 + count * seriesCount * 160);
-  openSvg(out, "bsvg", spec.id, width, height);
-  std::vector<std::string> names;
-  for (const BarSeries& series : spec.series) names.push_back(series.name);
-  if (names.size() > 1) appendLegend(out, LEFT, names);
-  appendValueAxis(out, ticks, LEFT, LEFT + plotWidth, top, plotHeight, spec.valueLabel);
-  if (count == 0) appendText(out, LEFT + plotWidth / 2, top + plotHeight / 2, "no data", "middle");
-  const double barWidth = group * 0.8 / static_cast<double>(seriesCount);
-  for (std::size_t c = 0; c < count; ++c) {
-    const double groupLeft = LEFT + static_cast<double>(c) * group;
-    for (std::size_t s = 0; s < spec.series.size(); ++s) {
-      const double v = c < spec.series[s].values.size() ? spec.series[s].values[c] : 0.0;
-      if (!std::isfinite(v)) continue;
-      const double y0 = y(0);
-      const double y1 = y(v);
-      out += "<rect";
-      appendAttr(out, "x", groupLeft + group * 0.1 + static_cast<double>(s) * barWidth);
-      appendAttr(out, "y", std::min(y0, y1));
-      appendAttr(out, "width", std::max(barWidth, 1.0));
-      appendAttr(out, "height", std::max(std::fabs(y1 - y0), v == 0 ? 0.0 : 1.0));
-      out += " fill=\"";
-      out += seriesColour(s);
-      out += "\">";
-      appendTitle(out, spec.categories[c] + (spec.series[s].name.empty() ? "" : " \xE2\x80\x94 " + spec.series[s].name) +
-                           ": " + text::number(v));
-      out += "</rect>";
-    }
-    const std::string label = shortened(spec.categories[c], MAX_LABEL_CHARS);
-    const double x = groupLeft + group / 2;
-    const double labelY = top + plotHeight + 14;
-    if (rotated) {
-      std::string rotate = "transform=\"rotate(-60 ";
-      appendCoord(rotate, x);
-      rotate += ' ';
-      appendCoord(rotate, labelY);
-      rotate += ")\" font-size=\"11\"";
-      appendText(out, x + 4, labelY, label, "end", rotate);
-    } else {
-      appendText(out, x, labelY, label, "middle");
-    }
-  }
-  appendLine(out, LEFT, y(0), LEFT + plotWidth, y(0), AXIS_COLOUR);
-  out += "</svg>";
-  return out;
-}
-
-std::string horizontalBarsSvg(const BarChartSpec& spec) {
-  const std::size_t count = spec.categories.size();
-  const std::size_t seriesCount = std::max<std::size_t>(spec.series.size(), 1);
-  std::size_t longest = 4;
-  for (const std::string& category : spec.categories) {
-    longest = std::max(longest, std::min(displayChars(category), MAX_LABEL_CHARS + 8));
-  }
-  const double left = static_cast<double>(longest) * CHAR_PX + 16;
-  constexpr double RIGHT = 90;  // room for the annotations
-  const double plotWidth = std::max(100.0, static_cast<double>(spec.width) - left - RIGHT);
-  const double width = left + plotWidth + RIGHT;
-  const double top = spec.series.size() > 1 ? LEGEND_TOP : 8;
-  const double plotHeight = static_cast<double>(std::max<std::size_t>(count, 1)) * BAR_ROW_PX;
-  const double height = top + plotHeight + TIME_AXIS_BOTTOM + 6;
-
-  double high = 0;
-  double low = 0;
-  for (const BarSeries& series : spec.series) {
-    for (double v : series.values) {
-      if (!std::isfinite(v)) continue;
-      low = std::min(low, v);
-      high = std::max(high, v);
-    }
-  }
-  const AxisTicks ticks = niceTicks(low, high == low ? low + 1 : high, 8);
-  const auto x = [&](double v) { return left + (v - ticks.low) / (ticks.high - ticks.low) * plotWidth; };
-
-  std::string out;
-  out.reserve(2048 + count * seriesCount * 200);
-  openSvg(out, "bsvg", spec.id, width, height);
-  std::vector<std::string> names;
-  for (const BarSeries& series : spec.series) names.push_back(series.name);
-  if (names.size() > 1) appendLegend(out, left, names);
-  for (double value : ticks.values) {
-    appendLine(out, x(value), top, x(value), top + plotHeight, GRID_COLOUR);
-    appendText(out, x(value), top + plotHeight + 15, tickLabel(value, ticks.step), "middle");
-  }
-  appendText(out, left + plotWidth, top + plotHeight + 30, spec.valueLabel, "end");
-  if (count == 0) appendText(out, left + plotWidth / 2, top + plotHeight / 2 + 4, "no data", "middle");
-  const double barHeight = (BAR_ROW_PX - 6.0) / static_cast<double>(seriesCount);
-  for (std::size_t c = 0; c < count; ++c) {
-    const double rowTop = top + static_cast<double>(c) * BAR_ROW_PX;
-    appendText(out, left - 6, rowTop + BAR_ROW_PX / 2.0 + 4, shortened(spec.categories[c], MAX_LABEL_CHARS + 8), "end");
-    double barEnd = x(0);
-    for (std::size_t s = 0; s < spec.series.size(); ++s) {
-      const double v = c < spec.series[s].values.size() ? spec.series[s].values[c] : 0.0;
-      if (!std::isfinite(v)) continue;
-      const double x0 = x(0);
-      const double x1 = x(v);
-      barEnd = std::max(barEnd, x1);
-      out += "<rect";
-      appendAttr(out, "x", std::min(x0, x1));
-      appendAttr(out, "y", rowTop + 3 + static_cast<double>(s) * barHeight);
-      appendAttr(out, "width", std::max(std::fabs(x1 - x0), v == 0 ? 0.0 : 1.0));
-      appendAttr(out, "height", barHeight);
-      out += " fill=\"";
-      out += seriesColour(s);
-      out += "\">";
-      appendTitle(out, spec.categories[c] + (spec.series[s].name.empty() ? "" : " \xE2\x80\x94 " + spec.series[s].name) +
-                           ": " + text::number(v));
-      out += "</rect>";
-    }
-    if (c < spec.annotations.size() && !spec.annotations[c].empty()) {
-      appendText(out, barEnd + 6, rowTop + BAR_ROW_PX / 2.0 + 4, spec.annotations[c]);
-    }
-  }
-  appendLine(out, x(0), top, x(0), top + plotHeight, AXIS_COLOUR);
-  out += "</svg>";
   return out;
 }
 
