@@ -21,9 +21,10 @@
 // DtcInterval and Finding times (the log's ns) are converted with it.
 //
 // The script: all time charts share one x range; the wheel zooms around the pointer,
-// dragging pans, a double click resets. On load it writes the bounding rectangles of all
-// chart elements (class "chart", attribute data-chart) as JSON into <pre id="chart-layout">
-// (the browser test reads them). Without the script the charts show the whole range.
+// dragging pans, a double click resets; report.html#view=T0,T1 opens on that range. On
+// load it writes the bounding rectangles of all chart elements (class "chart", attribute
+// data-chart) as JSON into <pre id="chart-layout"> (the browser test reads them).
+// Without the script the charts show the whole range.
 
 #include <array>
 #include <cstdint>
