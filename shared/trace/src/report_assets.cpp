@@ -84,20 +84,24 @@ std::string_view reportScript() noexcept {
           key = 'e' + y;
           offset = 7;
         } else {
-          e.setAttribute('x', x);
+          // an interval's label: at its start, or at the left edge while the interval goes on
+          if (x < L && a * +e.getAttribute('data-e') + b > L) x = L;
+          e.setAttribute('x', x + 3);
           label = e;
           key = 'l' + e.getAttribute('y');
-          offset = 0;
+          offset = 3;
         }
         (lanes[key] = lanes[key] || []).push({x: x, start: x + offset, label: label});
       });
-      // the rule of labelsShown() in svg_chart.cpp: after the previous label, before the next anchor
+      // the rule of labelsShown() in svg_chart.cpp: inside the plot, after the previous label,
+      // before the next anchor
       Object.keys(lanes).forEach(function (key) {
         var items = lanes[key], end = -Infinity;
         items.forEach(function (item, k) {
           if (!item.label) return;
           var labelEnd = item.start + item.label.textContent.length * 6.5;
-          if (item.start >= end + 4 && (k + 1 === items.length ? labelEnd <= L + W : items[k + 1].x - 6 > labelEnd)) {
+          if (item.start >= L && labelEnd <= L + W && item.start >= end + 4 &&
+              (k + 1 === items.length || items[k + 1].x - 6 > labelEnd)) {
             item.label.removeAttribute('display');
             end = labelEnd;
           } else {

@@ -18,6 +18,8 @@ constexpr std::size_t MAX_LANE_NAME_CHARS = 28;
 constexpr double LABEL_CHAR_PX = 6.5;
 /// The label of an event starts this far right of its marker.
 constexpr double EVENT_LABEL_OFFSET = 7;
+/// The label of an interval starts this far right of the interval's start.
+constexpr double INTERVAL_LABEL_OFFSET = 3;
 
 /// The time range a chart draws (never empty).
 std::pair<double, double> timeRange(double t0, double t1) {
@@ -115,20 +117,20 @@ std::vector<std::pair<double, double>> drawnPoints(const std::vector<std::pair<d
   return points;
 }
 
-/// Which labels of a lane to show: a label (at x + offset, anchors sorted by x) shows when it
-/// starts after the previous shown label and ends before the next anchor or, the last one,
-/// before `right` (the plot's end) (the report's
-/// script applies the same rule after a zoom).
+/// Which labels of a lane to show: a label (at anchor + offset, anchors sorted by x) shows
+/// when it lies inside [left, right] (the plot), starts after the previous shown label and
+/// ends before the next anchor (the report's script applies the same rule after a zoom).
 std::vector<bool> labelsShown(const std::vector<double>& xs, const std::vector<std::string>& labels, double offset,
-                              double right) {
+                              double left, double right) {
   std::vector<bool> shown(xs.size());
   double end = -INFINITY;
   for (std::size_t k = 0; k < xs.size(); ++k) {
     const double start = xs[k] + offset;
     const double labelEnd = start + static_cast<double>(displayChars(labels[k])) * LABEL_CHAR_PX;
+    const bool inside = start >= left && labelEnd <= right;
     const bool roomBefore = start >= end + 4;
-    const bool roomAfter = k + 1 == xs.size() ? labelEnd <= right : xs[k + 1] - 6 > labelEnd;
-    shown[k] = roomBefore && roomAfter;
+    const bool roomAfter = k + 1 == xs.size() || xs[k + 1] - 6 > labelEnd;
+    shown[k] = inside && roomBefore && roomAfter;
     if (shown[k]) end = labelEnd;
   }
   return shown;
@@ -281,17 +283,20 @@ std::string lanesSvg(const LanesChartSpec& spec) {
     }
     std::stable_sort(intervals.begin(), intervals.end(),
                      [](const LaneInterval* a, const LaneInterval* b) { return a->startS < b->startS; });
+    // an interval's label sits at its start, or at the plot's left edge when it began before
     std::vector<double> xs;
     std::vector<std::string> labels;
     for (const LaneInterval* interval : intervals) {
-      xs.push_back(scale.x(interval->startS) + 3);
+      const double x0 = scale.x(interval->startS);
+      xs.push_back(x0 < scale.left && scale.x(interval->endS) > scale.left ? scale.left : x0);
       labels.push_back(shortened(interval->label, MAX_LABEL_CHARS));
     }
-    std::vector<bool> shown = labelsShown(xs, labels, 0, scale.left + scale.width);
+    std::vector<bool> shown = labelsShown(xs, labels, INTERVAL_LABEL_OFFSET, scale.left, scale.left + scale.width);
     for (std::size_t k = 0; k < intervals.size(); ++k) {
       out += "<text class=\"lbl\"";
-      appendAttr(out, "data-x", xs[k]);
-      appendAttr(out, "x", xs[k]);
+      appendAttr(out, "data-x", scale.x(intervals[k]->startS));
+      appendAttr(out, "data-e", scale.x(intervals[k]->endS));
+      appendAttr(out, "x", xs[k] + INTERVAL_LABEL_OFFSET);
       appendAttr(out, "y", laneMiddle + 4);
       out += " font-size=\"11\" fill=\"#000000\"";
       if (!shown[k]) out += " display=\"none\"";
@@ -310,7 +315,7 @@ std::string lanesSvg(const LanesChartSpec& spec) {
       xs.push_back(scale.x(event->s));
       labels.push_back(shortened(event->label, MAX_LABEL_CHARS));
     }
-    shown = labelsShown(xs, labels, EVENT_LABEL_OFFSET, scale.left + scale.width);
+    shown = labelsShown(xs, labels, EVENT_LABEL_OFFSET, scale.left, scale.left + scale.width);
     for (std::size_t k = 0; k < events.size(); ++k) {
       out += "<g class=\"ev\"";
       appendAttr(out, "data-x", xs[k]);

@@ -186,14 +186,16 @@ TEST_CASE("vertical bars rotate their labels only when they do not fit and draw 
   CHECK(occurrences(manySvg, "<rect") == 80 * 2 + 2);  // bars and the two legend squares
 }
 
-TEST_CASE("lanes hide a label that would overlap the next marker and fade intervals still open") {
+TEST_CASE("lanes hide a label that would overlap the next marker or leave the plot and fade intervals still open") {
   LanesChartSpec spec;
   spec.id = "lanes";
   spec.t0 = 0;
   spec.t1 = 100;
   spec.lanes.push_back({"FSM", {}, {{10, "Standby", Severity::Info}, {10.1, "Ready", Severity::Info}}});
   spec.lanes.push_back({"DTC", {{20, 100, true, "OC 1", Severity::Warning}}, {}});
+  spec.lanes.push_back({"late", {}, {{99.9, "at the right edge", Severity::Fault}}});
   const std::string svg = lanesSvg(spec);
+  CHECK(occurrences(svg, "display=\"none\">at the right edge") == 1);  // would leave the plot
   CHECK(occurrences(svg, "display=\"none\">Standby") == 1);
   CHECK(occurrences(svg, "display=\"none\">Ready") == 0);
   CHECK(svg.find("fill=\"url(#lanes-open-warning)\"") != std::string::npos);
