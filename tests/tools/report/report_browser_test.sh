@@ -8,7 +8,7 @@
 #      with #view=300,320 every time chart shows 300..320 s (the zoom code ran);
 #   2. takes a --screenshot at the same window size with --log-net-log: every chart drew
 #      (check_screenshot.py pixels) and the document requested no http/https/ws URL
-#      (check_screenshot.py netlog);
+#      (check_screenshot.py netlog); the pixel check must fail on a blank image;
 #   3. loads a control page that does fetch http:// and ws:// URLs: the net log check must
 #      see them (so step 2 can fail).
 # SKIPPED (exit 77) without chromium or PIL. The screenshot stays in $OPENVCU_REPORT_WORK.
@@ -83,6 +83,11 @@ browser "$width,$height" --log-net-log="$work/netlog.json" --screenshot="$work/s
 echo "screenshot: $work/shot.png"
 "$python" "$checker" pixels "$work/dom.html" "$work/shot.png" --expect "$expected_charts" || fail "a chart drew nothing (see $work/shot.png)"
 "$python" "$checker" netlog "$work/netlog.json" || fail "the report fetched something (see $work/netlog.json)"
+# the pixel check fails on a blank page of the same size (so it can fail)
+"$python" -c "from PIL import Image; Image.new('RGB', ($width, $height), 'white').save('$work/blank.png')" ||
+  fail "cannot write the blank control image"
+"$python" "$checker" pixels "$work/dom.html" "$work/blank.png" --expect "$expected_charts" >/dev/null &&
+  fail "the pixel check passed a blank screenshot: it cannot catch a chart that draws nothing"
 
 # 3. the control: a page that fetches is caught by the same net log check
 cat >"$work/control.html" <<'EOF'
