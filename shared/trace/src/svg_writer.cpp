@@ -175,7 +175,8 @@ AxisTicks niceTicks(double low, double high, std::size_t maxTicks) {
   ticks.step = step;
   ticks.low = first * step;
   ticks.high = last * step;
-  for (double i = first; i <= last; ++i) {
+  // bounded: at the limits of double precision ++i may not move i
+  for (double i = first; i <= last && ticks.values.size() <= 4 * maxTicks + 4; ++i) {
     const double value = i * step;
     ticks.values.push_back(std::fabs(value) < step * 1e-9 ? 0.0 : value);
   }
