@@ -25,10 +25,13 @@ constexpr double PERCENT = 100.0;
 constexpr std::size_t LOAD_BUCKETS = static_cast<std::size_t>(LOAD_WINDOW_NS / LOAD_STEP_NS);
 static_assert(LOAD_WINDOW_NS % LOAD_STEP_NS == 0);
 
-/// Period histogram: linear bins up to PERIOD_LINEAR_NS, PERIOD_OCTAVE_BINS per octave
-/// above it up to PERIOD_RANGE_NS, one overflow bin. 2,769 32-bit counters = 11 KB per
-/// stream with at least one period (45 MB for MAX_STREAMS such streams).
-constexpr std::size_t LINEAR_BINS = static_cast<std::size_t>(PERIOD_LINEAR_NS / PERIOD_BIN_NS);
+/// Period histogram: linear bins centred on multiples of PERIOD_BIN_NS up to
+/// PERIOD_LINEAR_NS (bin i holds [i - 0.5, i + 0.5) x PERIOD_BIN_NS, so an exact 10 ms cycle
+/// reads 10.000), PERIOD_OCTAVE_BINS per octave above it up to PERIOD_RANGE_NS, one
+/// overflow bin. 2,770 32-bit counters = 11 KB per stream with at least one period
+/// (45 MB for MAX_STREAMS such streams).
+constexpr std::int64_t HALF_BIN_NS = PERIOD_BIN_NS / 2;
+constexpr std::size_t LINEAR_BINS = static_cast<std::size_t>(PERIOD_LINEAR_NS / PERIOD_BIN_NS) + 1;
 constexpr int PERIOD_OCTAVES = 6;
 static_assert((PERIOD_LINEAR_NS << PERIOD_OCTAVES) == PERIOD_RANGE_NS);
 constexpr std::size_t HISTOGRAM_BINS =
@@ -45,7 +48,7 @@ constexpr std::size_t STANDARD_NODE = 256;
 constexpr std::size_t NODE_SLOTS = 257;
 
 std::size_t periodBin(std::int64_t periodNs) noexcept {
-  if (periodNs < PERIOD_LINEAR_NS) return static_cast<std::size_t>(periodNs / PERIOD_BIN_NS);
+  if (periodNs < PERIOD_LINEAR_NS + HALF_BIN_NS) return static_cast<std::size_t>((periodNs + HALF_BIN_NS) / PERIOD_BIN_NS);
   if (periodNs >= PERIOD_RANGE_NS) return OVERFLOW_BIN;
   const auto octave = std::bit_width(static_cast<std::uint64_t>(periodNs / PERIOD_LINEAR_NS)) - 1;
   const std::int64_t base = PERIOD_LINEAR_NS << octave;
@@ -53,18 +56,15 @@ std::size_t periodBin(std::int64_t periodNs) noexcept {
   return LINEAR_BINS + static_cast<std::size_t>(octave * PERIOD_OCTAVE_BINS + sub);
 }
 
-/// [lower, upper) of a bin (the overflow bin: [PERIOD_RANGE_NS, max]).
-std::pair<std::int64_t, std::int64_t> binBounds(std::size_t bin) noexcept {
-  if (bin < LINEAR_BINS) {
-    const auto lower = static_cast<std::int64_t>(bin) * PERIOD_BIN_NS;
-    return {lower, lower + PERIOD_BIN_NS};
-  }
-  if (bin == OVERFLOW_BIN) return {PERIOD_RANGE_NS, std::numeric_limits<std::int64_t>::max()};
+/// The value a bin stands for: its centre (an octave bin: the middle of [lower, upper)).
+double binValueNs(std::size_t bin) noexcept {
+  if (bin < LINEAR_BINS) return static_cast<double>(static_cast<std::int64_t>(bin) * PERIOD_BIN_NS);
   const auto index = static_cast<std::int64_t>(bin - LINEAR_BINS);
   const std::int64_t octave = index / PERIOD_OCTAVE_BINS;
   const std::int64_t sub = index % PERIOD_OCTAVE_BINS;
   const std::int64_t base = PERIOD_LINEAR_NS << octave;
-  return {base + base * sub / PERIOD_OCTAVE_BINS, base + base * (sub + 1) / PERIOD_OCTAVE_BINS};
+  const double lower = static_cast<double>(base) + static_cast<double>(base * sub) / PERIOD_OCTAVE_BINS;
+  return lower + 0.5 * static_cast<double>(base) / PERIOD_OCTAVE_BINS;
 }
 
 struct NodeCount {
@@ -155,8 +155,8 @@ struct BusState {
   }
 };
 
-/// The value of the quantile `q` (nearest rank) from a histogram: the middle of its bin,
-/// clamped to the exact [min, max].
+/// The value of the quantile `q` (nearest rank) from a histogram: the value its bin stands
+/// for, clamped to the exact [min, max].
 double quantileMs(const Stream& stream, double q) noexcept {
   const auto rank = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(stream.periods))));
   std::uint64_t seen = 0;
@@ -164,9 +164,7 @@ double quantileMs(const Stream& stream, double q) noexcept {
     seen += stream.histogram[bin];
     if (seen < rank) continue;
     if (bin == OVERFLOW_BIN) return static_cast<double>(stream.maxNs) / NS_PER_MS;
-    const auto [lower, upper] = binBounds(bin);
-    const double middle = 0.5 * (static_cast<double>(lower) + static_cast<double>(upper));
-    return std::clamp(middle, static_cast<double>(stream.minNs), static_cast<double>(stream.maxNs)) / NS_PER_MS;
+    return std::clamp(binValueNs(bin), static_cast<double>(stream.minNs), static_cast<double>(stream.maxNs)) / NS_PER_MS;
   }
   return static_cast<double>(stream.maxNs) / NS_PER_MS;
 }

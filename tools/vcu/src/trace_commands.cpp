@@ -32,7 +32,8 @@ void addTraceInputOptions(CLI::App& command, TraceInputOptions& options) {
                      ->option_text("FILE");
   auto* dbcOption = command.add_option("-d,--dbc", options.dbcFiles, "DBC file (repeat for several; merged in order)")
                         ->option_text("FILE")
-                        ->take_all();
+                        ->take_all()
+                        ->allow_extra_args(false);  // one file per --dbc: "--dbc a.dbc drive.log -f json" leaves the log a LOG
   config->excludes(dbcOption);
   command
       .add_option_function<std::string>(

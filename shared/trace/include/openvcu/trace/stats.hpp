@@ -24,12 +24,14 @@
 
 namespace openvcu::trace {
 
-/// Width of a period histogram bin below PERIOD_LINEAR_NS: there p50/p99 are the middle of
-/// their bin (clamped to the exact min/max), so within PERIOD_BIN_NS / 2 of the true value.
+/// Width of a period histogram bin up to PERIOD_LINEAR_NS: there p50/p99 are the true
+/// value rounded to a multiple of PERIOD_BIN_NS (clamped to the exact min/max), so within
+/// PERIOD_BIN_NS / 2 of it; an exact 10 ms cycle reads 10.000 ms.
 inline constexpr std::int64_t PERIOD_BIN_NS = 100'000;  // 0.1 ms
 /// Periods up to here have linear bins; above, each octave (200-400 ms, 400-800 ms, ...)
 /// has PERIOD_OCTAVE_BINS bins (relative resolution 1/128 = 0.8 %) up to PERIOD_RANGE_NS;
-/// longer periods share one overflow bin (their percentile is the exact max).
+/// longer periods share one overflow bin (their percentile is the exact max). Above
+/// PERIOD_LINEAR_NS a percentile is the middle of its bin: within 1/256 (0.4 %).
 inline constexpr std::int64_t PERIOD_LINEAR_NS = 200'000'000;     // 200 ms
 inline constexpr std::int64_t PERIOD_OCTAVE_BINS = 128;
 inline constexpr std::int64_t PERIOD_RANGE_NS = 12'800'000'000;   // 12.8 s (6 octaves)
