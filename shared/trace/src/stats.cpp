@@ -9,10 +9,10 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "openvcu/can/wire_time.hpp"
+#include "openvcu/trace/wire_bits.hpp"
 
 namespace openvcu::trace {
 namespace {
@@ -72,15 +72,6 @@ struct NodeCount {
   std::uint64_t bits{};
 };
 
-/// The wire bits of the last classic frame of a stream, reused while its payload repeats
-/// (why: building the stuffed bit stream is the costliest step per frame).
-struct BitsCache {
-  std::uint64_t data{};
-  std::uint8_t flags{};
-  std::uint8_t length{0xFF};  ///< 0xFF: empty
-  can::WireBits bits{};
-};
-
 struct Stream {
   std::uint64_t key{};
   std::uint16_t bus{};
@@ -96,7 +87,6 @@ struct Stream {
   std::int64_t maxNs{};
   std::uint64_t gaps{};
   std::uint64_t missing{};
-  BitsCache cache;
   std::unique_ptr<std::uint32_t[]> histogram;  ///< HISTOGRAM_BINS, allocated at the first period
 };
 
@@ -233,18 +223,6 @@ struct TraceStats::Impl {
     return &created;
   }
 
-  static can::WireBits bitsOf(const can::Frame& frame, BitsCache* cache) noexcept {
-    if (cache == nullptr || frame.fd() || frame.length > can::CLASSIC_DATA_LENGTH) return can::wireBits(frame);
-    std::uint64_t data = 0;
-    std::memcpy(&data, frame.data.data(), can::CLASSIC_DATA_LENGTH);  // bytes past length are part of the key too
-    if (cache->length == frame.length && cache->flags == frame.flags && cache->data == data) return cache->bits;
-    cache->bits = can::wireBits(frame);
-    cache->length = frame.length;
-    cache->flags = frame.flags;
-    cache->data = data;
-    return cache->bits;
-  }
-
   void measurePeriod(Stream& stream, std::int64_t timeNs) {
     const std::int64_t period = timeNs - stream.lastNs;
     if (period < 0) {
@@ -292,7 +270,7 @@ struct TraceStats::Impl {
       }
     }
 
-    const can::WireBits bits = bitsOf(frame.frame, maybeStream != nullptr ? &maybeStream->cache : nullptr);
+    const can::WireBits bits = frameWireBits(frame.frame);
     const std::uint32_t frameBits = bits.nominalBits + bits.dataBits;
     // The same arithmetic as can::wireTimeNs (one rounding per frame).
     std::int64_t wireNs = 0;
