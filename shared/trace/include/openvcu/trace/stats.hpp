@@ -50,12 +50,15 @@ struct BusStats {
   std::uint64_t frames{};
   std::uint64_t errorFrames{};
   double durationS{};           ///< first to last frame on this bus
-  double loadMeanPct{};         ///< all wire bits / (duration x bitrate)
+  double loadMeanPct{};         ///< wire time of all frames (nominal bits at bitrate, CAN FD data
+                                ///< phase at the data bit rate, error frames 17 bits) / duration
   double loadMaxPct{};          ///< the highest load of any LOAD_WINDOW_NS window (windows
                                 ///< start at the bus' first frame + k x LOAD_STEP_NS); the
                                 ///< mean when the bus was seen for less than one window
-  /// Load over time: (seconds from the timeline's start, % in that bucket), bucket width
-  /// loadBucketS; at most LOAD_SERIES_POINTS points.
+  /// Load over time: (seconds from the timeline's start to the bucket's start, % of the
+  /// bucket's width that frames took), bucket width loadBucketS (LOAD_STEP_NS, doubled at
+  /// each pairwise merge); at most LOAD_SERIES_POINTS points. A bucket the log ends inside
+  /// still counts its whole width (it reads low).
   std::vector<std::pair<double, double>> loadSeries;
   double loadBucketS{};
 };
@@ -67,7 +70,7 @@ struct NodeStats {
   std::string name;             ///< from the DBC where known, else empty
   std::uint64_t frames{};
   double bitsPerS{};            ///< wire bits / bus duration
-  double sharePct{};            ///< of all wire bits on the bus
+  double sharePct{};            ///< of all wire bits on the bus (error frames included)
 };
 
 struct MessageStats {
