@@ -13,6 +13,7 @@
 #include "record_commands.hpp"
 #include "sim_commands.hpp"
 #include "top_commands.hpp"
+#include "trace_commands.hpp"
 #include "schedule_commands.hpp"
 #include "signal_commands.hpp"
 #include "status_commands.hpp"
@@ -79,6 +80,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerRecordCommands(app, context);
     registerTopCommands(app, context);
     registerCheckCommands(app, context);
+    registerTraceCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

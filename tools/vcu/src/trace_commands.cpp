@@ -1,0 +1,128 @@
+// `vcu trace`: the group, and the input every trace command shares.
+#include "trace_commands.hpp"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <system_error>
+
+#include "dbc_commands.hpp"
+#include "diagnostics.hpp"
+
+namespace openvcu::cli {
+namespace {
+
+/// The *.log files of a folder (vcu record writes one per bus), sorted.
+std::vector<std::string> logsOfFolder(const std::string& folder) {
+  std::vector<std::string> logs;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    if (entry.path().extension() == ".log" && entry.is_regular_file(error)) logs.push_back(entry.path().string());
+  }
+  std::sort(logs.begin(), logs.end());
+  return logs;
+}
+
+}  // namespace
+
+void addTraceInputOptions(CLI::App& command, TraceInputOptions& options) {
+  auto* config = command.add_option("-c,--config", options.configFile,
+                                    "vehicle configuration: its DBC files, bit rates, schedule cycles and J1939-76 pairs")
+                     ->option_text("FILE");
+  auto* dbcOption = command.add_option("-d,--dbc", options.dbcFiles, "DBC file (repeat for several; merged in order)")
+                        ->option_text("FILE")
+                        ->take_all();
+  config->excludes(dbcOption);
+  command
+      .add_option_function<std::string>(
+          "--match",
+          [&options](const std::string& mode) {
+            options.match = mode == "exact" ? dbc::MatchMode::Exact
+                            : mode == "j1939-tagged" ? dbc::MatchMode::J1939Tagged
+                                                     : dbc::MatchMode::J1939;
+          },
+          "how frames find their DBC message (default j1939)")
+      ->check(CLI::IsMember({"exact", "j1939", "j1939-tagged"}))
+      ->option_text("exact|j1939|j1939-tagged");
+  command.add_option("LOG", options.logs, "CAN logs (candump -L, candump, ASC) or a folder written by vcu record; several = one timeline")
+      ->required()
+      ->type_name("");
+}
+
+std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink& err) {
+  TraceInput input;
+  input.reportedErrors = std::make_shared<std::uint64_t>(0);
+  Result<trace::AnalysisSetup> setupResult = trace::emptySetup();
+  if (!options.configFile.empty()) {
+    setupResult = trace::loadSetupFromConfig(options.configFile);
+  } else if (!options.dbcFiles.empty()) {
+    setupResult = trace::loadSetupFromDbc(options.dbcFiles);
+  }
+  if (!setupResult) {
+    report(err, setupResult.error());
+    reportError(err, "going on without a DBC: messages are shown by identifier, expected cycles are unknown");
+    input.failed = true;
+    setupResult = trace::emptySetup();
+  }
+  input.setup = std::make_unique<trace::AnalysisSetup>(std::move(*setupResult));
+  if (options.match) input.setup->match = *options.match;
+
+  for (const std::string& log : options.logs) {
+    std::error_code error;
+    if (std::filesystem::is_directory(log, error)) {
+      if (input.recordFolder.empty()) input.recordFolder = log;
+      std::vector<std::string> logs = logsOfFolder(log);
+      if (logs.empty()) {
+        report(err, Error{"no *.log file in this folder", Location{log, 0, 0, {}}});
+        input.failed = true;
+      }
+      input.logPaths.insert(input.logPaths.end(), logs.begin(), logs.end());
+    } else {
+      input.logPaths.push_back(log);
+    }
+  }
+  if (input.logPaths.empty()) return std::nullopt;
+  auto reported = input.reportedErrors;
+  Result<trace::LogTimeline> timelineResult =
+      trace::LogTimeline::open(input.logPaths, *input.setup, [&err, reported](const Error& error) {
+        if (*reported < MAX_REPORTED_LOG_ERRORS) report(err, error);
+        ++*reported;
+      });
+  if (!timelineResult) {
+    report(err, timelineResult.error());
+    return std::nullopt;
+  }
+  input.timeline.emplace(std::move(*timelineResult));
+  return input;
+}
+
+void reportSkipped(TraceInput& input, Sink& err) {
+  for (const trace::LogCounts& count : input.timeline->counts()) {
+    if (count.malformedLines == 0 && count.untimed == 0 && count.backwards == 0) continue;
+    std::string text = "skipped " + std::to_string(count.malformedLines) + " malformed lines and " +
+                       std::to_string(count.untimed) + " lines without a time; " + std::to_string(count.backwards) +
+                       " frames went back in time (their periods not measured)";
+    report(err, Error{std::move(text), Location{count.path, 0, 0, {}}});
+    if (count.malformedLines > 0) input.failed = true;
+  }
+  if (*input.reportedErrors > MAX_REPORTED_LOG_ERRORS) {
+    reportError(err, "only the first " + std::to_string(MAX_REPORTED_LOG_ERRORS) + " of " +
+                         std::to_string(*input.reportedErrors) + " log problems were shown");
+  }
+}
+
+std::string relativeSeconds(std::int64_t timeNs, std::int64_t startNs) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6f", static_cast<double>(timeNs - startNs) / 1e9);
+  return text;
+}
+
+void registerTraceCommands(CLI::App& app, CommandContext& context) {
+  CLI::App* traceGroup = app.add_subcommand(
+      "trace", "CAN log analysis: traffic statistics, protocol checks (J1939-21/73/76), an HTML report");
+  (void)traceGroup;
+  (void)context;
+}
+
+}  // namespace openvcu::cli
