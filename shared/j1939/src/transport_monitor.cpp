@@ -353,19 +353,27 @@ void TpMonitor::handleData(std::uint8_t source, std::uint8_t destination, std::s
   ++session.nextPacket;
   session.windowStarted = true;
 
+  // After a retransmitted window the rest may have arrived before: then all are in.
+  const bool windowDone = session.state == State::WindowData && session.nextPacket > session.windowEnd;
+  if (windowDone && session.info.packetsReceived == session.info.packets) {
+    session.nextPacket = static_cast<std::uint16_t>(session.info.packets + 1u);
+  }
   if (session.nextPacket > session.info.packets) {
-    TpMonitoredMessage message;
-    message.session = session.info;
-    message.session.endNs = nowNs;
-    message.data = bufferOf(session).first(session.info.size);
-    sink.completed(message);
+    if (!session.delivered) {
+      session.delivered = true;
+      TpMonitoredMessage message;
+      message.session = session.info;
+      message.session.endNs = nowNs;
+      message.data = bufferOf(session).first(session.info.size);
+      sink.completed(message);
+    }
     if (session.info.broadcast) {
       endWith(session, TpOutcome::Completed, nowNs, sink);
     } else {
       session.state = State::AwaitAck;
       setDeadline(session, nowNs, TP_T3_NS, TpTimer::T3);
     }
-  } else if (session.state == State::WindowData && session.nextPacket > session.windowEnd) {
+  } else if (windowDone) {
     session.state = State::AwaitCts;
     setDeadline(session, nowNs, TP_T3_NS, TpTimer::T3);
   } else {

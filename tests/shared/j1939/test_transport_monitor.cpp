@@ -388,3 +388,23 @@ TEST_CASE("monitor refuses invalid announcements and those beyond a full pool, a
   CHECK(bus.sut.counters().refused == 2);
   CHECK(bus.sut.counters().started == 1);
 }
+
+TEST_CASE("monitor follows a retransmission request and hands the message on once") {
+  Bus bus;
+  const Bytes message = payload(20, 0x30);
+  Bytes corrupted = packet(message, 2);
+  corrupted[3] ^= 0xFF;
+  bus.send(cmId(GATEWAY, VCU), rts(20, 3, 0xFF, PGN_COMPONENT_ID), 0);
+  bus.send(cmId(VCU, GATEWAY), cts(3, 1, PGN_COMPONENT_ID));
+  bus.send(dtId(GATEWAY, VCU), packet(message, 1));
+  bus.send(dtId(GATEWAY, VCU), corrupted);
+  bus.send(dtId(GATEWAY, VCU), packet(message, 3));
+  bus.send(cmId(VCU, GATEWAY), cts(1, 2, PGN_COMPONENT_ID));  // packet 2 again
+  bus.send(dtId(GATEWAY, VCU), packet(message, 2));
+  bus.send(cmId(VCU, GATEWAY), endOfMsgAck(20, 3, PGN_COMPONENT_ID));
+
+  REQUIRE(bus.out.messages.size() == 1);  // at the first time all packets were in
+  REQUIRE(bus.out.ends.size() == 1);
+  CHECK(bus.out.ends[0].outcome == TpOutcome::Completed);
+  CHECK(bus.out.ends[0].session.windows == 2);
+}

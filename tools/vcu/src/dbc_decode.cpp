@@ -46,7 +46,7 @@ class TransportWriter final : public j1939::TpMonitorSink {
  public:
   TransportWriter(const dbc::Database& database, const dbc::MessageMatcher& matcher, FrameWriter& writer,
                   std::string& out, DecodeCounts& counts)
-      : m_database(database), m_matcher(matcher), m_codecs(database), m_writer(writer), m_out(out), m_counts(counts) {
+      : m_matcher(matcher), m_codecs(database), m_writer(writer), m_out(out), m_counts(counts) {
     std::size_t most = 1;
     for (const dbc::Message& message : database.messages) most = std::max(most, message.signals.size());
     m_values.resize(most);
@@ -143,7 +143,6 @@ class TransportWriter final : public j1939::TpMonitorSink {
     return record;
   }
 
-  const dbc::Database& m_database;
   const dbc::MessageMatcher& m_matcher;
   dbc::DatabaseCodec m_codecs;
   std::vector<trace::SignalValue> m_values;  ///< sized once for the message with the most signals

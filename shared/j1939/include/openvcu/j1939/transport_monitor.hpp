@@ -119,7 +119,8 @@ struct TpMonitoredMessage {
 class TpMonitorSink {
  public:
   virtual ~TpMonitorSink() = default;
-  /// All packets of a message arrived (size == announced size).
+  /// All packets of a message arrived (size == announced size); once per session: packets
+  /// retransmitted after it (a CTS asking for them again) are not handed on again.
   virtual void completed(const TpMonitoredMessage& message) noexcept = 0;
   /// A session ended (every session that started ends exactly once) or an announcement was refused.
   virtual void ended(const TpSessionEnd& end) noexcept = 0;
@@ -195,6 +196,7 @@ class TpMonitor {
     TpTimer timer{TpTimer::None};
     State state{State::Idle};
     bool windowStarted{};        ///< a TP.DT of the open window arrived
+    bool delivered{};            ///< completed() was called (a retransmission does not call it again)
   };
 
   void handleControl(std::uint8_t source, std::uint8_t destination, std::span<const std::uint8_t> data,

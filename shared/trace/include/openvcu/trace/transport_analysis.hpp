@@ -72,6 +72,7 @@ class TransportAnalysis {
   using OnMessage = std::function<void(const ReassembledMessage&)>;
 
   /// `onMessage` (optional) receives every reassembled message and every DM1/DM2.
+  /// `setup` must outlive the analysis (its database names messages in findings).
   explicit TransportAnalysis(const AnalysisSetup& setup, OnMessage onMessage = {});
   TransportAnalysis(TransportAnalysis&&) noexcept;
   TransportAnalysis& operator=(TransportAnalysis&&) noexcept;
