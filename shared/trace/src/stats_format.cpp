@@ -155,7 +155,7 @@ void appendStatsText(std::string& out, const StatsReport& report) {
   }
   nodes.appendTo(out);
 
-  out += "\nMessages (periods in ms; p50/p99 within 0.05 ms below 200 ms, 0.8 % above; gap: period > 1.5 x expected)\n";
+  out += "\nMessages (periods in ms; p50/p99 rounded to 0.1 ms up to 200 ms, within 0.4 % above; gap: period > 1.5 x expected)\n";
   Table messages({"BUS", "ID", "NAME", "COUNT", "EXPECTED", "MEAN", "P50", "P99", "MAX", "DEVIATION", "GAPS", "MISSING"},
                  {false, false, false, true, true, true, true, true, true, true, true, true});
   for (const MessageStats& message : report.messages) {

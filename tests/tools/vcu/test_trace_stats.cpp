@@ -157,3 +157,29 @@ TEST_CASE("vcu trace stats of a log that does not exist exits 1 naming it") {
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
   CHECK(contains(result.err, "/nonexistent/drive.log"));
 }
+
+TEST_CASE("vcu trace stats of a vcu record folder reads its logs as one timeline, a bus per channel") {
+  std::filesystem::create_directories(std::string(VCU_TEST_WORK_DIR) + "/record");
+  const std::string vehicle = writeScratchFile("record/vehicle.log",
+                                               "(1.000000) vehicle 18FF50E5#01\n(1.020000) vehicle 18FF50E5#01\n");
+  writeScratchFile("record/powertrain.log", "(1.010000) powertrain 123#01\n(1.040000) powertrain 123#01\n");
+  writeScratchFile("record/notes.txt", "not a log\n");
+  const std::string folder = std::filesystem::path(vehicle).parent_path().string();
+  const RunResult result = runVcu({"trace", "stats", folder, "--format", "json"});
+  CHECK(result.exitCode == EXIT_OK);
+  const nlohmann::json json = nlohmann::json::parse(result.out);
+  CHECK(json["frames"] == 4);
+  CHECK(json["duration_s"] == 0.04);
+  REQUIRE(json["buses"].size() == 2);
+  REQUIRE(json["messages"].size() == 2);
+  for (const nlohmann::json& message : json["messages"]) {
+    if (message["bus"] == "vehicle") {
+      CHECK(message["id"] == "0x18FF50E5");
+      CHECK(message["mean_ms"] == 20.0);
+    } else {
+      CHECK(message["bus"] == "powertrain");
+      CHECK(message["id"] == "0x123");
+      CHECK(message["mean_ms"] == 30.0);
+    }
+  }
+}
