@@ -121,8 +121,7 @@ std::string relativeSeconds(std::int64_t timeNs, std::int64_t startNs) {
 void registerTraceCommands(CLI::App& app, CommandContext& context) {
   CLI::App* traceGroup = app.add_subcommand(
       "trace", "CAN log analysis: traffic statistics, protocol checks (J1939-21/73/76), an HTML report");
-  (void)traceGroup;
-  (void)context;
+  addTraceCheck(*traceGroup, context);
 }
 
 }  // namespace openvcu::cli

@@ -60,6 +60,9 @@ void reportSkipped(TraceInput& input, Sink& err);
 /// Seconds from the timeline's start: "12.345678".
 [[nodiscard]] std::string relativeSeconds(std::int64_t timeNs, std::int64_t startNs);
 
+/// Adds `vcu trace check` (trace_check.cpp) to the `trace` group.
+void addTraceCheck(CLI::App& trace, CommandContext& context);
+
 /// Adds `trace` and its subcommands to `app`.
 void registerTraceCommands(CLI::App& app, CommandContext& context);
 
