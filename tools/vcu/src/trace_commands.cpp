@@ -32,6 +32,7 @@ void addTraceInputOptions(CLI::App& command, TraceInputOptions& options) {
                      ->option_text("FILE");
   auto* dbcOption = command.add_option("-d,--dbc", options.dbcFiles, "DBC file (repeat for several; merged in order)")
                         ->option_text("FILE")
+                        ->allow_extra_args(false)
                         ->take_all();
   config->excludes(dbcOption);
   command
