@@ -114,6 +114,17 @@ TEST_CASE("vcu trace check finds the pairs by their SHMs without a configuration
   CHECK(contains(result.out, "(found on the bus)"));
 }
 
+TEST_CASE("vcu trace check --dbc FILE LOG names the pairs it finds from the DBC") {
+  const std::string log = writeScratchFile("trace_check_dbc.log", hheaLog(true));
+  const RunResult result =
+      runVcu({"trace", "check", "--dbc", std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/hhea.dbc", log, "--quiet"});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK(result.err.empty());
+  CHECK(contains(result.out, "0.200292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: "));
+  CHECK(contains(result.out, "S1_ES_PGN61427 (0x0CEFF321) on vehicle: 50 SDMs, 1 faulty"));
+}
+
 TEST_CASE("vcu trace check without a log is a usage error") {
   CHECK(runVcu({"trace", "check"}).exitCode == EXIT_USAGE);
 }
