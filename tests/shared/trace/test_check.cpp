@@ -326,3 +326,49 @@ TEST_CASE("requests: an answer or a NACK closes them, none within 1.25 s is a fa
   CHECK(sut.counts().faults == 1);
   CHECK(sut.counts().infos == 1);
 }
+
+TEST_CASE("pairs found on the bus are capped and the SHMs beyond the cap are counted") {
+  const AnalysisSetup setup = makeSetup(false);
+  TraceChecker sut(setup);
+  Collector sink;
+  std::int64_t timeNs = START_NS;
+  for (std::size_t i = 0; i <= MAX_DISCOVERED_SAFETY_PAIRS; ++i) {  // one pair more than the cap
+    const auto destination = static_cast<std::uint8_t>(i % 256);
+    const auto source = static_cast<std::uint8_t>(0x21 + i / 256);
+    const std::uint32_t sdm = j1939::Id::fromPgn(0xEF00, 3, source, destination).toCanId();
+    sut.add(frameAt(timeNs, j1939::safetyHeaderCanId(sdm), j1939::buildSafetyHeader(sdm, THESIS_SDM, 0)), sink);
+    sut.add(frameAt(timeNs + DELTA_NS, sdm, THESIS_SDM), sink);
+    timeNs += MS;
+  }
+  sut.finish(timeNs, sink);
+
+  CHECK(sut.safetyPairs().size() == MAX_DISCOVERED_SAFETY_PAIRS);
+  CHECK(sut.counts().safetyPairsSkipped == 1);
+  CHECK(sut.counts().safetyPairs == MAX_DISCOVERED_SAFETY_PAIRS);  // the last SDM has no pair
+  REQUIRE(sink.findings.size() == 2);
+  CHECK(sink.findings[0].text ==
+        "more than 256 J1939-76 pairs: SHMs of further SDMs are not checked (counted at the end)");
+  CHECK(sink.findings[1].text == "1 SHMs of pairs beyond the first 256 not checked");
+  CHECK(sut.counts().faults == 0);
+}
+
+TEST_CASE("requests beyond the open-request table are counted, not checked") {
+  const AnalysisSetup setup = makeSetup(false);
+  TraceChecker sut(setup);
+  Collector sink;
+  const j1939::RequestFrame request = j1939::buildRequest(65254, 6, 0x21, 0xF3);
+  for (std::size_t i = 0; i <= MAX_OPEN_REQUESTS; ++i) {
+    sut.add(frameAt(START_NS + static_cast<std::int64_t>(i) * 100 * US, request.canId, request.payload), sink);
+  }
+  const std::array<std::uint8_t, 8> timeDate{};
+  sut.add(frameAt(START_NS + 200 * MS, j1939::Id::fromPgn(65254, 6, 0xF3).toCanId(), timeDate), sink);  // answers all
+  sut.finish(START_NS + 3000 * MS, sink);
+
+  CHECK(sut.counts().requests == MAX_OPEN_REQUESTS + 1);
+  CHECK(sut.counts().requestsSkipped == 1);
+  CHECK(sut.counts().unanswered == 0);
+  REQUIRE(sink.findings.size() == 2);
+  CHECK(sink.findings[0].text ==
+        "more than 1024 requests waiting for an answer: further ones are not checked (counted at the end)");
+  CHECK(sink.findings[1].text == "1 requests not checked (table full)");
+}
