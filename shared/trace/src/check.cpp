@@ -42,9 +42,15 @@ class CountingSink final : public FindingSink {
   CountingSink(FindingSink& next, CheckCounts& counts) noexcept : m_next(next), m_counts(counts) {}
   void finding(const Finding& finding) override {
     switch (finding.severity) {
-      case Severity::Info: ++m_counts.infos; break;
-      case Severity::Warning: ++m_counts.warnings; break;
-      case Severity::Fault: ++m_counts.faults; break;
+      case Severity::Info:
+        ++m_counts.infos;
+        break;
+      case Severity::Warning:
+        ++m_counts.warnings;
+        break;
+      case Severity::Fault:
+        ++m_counts.faults;
+        break;
     }
     m_next.finding(finding);
   }
@@ -114,8 +120,9 @@ class RequestCheck {
         continue;
       }
       ++counts.unanswered;
-      sink.finding(Finding{open.timeNs + REQUEST_TIMEOUT_NS, open.bus, Severity::Fault, Check::Request,
-                           describe(open) + ": no answer within " + std::to_string(REQUEST_TIMEOUT_NS / 1'000'000) + " ms"});
+      sink.finding(
+          Finding{open.timeNs + REQUEST_TIMEOUT_NS, open.bus, Severity::Fault, Check::Request,
+                  describe(open) + ": no answer within " + std::to_string(REQUEST_TIMEOUT_NS / 1'000'000) + " ms"});
       remove(i);
     }
   }
@@ -200,8 +207,12 @@ const CheckCounts& TraceChecker::counts() const noexcept {
   return m_impl->counts;
 }
 
-const TransportAnalysis& TraceChecker::transport() const noexcept { return m_impl->transport; }
+const TransportAnalysis& TraceChecker::transport() const noexcept {
+  return m_impl->transport;
+}
 
-std::vector<SafetyPairStats> TraceChecker::safetyPairs() const { return m_impl->safety.stats(); }
+std::vector<SafetyPairStats> TraceChecker::safetyPairs() const {
+  return m_impl->safety.stats();
+}
 
 }  // namespace openvcu::trace

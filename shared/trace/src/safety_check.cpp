@@ -30,13 +30,17 @@ std::string hex8(std::uint8_t value) {
 }
 
 /// 292000 -> "292 us"; sub-microsecond digits dropped.
-std::string micros(std::int64_t ns) { return std::to_string(ns / 1000) + " us"; }
+std::string micros(std::int64_t ns) {
+  return std::to_string(ns / 1000) + " us";
+}
 
 bool usable(const TraceFrame& frame) noexcept {
   return frame.frame.extended() && (frame.frame.flags & (can::FLAG_ERROR | can::FLAG_RTR)) == 0;
 }
 
-bool isHeader(std::uint32_t canId) noexcept { return j1939::pgnOf(canId) == j1939::PGN_SAFETY_HEADER; }
+bool isHeader(std::uint32_t canId) noexcept {
+  return j1939::pgnOf(canId) == j1939::PGN_SAFETY_HEADER;
+}
 
 /// The SDM identifier an SHM names (its own priority), when the SHM is self-consistent:
 /// the SDM's SA is the SHM's SA and the SDM's destination is the SHM's DA.
@@ -66,9 +70,7 @@ std::int64_t deltaTolerance(std::int64_t deltaNs) noexcept {
 }  // namespace
 
 SafetyCheck::SafetyCheck(const AnalysisSetup& setup)
-    : m_setup(&setup),
-      m_matcher(setup.database, setup.match),
-      m_configuredSeen(setup.safetyPairs.size(), 0) {
+    : m_setup(&setup), m_matcher(setup.database, setup.match), m_configuredSeen(setup.safetyPairs.size(), 0) {
   for (const SafetyPairSetup& pair : setup.safetyPairs) m_sdmSources.set(pair.dataCanId & 0xFFu);
   m_pairs.reserve(setup.safetyPairs.empty() ? 16 : setup.safetyPairs.size());
 }
@@ -85,7 +87,8 @@ SafetyCheck::Pair* SafetyCheck::addPair(std::uint16_t bus, std::uint32_t dataCan
     const bool knownCycle = message >= 0 && static_cast<std::size_t>(message) < m_setup->expectedCycleNs.size() &&
                             m_setup->expectedCycleNs[static_cast<std::size_t>(message)] > 0;
     config.maxHeaderCycleNs =
-        DEFAULT_SCT_CYCLES * (knownCycle ? m_setup->expectedCycleNs[static_cast<std::size_t>(message)] : UNKNOWN_CYCLE_NS);
+        DEFAULT_SCT_CYCLES *
+        (knownCycle ? m_setup->expectedCycleNs[static_cast<std::size_t>(message)] : UNKNOWN_CYCLE_NS);
   }
   if (config.maxHeaderCycleNs <= 0) config.maxHeaderCycleNs = DEFAULT_SCT_CYCLES * UNKNOWN_CYCLE_NS;
   Pair& pair = m_pairs.emplace_back(config);
@@ -98,8 +101,9 @@ SafetyCheck::Pair* SafetyCheck::addPair(std::uint16_t bus, std::uint32_t dataCan
   pair.stats.maxHeaderToDataNs = config.maxHeaderToDataNs;
   pair.stats.maxHeaderCycleNs = config.maxHeaderCycleNs;
   const bool named = message >= 0 && static_cast<std::size_t>(message) < m_setup->database.messages.size();
-  pair.name = (named ? m_setup->database.messages[static_cast<std::size_t>(message)].name + " (" + hex32(dataCanId) + ")"
-                     : "SDM " + hex32(dataCanId));
+  pair.name =
+      (named ? m_setup->database.messages[static_cast<std::size_t>(message)].name + " (" + hex32(dataCanId) + ")"
+             : "SDM " + hex32(dataCanId));
   m_sdmSources.set(dataCanId & 0xFFu);
   if (configIndex >= 0) m_configuredSeen[static_cast<std::size_t>(configIndex)] = 1;
   return &pair;
@@ -132,7 +136,8 @@ SafetyCheck::Pair* SafetyCheck::routeHeader(const TraceFrame& frame, FindingSink
     const bool onThisBus = std::any_of(m_pairs.begin(), m_pairs.end(), [&](const Pair& pair) {
       return pair.stats.bus == frame.bus && pair.configIndex == static_cast<std::int32_t>(i);
     });
-    if (!onThisBus) return addPair(frame.bus, configured.dataCanId, configured.message, static_cast<std::int32_t>(i), &configured);
+    if (!onThisBus)
+      return addPair(frame.bus, configured.dataCanId, configured.message, static_cast<std::int32_t>(i), &configured);
   }
   if (exactCount == 1) return exact;
   if (candidates == 1) return only;
@@ -207,8 +212,9 @@ void SafetyCheck::onData(Pair& pair, const TraceFrame& frame, FindingSink& sink)
   ++m_pairsChecked;
   ++pair.stats.pairs;
   const std::optional<j1939::SafetyHeader> header =
-      hadHeader ? j1939::parseSafetyHeader(std::span<const std::uint8_t>(pair.pendingHeader.data(), pair.pendingHeaderLength))
-                : std::nullopt;
+      hadHeader
+          ? j1939::parseSafetyHeader(std::span<const std::uint8_t>(pair.pendingHeader.data(), pair.pendingHeaderLength))
+          : std::nullopt;
   const std::int64_t delayNs = frame.timeNs - pair.pendingHeaderNs;
 
   if (result == SafetyResult::Ok || result == SafetyResult::Synchronising) {
@@ -220,7 +226,9 @@ void SafetyCheck::onData(Pair& pair, const TraceFrame& frame, FindingSink& sink)
     ++m_faults;
     std::string text = pair.name + ": " + std::string(j1939::safetyResultName(result)) + ": ";
     switch (result) {
-      case SafetyResult::MissingHeader: text += "SDM without an SHM before it"; break;
+      case SafetyResult::MissingHeader:
+        text += "SDM without an SHM before it";
+        break;
       case SafetyResult::BadLength:
         text += "SHM " + std::to_string(pair.pendingHeaderLength) + " bytes, SDM " + std::to_string(data.size()) +
                 " bytes (8 each)";
@@ -248,7 +256,8 @@ void SafetyCheck::onData(Pair& pair, const TraceFrame& frame, FindingSink& sink)
                 " after " + std::to_string(pair.reference);
         break;
       }
-      default: break;
+      default:
+        break;
     }
     if (frame.frame.id != pair.stats.dataCanId) text += " (taken for the SDM: " + hex32(frame.frame.id) + ")";
     pair.hasReference = false;
@@ -336,8 +345,8 @@ void SafetyCheck::finish(std::int64_t endNs, FindingSink& sink) {
   for (std::size_t i = 0; i < m_setup->safetyPairs.size(); ++i) {
     if (m_configuredSeen[i] != 0) continue;
     const SafetyPairSetup& configured = m_setup->safetyPairs[i];
-    const bool named = configured.message >= 0 &&
-                       static_cast<std::size_t>(configured.message) < m_setup->database.messages.size();
+    const bool named =
+        configured.message >= 0 && static_cast<std::size_t>(configured.message) < m_setup->database.messages.size();
     sink.finding(Finding{endNs, 0, Severity::Info, Check::Safety,
                          (named ? m_setup->database.messages[static_cast<std::size_t>(configured.message)].name + " (" +
                                       hex32(configured.dataCanId) + ")"
@@ -350,9 +359,9 @@ void SafetyCheck::finish(std::int64_t endNs, FindingSink& sink) {
                              std::to_string(MAX_DISCOVERED_SAFETY_PAIRS) + " not checked"});
   }
   if (m_contradictions > MAX_LISTED_PER_KIND) {
-    sink.finding(Finding{endNs, 0, Severity::Fault, Check::Safety,
-                         std::to_string(m_contradictions - MAX_LISTED_PER_KIND) +
-                             " more self-contradicting SHMs not listed"});
+    sink.finding(
+        Finding{endNs, 0, Severity::Fault, Check::Safety,
+                std::to_string(m_contradictions - MAX_LISTED_PER_KIND) + " more self-contradicting SHMs not listed"});
   }
 }
 

@@ -40,8 +40,8 @@ class SafetyCheck {
     explicit Pair(const j1939::SafetyPairConfig& config) noexcept : checker(config) {}
     j1939::SafetyPairChecker checker;
     SafetyPairStats stats;
-    std::string name;               ///< "S1_ES_PGN61427 (0x0CEFF321)"
-    std::int32_t configIndex{-1};   ///< into setup.safetyPairs, -1 when discovered
+    std::string name;              ///< "S1_ES_PGN61427 (0x0CEFF321)"
+    std::int32_t configIndex{-1};  ///< into setup.safetyPairs, -1 when discovered
     // What the checker holds, mirrored to print the numbers behind a verdict.
     j1939::SafetyPayload pendingHeader{};
     std::uint8_t pendingHeaderLength{};
@@ -72,7 +72,7 @@ class SafetyCheck {
   dbc::MessageMatcher m_matcher;
   std::vector<Pair> m_pairs;
   std::vector<std::uint8_t> m_configuredSeen;  ///< per setup.safetyPairs entry: seen on some bus
-  std::bitset<256> m_sdmSources;              ///< source addresses of the SDMs known (cheap pre-filter)
+  std::bitset<256> m_sdmSources;               ///< source addresses of the SDMs known (cheap pre-filter)
   std::int64_t m_nextPollNs{};
   bool m_polling{};
   std::uint64_t m_pairsChecked{};

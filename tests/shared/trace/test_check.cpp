@@ -16,8 +16,8 @@ using namespace openvcu::trace;
 
 namespace {
 
-constexpr std::uint32_t S1_ES_ID = 0x0CEFF321;        // SDM, PDU1 to the VIC 0xF3 from the VCU 0x21
-constexpr std::uint32_t PROPA_C4_ID = 0x18EFF321;     // same PGN, SA and DA at priority 6
+constexpr std::uint32_t S1_ES_ID = 0x0CEFF321;     // SDM, PDU1 to the VIC 0xF3 from the VCU 0x21
+constexpr std::uint32_t PROPA_C4_ID = 0x18EFF321;  // same PGN, SA and DA at priority 6
 constexpr std::int64_t MS = 1'000'000;
 constexpr std::int64_t US = 1'000;
 constexpr std::int64_t START_NS = 1'700'000'000'000'000'000;
@@ -130,8 +130,7 @@ TEST_CASE("an SDM whose data does not match the SHM's CRC is a CrcMismatch fault
   REQUIRE(sink.findings.size() == 1);
   const Finding& finding = sink.findings[0];
   char expected[128];
-  std::snprintf(expected, sizeof expected,
-                "S1_ES (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, SDM data CRC 0x%08X",
+  std::snprintf(expected, sizeof expected, "S1_ES (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, SDM data CRC 0x%08X",
                 j1939::crc32J1939_76(corrupted));
   CHECK(finding.text == expected);
   CHECK(finding.timeNs == sdmNs);
@@ -161,10 +160,10 @@ TEST_CASE("a lost pair is a SequenceError with the sequence expected") {
   TraceChecker sut(setup);
   Collector sink;
   PairSender sender{sut, sink};
-  sender.send();  // 0: synchronises
-  sender.send();  // 1: ok
+  sender.send();                                // 0: synchronises
+  sender.send();                                // 1: ok
   (void)sender.builder.nextHeader(THESIS_SDM);  // 2 never sent
-  sender.send();  // 3
+  sender.send();                                // 3
 
   REQUIRE(sink.findings.size() == 1);
   CHECK(sink.findings[0].text == "S1_ES (0x0CEFF321): SequenceError: sequence 3, expected 2 after 1");
@@ -189,7 +188,7 @@ TEST_CASE("an SHM later than the SCT is found while it is missing and at its SDM
   PairSender sender{sut, sink};
   sender.send();
   sender.send();
-  sender.send();                 // last SHM at +40 ms
+  sender.send();                  // last SHM at +40 ms
   sender.timeNs += 4 * CYCLE_NS;  // the next one at +140 ms: 100 ms after it
   const std::int64_t lateNs = sender.timeNs;
   sender.send();
@@ -199,7 +198,8 @@ TEST_CASE("an SHM later than the SCT is found while it is missing and at its SDM
   CHECK(sink.findings[0].text ==
         "S1_ES (0x0CEFF321): no SHM for 100000 us (SCT 60000 us): the sender stopped or its SHMs are lost");
   CHECK(sink.findings[0].timeNs == lateNs);
-  CHECK(sink.findings[1].text == "S1_ES (0x0CEFF321): CycleTimeout: SHM 100000 us after the previous SHM (SCT 60000 us)");
+  CHECK(sink.findings[1].text ==
+        "S1_ES (0x0CEFF321): CycleTimeout: SHM 100000 us after the previous SHM (SCT 60000 us)");
   CHECK(sink.findings[1].timeNs == lateNs + DELTA_NS);
 }
 

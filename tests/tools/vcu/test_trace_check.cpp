@@ -3,9 +3,8 @@
 // PropA_C4 between the pairs and a request answered; one log with a broken pair.
 #include <doctest/doctest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "openvcu/j1939/safety.hpp"
@@ -27,8 +26,9 @@ const j1939::SafetyPayload SDM_DATA{0xEF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x
 
 std::string line(std::int64_t timeUs, std::uint32_t id, std::span<const std::uint8_t> data) {
   char text[96];
-  int length = std::snprintf(text, sizeof text, "(%lld.%06lld) vehicle %08X#", static_cast<long long>(timeUs / 1'000'000),
-                             static_cast<long long>(timeUs % 1'000'000), id);
+  int length =
+      std::snprintf(text, sizeof text, "(%lld.%06lld) vehicle %08X#", static_cast<long long>(timeUs / 1'000'000),
+                    static_cast<long long>(timeUs % 1'000'000), id);
   for (const std::uint8_t byte : data) length += std::snprintf(text + length, sizeof text - length, "%02X", byte);
   return std::string(text, static_cast<std::size_t>(length)) + '\n';
 }
@@ -46,8 +46,8 @@ std::string hheaLog(bool broken) {
     j1939::SafetyPayload data = SDM_DATA;
     if (broken && i == BROKEN_PAIR) data[7] = 0xFE;
     log += line(t + DELTA_US, S1_ES_ID, data);
-    if (i == 0) log += line(t + 5'000, 0x18EAF321, request);  // RQST_ES: VCU -> VIC
-    log += line(t + CYCLE_US / 2, 0x18EFF321, propA);         // PropA_C4, never between SHM and SDM
+    if (i == 0) log += line(t + 5'000, 0x18EAF321, request);   // RQST_ES: VCU -> VIC
+    log += line(t + CYCLE_US / 2, 0x18EFF321, propA);          // PropA_C4, never between SHM and SDM
     if (i == 0) log += line(t + 15'000, 0x18FC5EF3, history);  // the VIC's answer
   }
   return log;
@@ -63,8 +63,9 @@ TEST_CASE("vcu trace check passes a clean HHEA log with correct S1_ES pairs") {
   CHECK(result.err.empty());
   CHECK_FALSE(contains(result.out, " fault "));
   CHECK(contains(result.out, "1 requests (0 unanswered)"));
-  CHECK(contains(result.out, "S1_ES_PGN61427 (0x0CEFF321) on vehicle: 50 SDMs, 0 faulty, SHM -> SDM delta "
-                             "min/mean/max 292/292/292 us (configured 292 us)\n"));
+  CHECK(contains(result.out,
+                 "S1_ES_PGN61427 (0x0CEFF321) on vehicle: 50 SDMs, 0 faulty, SHM -> SDM delta "
+                 "min/mean/max 292/292/292 us (configured 292 us)\n"));
   CHECK(contains(result.out, "findings: 0 faults, 0 warnings, 4 infos\n"));  // the 4 other pairs: not in this log
 }
 

@@ -2,7 +2,8 @@
 // finding as it is made, a summary at the end, exit 1 on a protocol fault.
 //
 //   $ vcu trace check --config config/hhea/vehicle.json drive.log
-//   0.040292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, SDM data CRC 0x3C1D2B0E
+//   0.040292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, SDM data CRC
+//   0x3C1D2B0E
 //   ...
 //   checked 5 J1939-76 pairs (2500 SDMs, 1 fault), 2 requests (0 unanswered), 0 TP sessions
 #include <CLI/CLI.hpp>
@@ -19,7 +20,8 @@
 namespace openvcu::cli {
 namespace {
 
-constexpr const char* CHECK_DESCRIPTION = "Protocol checks of CAN logs: J1939-76 pairs, transport sessions, DTCs, requests";
+constexpr const char* CHECK_DESCRIPTION =
+    "Protocol checks of CAN logs: J1939-76 pairs, transport sessions, DTCs, requests";
 constexpr const char* CHECK_FOOTER =
     "Reads the logs as one timeline (merged by time) and checks:\n"
     "  j1939-76  every SHM/SDM pair: SHM before its SDM, inverted header fields, CRC-32,\n"
@@ -175,14 +177,15 @@ void writeJsonSummary(Sink& out, const trace::AnalysisSetup& setup, const std::v
     text += ",\"delta_warnings\":" + std::to_string(pair.deltaWarnings) + '}';
   }
   text += "\n],\n\"summary\": {\"sdms\":" + std::to_string(counts.safetyPairs) +
-          ",\"sdm_faults\":" + std::to_string(counts.safetyFaults) + ",\"requests\":" + std::to_string(counts.requests) +
-          ",\"unanswered\":" + std::to_string(counts.unanswered) + ",\"tp_sessions\":" + std::to_string(tp.sessions) +
-          ",\"faults\":" + std::to_string(counts.faults) + ",\"warnings\":" + std::to_string(counts.warnings) +
-          ",\"infos\":" + std::to_string(counts.infos) + ",\"faults_by_check\":{";
+          ",\"sdm_faults\":" + std::to_string(counts.safetyFaults) +
+          ",\"requests\":" + std::to_string(counts.requests) + ",\"unanswered\":" + std::to_string(counts.unanswered) +
+          ",\"tp_sessions\":" + std::to_string(tp.sessions) + ",\"faults\":" + std::to_string(counts.faults) +
+          ",\"warnings\":" + std::to_string(counts.warnings) + ",\"infos\":" + std::to_string(counts.infos) +
+          ",\"faults_by_check\":{";
   for (std::size_t i = 0; i < CHECK_KINDS; ++i) {
     if (i > 0) text += ',';
-    text += '"' + std::string(trace::checkName(static_cast<trace::Check>(i))) + "\":" +
-            std::to_string(printed.faultsByCheck[i]);
+    text += '"' + std::string(trace::checkName(static_cast<trace::Check>(i))) +
+            "\":" + std::to_string(printed.faultsByCheck[i]);
   }
   text += "}}\n}\n";
   out.write(text);
