@@ -372,3 +372,22 @@ TEST_CASE("requests beyond the open-request table are counted, not checked") {
         "more than 1024 requests waiting for an answer: further ones are not checked (counted at the end)");
   CHECK(sink.findings[1].text == "1 requests not checked (table full)");
 }
+
+TEST_CASE("a sender that stops mid-log is found by polling within 10 ms of log time, once") {
+  const AnalysisSetup setup = makeSetup(true);
+  TraceChecker sut(setup);
+  Collector sink;
+  PairSender sender{sut, sink};
+  for (int i = 0; i < 5; ++i) sender.send();  // the last SHM at +80 ms
+  const std::array<std::uint8_t, 8> other{};
+  for (std::int64_t t = 90 * MS; t <= 300 * MS; t += 10 * MS) sut.add(frameAt(START_NS + t, 0x18FEF100, other), sink);
+  sut.finish(START_NS + 300 * MS, sink);
+
+  // polls at +90, +100, ... ms: the first beyond the SCT of 60 ms is +150 ms
+  REQUIRE(sink.findings.size() == 1);
+  CHECK(sink.findings[0].timeNs == START_NS + 150 * MS);
+  CHECK(sink.findings[0].text ==
+        "S1_ES (0x0CEFF321): no SHM for 70000 us (SCT 60000 us): the sender stopped or its SHMs are lost");
+  CHECK(sut.counts().faults == 1);
+  CHECK(sut.counts().safetyFaults == 0);  // no SDM was judged faulty
+}

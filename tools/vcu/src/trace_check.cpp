@@ -40,7 +40,7 @@ constexpr const char* CHECK_FOOTER =
     "closing line.\n"
     "--format text (default): 'SECONDS SEVERITY CHECK BUS: TEXT' per finding (seconds from\n"
     "  the first frame), then a summary with the delta statistics of each pair.\n"
-    "--format json: {\"source\",\"start_s\",\"findings\":[{\"t\",\"severity\",\"check\",\"bus\",\n"
+    "--format json: {\"source\",\"findings\":[{\"t\",\"severity\",\"check\",\"bus\",\n"
     "  \"text\"}],\"pairs\":[{\"bus\",\"id\",\"name\",\"sdms\",\"ok\",\"faults\",\"delta_us\",\n"
     "  \"delta_min_us\",\"delta_mean_us\",\"delta_max_us\",\"delta_warnings\"}],\"summary\":{...}}\n"
     "--quiet hides info findings (they are still counted).\n"
