@@ -123,6 +123,8 @@ void registerTraceCommands(CLI::App& app, CommandContext& context) {
   CLI::App* traceGroup = app.add_subcommand(
       "trace", "CAN log analysis: traffic statistics, protocol checks (J1939-21/73/76), an HTML report");
   addTraceStats(*traceGroup, context);
+  addTraceCheck(*traceGroup, context);
+  addTraceReport(*traceGroup, context);
 }
 
 }  // namespace openvcu::cli

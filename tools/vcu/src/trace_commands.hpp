@@ -62,6 +62,10 @@ void reportSkipped(TraceInput& input, Sink& err);
 
 /// `vcu trace stats` (trace_stats.cpp).
 void addTraceStats(CLI::App& trace, CommandContext& context);
+/// Adds `vcu trace check` (trace_check.cpp) to the `trace` group.
+void addTraceCheck(CLI::App& trace, CommandContext& context);
+/// Adds `vcu trace report` (trace_report.cpp) to the `trace` group.
+void addTraceReport(CLI::App& trace, CommandContext& context);
 
 /// Adds `trace` and its subcommands to `app`.
 void registerTraceCommands(CLI::App& app, CommandContext& context);

@@ -201,7 +201,7 @@ ExitCode runReport(const ReportArguments& arguments, Streams streams) {
     refs.push_back(*ref);
   }
 
-  trace::TraceStats stats(*input.setup);
+  trace::TraceStats stats(*input.setup, input.timeline->buses());
   trace::TraceChecker checker(*input.setup);
   trace::ReportFindings findings;
   trace::TraceFrame frame;
