@@ -92,13 +92,14 @@ Result<AnalysisSetup> loadSetupFromConfig(const std::string& path) {
       const std::int64_t cycle = scheduled.cycleNs > 0 ? scheduled.cycleNs : 0;
       setup.safetyPairs.push_back(SafetyPairSetup{
           index, scheduled.canId, *scheduled.safetyDeltaNs, DEFAULT_SRVT_NS,
-          cycle > 0 ? DEFAULT_SCT_CYCLES * cycle : std::numeric_limits<std::int64_t>::max()});
+          cycle > 0 ? DEFAULT_SCT_CYCLES * cycle : std::numeric_limits<std::int64_t>::max(),
+          scheduled.group ? scheduleResult->groups[*scheduled.group].name : std::string()});
     }
   }
   for (const config::SafetyGroup& group : receiveResult->safety) {
     const dbc::Message& message = setup.database.messages[group.dataMessage];
     setup.safetyPairs.push_back(SafetyPairSetup{static_cast<std::int32_t>(group.dataMessage), message.id, 0,
-                                                group.maxHeaderToDataNs, group.maxHeaderCycleNs});
+                                                group.maxHeaderToDataNs, group.maxHeaderCycleNs, {}});
   }
   return setup;
 }
@@ -152,7 +153,7 @@ struct LogTimeline::Impl {
         if (count.backwards == 0 && onError) {
           onError(Error{"time goes backwards (" + std::to_string(frame.timeNs - source.lastTimeNs) +
                             " ns); the periods across such steps are not measured",
-                        Location{count.path, static_cast<std::uint32_t>(record->line), 0, {}}});
+                        Location{count.path, static_cast<std::uint32_t>(record->line), 0, {}}, Severity::Warning});
         }
         ++count.backwards;
       }

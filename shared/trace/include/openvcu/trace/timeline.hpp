@@ -52,6 +52,10 @@ struct SafetyPairSetup {
   std::int64_t deltaNs{};            ///< configured SHM -> SDM delay (schedule "safety.deltaUs")
   std::int64_t maxHeaderToDataNs{};  ///< SRVT: the longest accepted SHM -> SDM time
   std::int64_t maxHeaderCycleNs{};   ///< SCT: the longest accepted SHM -> SHM time
+  /// The schedule's send group that switches the SDM on and off ("keepAlive"); empty when it
+  /// is always sent. A switched pair that falls silent was most likely switched off: the
+  /// check reports it as a warning, not a fault.
+  std::string switchedBy;
 };
 
 /// What the analysis knows of the vehicle.
