@@ -153,7 +153,7 @@ struct LogTimeline::Impl {
         if (count.backwards == 0 && onError) {
           onError(Error{"time goes backwards (" + std::to_string(frame.timeNs - source.lastTimeNs) +
                             " ns); the periods across such steps are not measured",
-                        Location{count.path, static_cast<std::uint32_t>(record->line), 0, {}}, Severity::Warning});
+                        Location{count.path, static_cast<std::uint32_t>(record->line), 0, {}}, openvcu::Severity::Warning});
         }
         ++count.backwards;
       }
