@@ -2,6 +2,7 @@
 // logs merged by time, one pending record per log.
 #include "openvcu/trace/timeline.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <utility>
 
@@ -32,8 +33,17 @@ void fillFromDatabase(AnalysisSetup& setup) {
     if (!message.extended || message.pseudo || message.transmitter.empty() || message.transmitter == dbc::NO_NODE) {
       continue;
     }
+    // Several DBC nodes may send with one address (hhea.dbc: the VCU's HC*_Demands and the
+    // HVLP string's HS* feedback both use 0x71): all are named, in DBC order.
     std::string& name = setup.nodeNames[message.id & 0xFFu];
-    if (name.empty()) name = message.transmitter;
+    const std::string& node = message.transmitter;
+    bool listed = false;
+    for (std::size_t start = 0; start <= name.size() && !name.empty();) {
+      const std::size_t end = std::min(name.find('/', start), name.size());
+      if (name.compare(start, end - start, node) == 0) listed = true;
+      start = end + 1;
+    }
+    if (!listed) name += (name.empty() ? "" : "/") + node;
   }
 }
 
