@@ -5,7 +5,12 @@
       writes DIR/drive.log (candump -L, bus can0), DIR/drive.dbc (J1939) and DIR/facts.json
       (what the log holds, computed here from the generated frames)
   make_trace_log.py check REPORT.html DIR/facts.json
-      the report's tables and node chart agree with facts.json
+      the report of `vcu trace report` agrees with facts.json: the message table's count,
+      expected cycle (GenMsgCycleTime), mean and max period, missing frames and gaps; the DTC
+      table's SA, SPN, FMI, OC, raise and clear times; a "DTC raised" and a "DTC cleared"
+      finding per DTC and one complete-BAM finding per BAM; the DTC timeline's lanes; the node
+      table's frames per SA; the node chart's labels "0x27 Vehicle_Control_Unit" (SA first,
+      uncut); a signal chart of VehicleSpeed in km/h
 
 The log, 20 s from 1700000000.000000:
   VCU_Status  0x18FF0127 (SA 0x27) every 100 ms exactly; VehicleSpeed (km/h) ramps 0 -> 60 -> 0
@@ -119,10 +124,12 @@ def generate():
     payload = dm1_bytes(DTCS, 0x04)  # amber warning lamp on
     packets = (len(payload) + 6) // 7
     raised_us = None
+    facts["bam"] = {"sa": f"0x{sa:02X}", "count": 0, "bytes": len(payload), "packets": packets}
     for t in range(BAM_FIRST_US, BAM_LAST_US + 1, 1_000_000):
         cm = bytes([0x20, len(payload) & 0xFF, len(payload) >> 8, packets, 0xFF,
                     DM1_PGN & 0xFF, (DM1_PGN >> 8) & 0xFF, DM1_PGN >> 16])
         frames.append((t, 0x1CECFF00 | sa, cm))
+        facts["bam"]["count"] += 1
         for number in range(1, packets + 1):
             chunk = payload[(number - 1) * 7:number * 7]
             frames.append((t + number * BAM_PACKET_GAP_US, 0x1CEBFF00 | sa,
@@ -161,7 +168,8 @@ def write(folder):
 
 
 class Tables(html.parser.HTMLParser):
-    """Every <table> as (header cells, rows of cells); the <text> of every svg by its id."""
+    """Every <table> as (header cells, rows of cells); the <text> of every svg by its id (the
+    drawn text: a <title> tooltip inside a <text> is left out)."""
 
     def __init__(self):
         super().__init__()
@@ -171,6 +179,7 @@ class Tables(html.parser.HTMLParser):
         self._row = None
         self._svg = None
         self._text = None
+        self._title = False
 
     def handle_starttag(self, tag, attrs):
         attrs = dict(attrs)
@@ -185,6 +194,8 @@ class Tables(html.parser.HTMLParser):
             self.svg_texts.setdefault(self._svg, [])
         elif tag == "text" and self._svg is not None:
             self._text = ""
+        elif tag == "title":
+            self._title = True
 
     def handle_endtag(self, tag):
         if tag in ("td", "th") and self._cell is not None:
@@ -202,11 +213,13 @@ class Tables(html.parser.HTMLParser):
             self._text = None
         elif tag == "svg":
             self._svg = None
+        elif tag == "title":
+            self._title = False
 
     def handle_data(self, data):
         if self._cell is not None:
             self._cell += data
-        if self._text is not None:
+        if self._text is not None and not self._title:
             self._text += data
 
 
@@ -274,6 +287,23 @@ def check(report_path, facts_path):
             failures.append(f"DTC SPN {want['spn']} FMI {want['fmi']}: row {row}, want {want}")
         print(f"DTC SPN {row.get('SPN')} FMI {row.get('FMI')} OC {row.get('OC')}: "
               f"{row.get('raised [s]')} .. {row.get('cleared [s]')} s")
+
+    # the checker's findings and the timeline's lanes name the same DTCs
+    findings = [row.get("finding", "") for row in table_with(parser.tables, "finding") or []]
+    for want in facts["dtcs"]:
+        code = f"SPN {want['spn']} FMI {want['fmi']}"
+        for event in ("raised", "cleared"):
+            found = sum(1 for text in findings if text.startswith(f"{want['sa']} DM1: DTC {event} {code} "))
+            if found != 1:
+                failures.append(f"{found} findings 'DTC {event} {code}' (want 1)")
+        if f"{code} ({want['sa']})" not in parser.svg_texts.get("dtc-timeline", []):
+            failures.append(f"no DTC timeline lane '{code} ({want['sa']})'")
+    bam = facts["bam"]
+    complete = sum(1 for text in findings
+                   if text.startswith(f"BAM {bam['sa']} -> all PGN 65226 (0xFECA) DM1 ")
+                   and f" {bam['bytes']} bytes in {bam['packets']} packets" in text)
+    if complete != bam["count"]:
+        failures.append(f"{complete} complete DM1 BAM findings, want {bam['count']}")
 
     nodes = table_with(parser.tables, "data rate [bit/s]")
     if nodes is None:
