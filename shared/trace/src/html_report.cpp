@@ -9,6 +9,7 @@
 #include "openvcu/core/text.hpp"
 #include "openvcu/trace/svg_chart.hpp"
 #include "report_assets.hpp"
+#include "svg_writer.hpp"
 
 namespace openvcu::trace {
 namespace {
@@ -19,6 +20,9 @@ constexpr double NS_PER_S = 1e9;
 constexpr std::size_t MAX_DTC_LANES = 60;
 /// Rows of the DTC table; all intervals are drawn.
 constexpr std::size_t MAX_DTC_ROWS = 1000;
+/// Longest bus name in a node label (cut in the middle): leaves the DBC name 10 characters.
+constexpr std::size_t NODE_LABEL_BUS_CHARS = 20;
+static_assert(NODE_LABEL_BUS_CHARS + 6 + 10 <= HORIZONTAL_LABEL_CHARS);
 
 void esc(std::string& out, std::string_view text) { appendXmlEscaped(out, text); }
 
@@ -38,11 +42,35 @@ double secondsFromStart(const ReportInput& input, std::int64_t ns) {
   return static_cast<double>(ns) / NS_PER_S - input.stats.startS;
 }
 
-std::string nodeLabel(const NodeStats& node) {
-  if (node.standard) return node.bus + " 11-bit frames";
-  std::string label = node.bus + " ";
-  if (!node.name.empty()) label += node.name + " ";
-  return label + "(SA " + hex(node.sa, 2) + ")";
+/// At most `maxChars` code points of `text`, cut in the middle ("vehicle_b…_can_1"): names
+/// that differ only at their end stay apart.
+std::string middleShortened(std::string_view text, std::size_t maxChars) {
+  const std::size_t chars = displayChars(text);
+  if (chars <= maxChars || maxChars < 3) return std::string(text);
+  const std::size_t head = (maxChars - 1) / 2;
+  const std::size_t tail = maxChars - 1 - head;
+  std::size_t headEnd = 0;
+  std::size_t tailStart = 0;
+  std::size_t seen = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if ((static_cast<unsigned char>(text[i]) & 0xC0) == 0x80) continue;  // UTF-8 continuation byte
+    if (seen == head) headEnd = i;
+    if (seen == chars - tail) tailStart = i;
+    ++seen;
+  }
+  return std::string(text.substr(0, headEnd)) + "\xE2\x80\xA6" + std::string(text.substr(tailStart));
+}
+
+/// A node's row label in the data-rate chart: the SA first, then the DBC name, the bus in front
+/// when there are several ("can1 0x27 Vehicle_Control_Unit"). What tells nodes apart (bus and
+/// SA) is never cut: only the name is shortened to the chart's label width (the table has all).
+std::string nodeLabel(const NodeStats& node, bool withBus) {
+  std::string label = withBus ? middleShortened(node.bus, NODE_LABEL_BUS_CHARS) + " " : std::string();
+  if (node.standard) return label + "11-bit frames";
+  label += hex(node.sa, 2);
+  if (node.name.empty()) return label;
+  const std::size_t used = displayChars(label) + 1;
+  return label + " " + shortened(node.name, HORIZONTAL_LABEL_CHARS - used);
 }
 
 std::string messageId(const MessageStats& message) { return hex(message.id, message.extended ? 8 : 3); }
@@ -201,8 +229,9 @@ void appendNodeSection(std::string& out, const ReportInput& input, int& figure) 
   }
   BarChartSpec spec{.id = "node-rate", .valueLabel = "data rate [kbit/s]", .width = CHART_WIDTH};
   BarSeries rate{"data rate", {}};
+  const bool severalBuses = input.stats.buses.size() > 1;
   for (const NodeStats& node : input.stats.nodes) {
-    spec.categories.push_back(nodeLabel(node));
+    spec.categories.push_back(nodeLabel(node, severalBuses));
     rate.values.push_back(node.bitsPerS / 1000.0);
     spec.annotations.push_back(formatFixed(node.sharePct, 1) + " %");
   }

@@ -95,7 +95,7 @@ std::string horizontalBarsSvg(const BarChartSpec& spec) {
   const std::size_t seriesCount = std::max<std::size_t>(spec.series.size(), 1);
   std::size_t longest = 4;
   for (const std::string& category : spec.categories) {
-    longest = std::max(longest, std::min(displayChars(category), MAX_LABEL_CHARS + 8));
+    longest = std::max(longest, std::min(displayChars(category), HORIZONTAL_LABEL_CHARS));
   }
   const double left = static_cast<double>(longest) * CHAR_PX + 16;
   constexpr double RIGHT = 90;  // room for the annotations
@@ -132,7 +132,7 @@ std::string horizontalBarsSvg(const BarChartSpec& spec) {
   const double barHeight = (BAR_ROW_PX - 6.0) / static_cast<double>(seriesCount);
   for (std::size_t c = 0; c < count; ++c) {
     const double rowTop = top + static_cast<double>(c) * BAR_ROW_PX;
-    appendText(out, left - 6, rowTop + BAR_ROW_PX / 2.0 + 4, shortened(spec.categories[c], MAX_LABEL_CHARS + 8), "end");
+    appendText(out, left - 6, rowTop + BAR_ROW_PX / 2.0 + 4, shortened(spec.categories[c], HORIZONTAL_LABEL_CHARS), "end");
     double barEnd = x(0);
     for (std::size_t s = 0; s < spec.series.size(); ++s) {
       const double v = c < spec.series[s].values.size() ? spec.series[s].values[c] : 0.0;

@@ -24,6 +24,8 @@ inline constexpr int LEGEND_TOP = 28;
 inline constexpr int TIME_AXIS_BOTTOM = 34;
 /// Longest category or label text drawn (longer ones end in "…"; the tooltip has all).
 inline constexpr std::size_t MAX_LABEL_CHARS = 28;
+/// The same for the row labels of horizontal bars (they have a row of their own).
+inline constexpr std::size_t HORIZONTAL_LABEL_CHARS = MAX_LABEL_CHARS + 8;
 inline constexpr std::string_view GRID_COLOUR = "#dddddd";
 inline constexpr std::string_view AXIS_COLOUR = "#555555";
 inline constexpr std::string_view TEXT_COLOUR = "#222222";

@@ -3,9 +3,11 @@
 // references nothing outside itself, and that empty input gives "no data" notes.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "openvcu/trace/html_report.hpp"
 #include "openvcu/trace/svg_chart.hpp"
@@ -226,6 +228,68 @@ TEST_CASE("the report is one document with a CSP that forbids fetching, its char
   CHECK(html.find("<td>20.000000</td>") != std::string::npos);             // the finding at start + 20 s
   CHECK(html.size() > 0);
   CHECK(html.substr(html.size() - 8) == "</html>\n");
+}
+
+namespace {
+
+/// The <text> elements of one chart of a report, in order.
+std::vector<std::string> chartTexts(const std::string& html, std::string_view id) {
+  const std::size_t start = html.find("id=\"" + std::string(id) + "\"");
+  REQUIRE(start != std::string::npos);
+  const std::string svg = html.substr(start, html.find("</svg>", start) - start);
+  std::vector<std::string> texts;
+  for (std::size_t at = svg.find("<text"); at != std::string::npos; at = svg.find("<text", at + 1)) {
+    const std::size_t open = svg.find('>', at) + 1;
+    texts.push_back(svg.substr(open, svg.find("</text>", open) - open));
+  }
+  return texts;
+}
+
+bool contains(const std::vector<std::string>& texts, std::string_view text) {
+  return std::find(texts.begin(), texts.end(), text) != texts.end();
+}
+
+NodeStats nodeOf(std::string bus, std::uint8_t sa, std::string name, double bitsPerS) {
+  NodeStats node;
+  node.bus = std::move(bus);
+  node.sa = sa;
+  node.name = std::move(name);
+  node.bitsPerS = bitsPerS;
+  return node;
+}
+
+}  // namespace
+
+TEST_CASE("node labels put the SA first and never cut it: nodes of one name stay apart") {
+  ReportInput input = fullInput();
+  input.stats.nodes = {nodeOf("vehicle", 0x27, "Vehicle_Control_Unit", 2000),
+                       nodeOf("vehicle", 0x28, "Vehicle_Control_Unit", 1000),
+                       nodeOf("vehicle", 0x00, "An_Engine_Control_Module_With_A_Long_Name", 500)};
+  NodeStats standard;
+  standard.bus = "vehicle";
+  standard.standard = true;
+  input.stats.nodes.push_back(standard);
+  std::vector<std::string> labels = chartTexts(renderHtmlReport(input), "node-rate");
+  CHECK(contains(labels, "0x27 Vehicle_Control_Unit"));  // one bus: no bus name
+  CHECK(contains(labels, "0x28 Vehicle_Control_Unit"));
+  CHECK(contains(labels, "11-bit frames"));
+  // the long name is cut to the chart's 36 characters, its SA kept
+  CHECK(contains(labels, "0x00 An_Engine_Control_Module_With_\xE2\x80\xA6"));
+
+  // two buses whose names differ only at their end: the bus name cut in its middle to 20
+  // characters, the DBC name to what is left of 36
+  BusStats second = input.stats.buses.front();
+  second.bus = "vehicle_powertrain_can_2";
+  input.stats.buses.front().bus = "vehicle_powertrain_can_1";
+  input.stats.buses.push_back(second);
+  input.stats.nodes = {nodeOf("vehicle_powertrain_can_1", 0x27, "Vehicle_Control_Unit", 2000),
+                       nodeOf("vehicle_powertrain_can_2", 0x27, "Vehicle_Control_Unit", 1000)};
+  input.stats.nodes.push_back(standard);
+  input.stats.nodes.back().bus = "vehicle_powertrain_can_2";
+  labels = chartTexts(renderHtmlReport(input), "node-rate");
+  CHECK(contains(labels, "vehicle_p\xE2\x80\xA6rain_can_1 0x27 Vehicle_C\xE2\x80\xA6"));
+  CHECK(contains(labels, "vehicle_p\xE2\x80\xA6rain_can_2 0x27 Vehicle_C\xE2\x80\xA6"));
+  CHECK(contains(labels, "vehicle_p\xE2\x80\xA6rain_can_2 11-bit frames"));
 }
 
 TEST_CASE("the report references nothing outside itself") {

@@ -10,11 +10,17 @@
 #      (check_screenshot.py pixels) and the document requested no http/https/ws URL
 #      (check_screenshot.py netlog); the pixel check must fail on a blank image;
 #   3. loads a control page that does fetch http:// and ws:// URLs: the net log check must
-#      see them (so step 2 can fail).
-# SKIPPED (exit 77) without chromium or PIL. The screenshot stays in $OPENVCU_REPORT_WORK.
+#      see them (so step 2 can fail);
+#   4. the real pipeline: make_trace_log.py writes a known-answer candump log and DBC (cyclic
+#      messages of two SAs of one DBC node, one with jitter and dropped frames, a DM1 with 3
+#      DTCs by BAM later cleared, a changing signal), `vcu trace report` turns them into
+#      report2.html; make_trace_log.py check finds the log's known answers in its tables
+#      (cycles, missing frames, DTCs, node labels "0x27 Vehicle_Control_Unit"), and in the
+#      browser its charts draw and nothing is fetched, as in 1 and 2.
+# SKIPPED (exit 77) without chromium or PIL. The screenshots stay in $OPENVCU_REPORT_WORK.
 #
 #   OPENVCU_MAKE_SAMPLE_REPORT=build/tests/tools/report/make_sample_report \
-#   OPENVCU_REPORT_WORK=build/tests/tools/report/browser \
+#   OPENVCU_VCU=build/tools/vcu/vcu OPENVCU_REPORT_WORK=build/tests/tools/report/browser \
 #   tests/harness/run_isolated.sh -- tests/tools/report/report_browser_test.sh
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -25,14 +31,15 @@ width=1400
 height=5000
 max_height=16000
 expected_charts="bus-load,node-rate,cycle-compare,cycle-difference,signals-1,signals-2,signals-3,signals-4,dtc-timeline,event-lanes"
+expected_charts2="bus-load,node-rate,cycle-compare,cycle-difference,signals-1,dtc-timeline,event-lanes"
 
 skip() { echo "report_browser_test: SKIPPED: $*"; exit 77; }
 fail() { echo "report_browser_test: FAIL: $*"; exit 1; }
 
 [ -x "$chromium" ] || skip "no chromium at $chromium (Debian: apt install chromium)"
 [ -x "$python" ] && "$python" -c 'import PIL' 2>/dev/null || skip "no PIL for $python (Debian: apt install python3-pil)"
-[ -n "${OPENVCU_MAKE_SAMPLE_REPORT:-}" ] && [ -n "${OPENVCU_REPORT_WORK:-}" ] ||
-  fail "set OPENVCU_MAKE_SAMPLE_REPORT and OPENVCU_REPORT_WORK (see the top of this file)"
+[ -n "${OPENVCU_MAKE_SAMPLE_REPORT:-}" ] && [ -n "${OPENVCU_VCU:-}" ] && [ -n "${OPENVCU_REPORT_WORK:-}" ] ||
+  fail "set OPENVCU_MAKE_SAMPLE_REPORT, OPENVCU_VCU and OPENVCU_REPORT_WORK (see the top of this file)"
 [ "${OPENVCU_ISOLATED:-}" = 1 ] || fail "run me inside tests/harness/run_isolated.sh: chromium must not reach the network"
 
 work=$OPENVCU_REPORT_WORK
@@ -99,4 +106,27 @@ browser "$width,800" --log-net-log="$work/control-netlog.json" --dump-dom "file:
   fail "chromium failed on the control page"
 "$python" "$checker" netlog "$work/control-netlog.json" --expect-page-requests >/dev/null ||
   fail "the net log check did not see the control page's requests: it cannot catch a report that fetches"
+
+# 4. the real pipeline on a known-answer log
+"$python" "$here/make_trace_log.py" write "$work/known" || fail "make_trace_log.py write failed"
+"$OPENVCU_VCU" trace report --dbc "$work/known/drive.dbc" "$work/known/drive.log" -o "$work/report2.html" \
+  --signals VCU_Status.VehicleSpeed || fail "vcu trace report failed on the known-answer log"
+"$python" "$here/make_trace_log.py" check "$work/report2.html" "$work/known/facts.json" ||
+  fail "report2.html does not hold the known answers of the log (see above)"
+"$python" "$here/make_trace_log.py" check "$work/report.html" "$work/known/facts.json" >/dev/null &&
+  fail "the known-answer check passed the sample report: it cannot catch a wrong table"
+height=5000
+browser "$width,$height" --dump-dom "file://$work/report2.html" >"$work/dom2.html" || fail "chromium --dump-dom of report2.html failed"
+page_height=$("$python" "$checker" layout "$work/dom2.html") || fail "no chart layout in the DOM ($work/dom2.html)"
+if [ "$page_height" -gt "$height" ]; then
+  height=$((page_height + 50 > max_height ? max_height : page_height + 50))
+  browser "$width,$height" --dump-dom "file://$work/report2.html" >"$work/dom2.html" || fail "chromium --dump-dom failed"
+fi
+browser "$width,$height" --log-net-log="$work/netlog2.json" --screenshot="$work/shot2.png" "file://$work/report2.html" >/dev/null ||
+  fail "chromium --screenshot of report2.html failed (see $work/chromium.err)"
+[ -s "$work/shot2.png" ] || fail "no screenshot of report2.html"
+echo "screenshot: $work/shot2.png"
+"$python" "$checker" pixels "$work/dom2.html" "$work/shot2.png" --expect "$expected_charts2" ||
+  fail "a chart of report2.html drew nothing (see $work/shot2.png)"
+"$python" "$checker" netlog "$work/netlog2.json" || fail "report2.html fetched something (see $work/netlog2.json)"
 echo "report_browser_test: PASS"
