@@ -433,7 +433,7 @@ void appendEventSection(std::string& out, const ReportInput& input, double t0, d
     spec.lanes.push_back(std::move(drawn));
   }
   // The kept findings, one lane per check.
-  for (Check check : {Check::Log, Check::Safety, Check::Transport, Check::Dtc, Check::Request, Check::Cycle}) {
+  for (Check check : {Check::Log, Check::Safety, Check::Transport, Check::Dtc, Check::Request}) {
     Lane lane{"findings: " + std::string(checkName(check)), {}, {}};
     for (const Finding& finding : input.findings.kept) {
       if (finding.check != check) continue;

@@ -352,7 +352,7 @@ TEST_CASE("a report keeps the first MAX_REPORT_FINDINGS findings and counts all 
   ReportFindings sut;
   const std::size_t total = MAX_REPORT_FINDINGS + 500;
   for (std::size_t i = 0; i < total; ++i) {
-    sut.finding({static_cast<std::int64_t>(i), 0, i % 2 ? Severity::Warning : Severity::Fault, Check::Cycle, "gap"});
+    sut.finding({static_cast<std::int64_t>(i), 0, i % 2 ? Severity::Warning : Severity::Fault, Check::Request, "no answer"});
   }
   REQUIRE(sut.list().kept.size() == MAX_REPORT_FINDINGS);
   CHECK(sut.list().total == total);

@@ -172,7 +172,7 @@ void addDtcsAndFindings(ReportInput& input) {
   sink.finding({logNs(305.2), 0, Severity::Fault, Check::Safety,
                 "S1_ES (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, SDM data CRC 0x12345678"});
   sink.finding({logNs(306), 0, Severity::Fault, Check::Transport, "RTS/CTS 0x27 -> 0xEF PGN 0xEF00 timed out (T3)"});
-  sink.finding({logNs(311), 0, Severity::Warning, Check::Cycle, "BMS_Limits 0x0CF00424: gap of 412 ms (3 cycles missing)"});
+  sink.finding({logNs(311), 0, Severity::Fault, Check::Request, "request from 0x21 to 0xF3 for PGN 65254 (0xFEE6): no answer within 1250 ms"});
   sink.finding({logNs(450), 0, Severity::Fault, Check::Request, "request PGN 0xFEDA from 0x27 to 0x4A unanswered"});
   input.findings = sink.list();
 }

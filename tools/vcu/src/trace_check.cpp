@@ -57,7 +57,7 @@ struct CheckArguments {
   bool quiet{};
 };
 
-constexpr std::size_t CHECK_KINDS = 6;  // trace::Check values
+constexpr std::size_t CHECK_KINDS = 5;  // trace::Check values
 
 std::string busName(const std::vector<std::string>& buses, std::uint16_t bus) {
   return bus < buses.size() ? buses[bus] : std::to_string(bus);

@@ -43,7 +43,6 @@ enum class Check : std::uint8_t {
   Transport,  ///< J1939-21 transport sessions (BAM, RTS/CTS)
   Dtc,        ///< J1939-73 DM1/DM2: DTCs raised and cleared, lamps
   Request,    ///< J1939-21 requests (PGN 59904) and their answers
-  Cycle,      ///< cyclic messages: gaps and missing cycles
 };
 
 /// "info", "warning", "fault".
@@ -56,7 +55,7 @@ enum class Check : std::uint8_t {
   return "?";
 }
 
-/// "log", "j1939-76", "tp", "dtc", "request", "cycle".
+/// "log", "j1939-76", "tp", "dtc", "request".
 [[nodiscard]] constexpr std::string_view checkName(Check check) noexcept {
   switch (check) {
     case Check::Log: return "log";
@@ -64,7 +63,6 @@ enum class Check : std::uint8_t {
     case Check::Transport: return "tp";
     case Check::Dtc: return "dtc";
     case Check::Request: return "request";
-    case Check::Cycle: return "cycle";
   }
   return "?";
 }
