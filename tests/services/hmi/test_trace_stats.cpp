@@ -169,7 +169,8 @@ TEST_CASE("the statistics model gives the known cycle, gap, node and bus load fi
   CHECK(bus["frames"].toULongLong() == EEC1_FRAMES + EBC1_SLOTS - 1);
   CHECK(bus["loadMeanPct"].toDouble() ==
         doctest::Approx(100 * (engineBits + brakeBits) / (seconds * BITRATE)).epsilon(1e-6));
-  CHECK(bus["loadMaxPct"].toDouble() >= bus["loadMeanPct"].toDouble() * 0.99);
+  // the busiest 1 s window: at least about the mean (the log is shorter than a window)
+  CHECK(bus["loadMaxPct"].toDouble() >= bus["loadMeanPct"].toDouble() * 0.95);
   const QVariantList series = bus["series"].toList();
   REQUIRE_FALSE(series.isEmpty());
   CHECK(series.size() <= static_cast<qsizetype>(trace::LOAD_SERIES_POINTS));

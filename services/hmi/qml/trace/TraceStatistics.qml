@@ -6,8 +6,9 @@ import OpenVcu.Hmi
 
 // The Trace tab's Statistics page (issue 21): the figures of `vcu trace stats` over the
 // opened log(s), computed on a worker thread by TraceStatsModel: bus load per bus (mean,
-// peak, over time), then per message (cycle expected and measured; deviating rows in
-// orange) or per node (frames, bit/s, share of the bus).
+// peak, over time), then per message (periods in ms; the expected cycle in blue when it is
+// the VCU's schedule, white from the DBC's GenMsgCycleTime; deviating rows in orange) or
+// per node (frames, bit/s, share of the bus).
 ColumnLayout {
     id: page
     property TraceStatsModel stats
@@ -23,6 +24,7 @@ ColumnLayout {
         elide: Text.ElideRight
     }
     function ms(value) { return value > 0 ? value.toFixed(1) : "–" }
+    function signedMs(value) { return Math.abs(value) < 0.05 ? "0.0" : (value > 0 ? "+" : "") + value.toFixed(1) }
 
     RowLayout {
         Layout.fillWidth: true
@@ -102,7 +104,7 @@ ColumnLayout {
                     Cell { head: true; width: 84; text: "id"; horizontalAlignment: Text.AlignLeft }
                     Cell { head: true; width: messageView.width - 594; text: "name"; horizontalAlignment: Text.AlignLeft }
                     Cell { head: true; width: 50; text: "count" }
-                    Cell { head: true; width: 44; text: "exp ms" }
+                    Cell { head: true; width: 44; text: "exp" }
                     Cell { head: true; width: 48; text: "mean" }
                     Cell { head: true; width: 44; text: "p50" }
                     Cell { head: true; width: 44; text: "p99" }
@@ -128,7 +130,7 @@ ColumnLayout {
                     Cell { width: 44; text: page.ms(model.p50Ms) }
                     Cell { width: 44; text: page.ms(model.p99Ms) }
                     Cell { width: 48; text: page.ms(model.maxMs) }
-                    Cell { width: 48; text: model.expectedMs > 0 && model.count > 1 ? (model.deviationMs >= 0 ? "+" : "") + model.deviationMs.toFixed(1) : "–"; color: model.flagged ? Theme.warn : Theme.text }
+                    Cell { width: 48; text: model.expectedMs > 0 && model.count > 1 ? page.signedMs(model.deviationMs) : "–"; color: model.flagged ? Theme.warn : Theme.text }
                     Cell { width: 36; text: model.gaps; color: model.gaps > 0 ? Theme.warn : Theme.text }
                     Cell { width: 40; text: model.missing; color: model.missing > 0 ? Theme.warn : Theme.text }
                 }
