@@ -44,8 +44,13 @@ TEST_CASE("the record controller runs vcu record into the data folder with the H
   CHECK(folder.startsWith(data.path() + "/recordings/"));
   CHECK(folder.mid(folder.lastIndexOf('/') + 1).size() == QStringLiteral("yyyyMMdd-hhmmss").size());
   const QStringList argv = sut.recordArgv(folder);
-  const QStringList expected{VCU_BINARY,        "record",    folder, "--config", QString::fromStdString(test::HHEA_CONFIG),
-                             "--instance", QString::fromStdString(stack->settings().instance)};
+  const QStringList expected{VCU_BINARY,
+                             "record",
+                             folder,
+                             "--config",
+                             QString::fromStdString(test::HHEA_CONFIG),
+                             "--instance",
+                             QString::fromStdString(stack->settings().instance)};
   CHECK(argv == expected);
   CHECK(sut.state() == RecordController::Idle);
   CHECK_FALSE(sut.active());

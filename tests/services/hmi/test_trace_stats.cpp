@@ -46,9 +46,9 @@ BA_ "GenMsgCycleTime" BO_ 2565865739 20;
 )";
 constexpr std::uint32_t EEC1_ID = 0x0CF00400;
 constexpr std::uint32_t EBC1_ID = 0x18F0010B;
-constexpr int EEC1_FRAMES = 100;    // t = 0, 10, ..., 990 ms
-constexpr int EBC1_SLOTS = 50;      // t = 5, 25, ..., 985 ms
-constexpr int EBC1_DROPPED = 25;    // the frame at 505 ms is missing
+constexpr int EEC1_FRAMES = 100;     // t = 0, 10, ..., 990 ms
+constexpr int EBC1_SLOTS = 50;       // t = 5, 25, ..., 985 ms
+constexpr int EBC1_DROPPED = 25;     // the frame at 505 ms is missing
 constexpr double BITRATE = 500'000;  // the default of a bus no configuration names
 constexpr double BIN_MS = static_cast<double>(trace::PERIOD_BIN_NS) / 1e6;
 constexpr std::int64_t START_US = 1'700'000'000'000'000;
@@ -189,7 +189,7 @@ TEST_CASE("the statistics model reports skipped lines, a log it cannot open and 
   CHECK(sut.status() == ModelStatus::Stale);  // computed, with a note
   CHECK_MESSAGE(sut.errorString().contains("1 malformed line"), sut.errorString().toStdString());
   CHECK_MESSAGE(sut.errorString().contains("drive.log:"), sut.errorString().toStdString());  // file:line of the reason
-  CHECK(sut.rowCount() == 2);  // the analysis went on
+  CHECK(sut.rowCount() == 2);                                                                // the analysis went on
 
   sut.compute({QString::fromStdString(log), QStringLiteral("/nonexistent/body.log")});
   sut.waitUntilComputed();

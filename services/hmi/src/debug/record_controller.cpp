@@ -68,7 +68,8 @@ QStringList RecordController::recordArgv(const QString& folder) const {
 
 QString RecordController::newRecordingFolder() const {
   return QDir(FileBrowserModel::defaultDataFolder())
-      .filePath(QStringLiteral("recordings/") + QDateTime::currentDateTime().toString(QStringLiteral("yyyyMMdd-hhmmss")));
+      .filePath(QStringLiteral("recordings/") +
+                QDateTime::currentDateTime().toString(QStringLiteral("yyyyMMdd-hhmmss")));
 }
 
 QString RecordController::start(const QString& folder) {
@@ -147,8 +148,8 @@ void RecordController::onError(QProcess::ProcessError error) {
   if (error != QProcess::FailedToStart) return;  // the others end in finished()
   m_killTimer.stop();
   m_status = ModelStatus::Error;
-  m_lastResult = QStringLiteral("cannot start %1: %2 (vcu-hmi --vcu PROGRAM names it)")
-                     .arg(m_program, m_process->errorString());
+  m_lastResult =
+      QStringLiteral("cannot start %1: %2 (vcu-hmi --vcu PROGRAM names it)").arg(m_program, m_process->errorString());
   m_state = Idle;
   m_process.release()->deleteLater();
   Q_EMIT changed();

@@ -7,9 +7,9 @@
 // *.log files for the Trace tab. A failing `vcu record` shows its exit code and stderr.
 //
 //   RecordController { id: recorder }
-//   TouchButton { text: recorder.active ? "Stop" : "Record"; onClicked: recorder.active ? recorder.stop() : recorder.start() }
-//   Text { text: recorder.folder + "  " + recorder.elapsedText }
-//   TouchButton { visible: recorder.recordedLogs.length > 0; onClicked: analyse(recorder.recordedLogs) }
+//   TouchButton { text: recorder.active ? "Stop" : "Record"; onClicked: recorder.active ? recorder.stop() :
+//   recorder.start() } Text { text: recorder.folder + "  " + recorder.elapsedText } TouchButton { visible:
+//   recorder.recordedLogs.length > 0; onClicked: analyse(recorder.recordedLogs) }
 //
 // The program: --vcu PROGRAM of vcu-hmi, else `vcu` beside the vcu-hmi executable, else `vcu`
 // from PATH. The configuration and instance: those the HMI runs with.

@@ -40,20 +40,29 @@ QVariant TraceNodeModel::data(const QModelIndex& index, int role) const {
   const trace::NodeStats* node = rowAt(m_nodes, index);
   if (!node) return {};
   switch (role) {
-    case BusRole: return toQ(node->bus);
-    case SaRole: return node->standard ? -1 : static_cast<int>(node->sa);
-    case SaTextRole: return node->standard ? QStringLiteral("11-bit") : hexText(node->sa, 2);
-    case NameRole: return toQ(node->name);
-    case FramesRole: return static_cast<qulonglong>(node->frames);
-    case BitsPerSRole: return node->bitsPerS;
-    case SharePctRole: return node->sharePct;
-    default: return {};
+    case BusRole:
+      return toQ(node->bus);
+    case SaRole:
+      return node->standard ? -1 : static_cast<int>(node->sa);
+    case SaTextRole:
+      return node->standard ? QStringLiteral("11-bit") : hexText(node->sa, 2);
+    case NameRole:
+      return toQ(node->name);
+    case FramesRole:
+      return static_cast<qulonglong>(node->frames);
+    case BitsPerSRole:
+      return node->bitsPerS;
+    case SharePctRole:
+      return node->sharePct;
+    default:
+      return {};
   }
 }
 
 QHash<int, QByteArray> TraceNodeModel::roleNames() const {
-  return {{BusRole, "bus"},       {SaRole, "sa"},         {SaTextRole, "saText"},    {NameRole, "name"},
-          {FramesRole, "frames"}, {BitsPerSRole, "bitsPerS"}, {SharePctRole, "sharePct"}};
+  return {{BusRole, "bus"},          {SaRole, "sa"},         {SaTextRole, "saText"},
+          {NameRole, "name"},        {FramesRole, "frames"}, {BitsPerSRole, "bitsPerS"},
+          {SharePctRole, "sharePct"}};
 }
 
 void TraceNodeModel::reset(std::vector<trace::NodeStats> nodes) {
@@ -69,9 +78,9 @@ struct TraceStatsModel::Outcome {
   QStringList paths;
   trace::StatsReport report;
   std::shared_ptr<const trace::AnalysisSetup> setup;
-  std::string setupFrom;        ///< the path the setup was loaded from
-  std::string setupError;       ///< the configuration did not load: ran without a DBC
-  std::string openError;        ///< a log could not be opened: nothing computed
+  std::string setupFrom;              ///< the path the setup was loaded from
+  std::string setupError;             ///< the configuration did not load: ran without a DBC
+  std::string openError;              ///< a log could not be opened: nothing computed
   std::vector<std::string> problems;  ///< first MAX_REPORTED_PROBLEMS reasons
   std::uint64_t problemCount{};
   std::uint64_t malformedLines{};
@@ -185,7 +194,8 @@ void TraceStatsModel::start(const QStringList& paths) {
         outcome->untimed += counts.untimed;
       }
     }
-    QMetaObject::invokeMethod(this, [this, outcome] { finish(outcome); }, Qt::QueuedConnection);
+    QMetaObject::invokeMethod(
+        this, [this, outcome] { finish(outcome); }, Qt::QueuedConnection);
   });
 }
 
@@ -263,30 +273,47 @@ QVariant TraceStatsModel::data(const QModelIndex& index, int role) const {
   const trace::MessageStats* message = rowAt(m_messages, index);
   if (!message) return {};
   switch (role) {
-    case BusRole: return toQ(message->bus);
-    case FrameIdRole: return hexText(message->id, message->extended ? 8 : 3);
-    case NameRole: return toQ(message->name);
-    case CountRole: return static_cast<qulonglong>(message->count);
-    case ExpectedMsRole: return message->expectedMs;
+    case BusRole:
+      return toQ(message->bus);
+    case FrameIdRole:
+      return hexText(message->id, message->extended ? 8 : 3);
+    case NameRole:
+      return toQ(message->name);
+    case CountRole:
+      return static_cast<qulonglong>(message->count);
+    case ExpectedMsRole:
+      return message->expectedMs;
     case CycleSourceRole:
       switch (message->cycleSource) {
-        case trace::CycleSource::Schedule: return QStringLiteral("schedule");
-        case trace::CycleSource::Attribute: return QStringLiteral("DBC");
-        case trace::CycleSource::None: return QString();
+        case trace::CycleSource::Schedule:
+          return QStringLiteral("schedule");
+        case trace::CycleSource::Attribute:
+          return QStringLiteral("DBC");
+        case trace::CycleSource::None:
+          return QString();
       }
       return QString();
-    case MeanMsRole: return message->meanMs;
-    case P50MsRole: return message->p50Ms;
-    case P99MsRole: return message->p99Ms;
-    case MaxMsRole: return message->maxMs;
-    case DeviationMsRole: return message->deviationMs;
-    case GapsRole: return static_cast<qulonglong>(message->gaps);
-    case MissingRole: return static_cast<qulonglong>(message->missing);
+    case MeanMsRole:
+      return message->meanMs;
+    case P50MsRole:
+      return message->p50Ms;
+    case P99MsRole:
+      return message->p99Ms;
+    case MaxMsRole:
+      return message->maxMs;
+    case DeviationMsRole:
+      return message->deviationMs;
+    case GapsRole:
+      return static_cast<qulonglong>(message->gaps);
+    case MissingRole:
+      return static_cast<qulonglong>(message->missing);
     case FlaggedRole:
       return message->expectedMs > 0 &&
              (message->gaps > 0 || std::abs(message->deviationMs) > DEVIATION_TOLERANCE * message->expectedMs);
-    case Qt::DisplayRole: return toQ(message->name.empty() ? std::string("?") : message->name);
-    default: return {};
+    case Qt::DisplayRole:
+      return toQ(message->name.empty() ? std::string("?") : message->name);
+    default:
+      return {};
   }
 }
 
