@@ -467,6 +467,12 @@ std::vector<std::uint8_t> encodeCommandAck(const CommandAck& ack) {
 std::optional<CommandAck> decodeCommandAck(const void* data, std::size_t size) {
   return decodeOne<openvcu_lcm::command_ack_t>(data, size);
 }
+std::optional<FsmTransition> decodeFsmTransition(const void* data, std::size_t size) {
+  return decodeOne<openvcu_lcm::fsm_transition_t>(data, size);
+}
+std::optional<FaultEvent> decodeFaultEvent(const void* data, std::size_t size) {
+  return decodeOne<openvcu_lcm::fault_event_t>(data, size);
+}
 
 struct EventBusImpl {
   struct Entry {

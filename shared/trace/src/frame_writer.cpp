@@ -98,6 +98,38 @@ std::string jsonKey(std::string_view name) {
   return key;
 }
 
+/// "by the responder, reason 1 AlreadyInSession", "T1 ran out", "bad sequence number", ...
+std::string sessionEndReason(const j1939::TpSessionEnd& end) {
+  switch (end.outcome) {
+    case j1939::TpOutcome::Aborted:
+      return "by the " + std::string(j1939::tpSideName(end.abortedBy)) + ", reason " +
+             std::to_string(static_cast<unsigned>(end.abortReason)) + " " +
+             std::string(j1939::tpAbortReasonName(end.abortReason));
+    case j1939::TpOutcome::TimedOut: return std::string(j1939::tpTimerName(end.timer)) + " ran out";
+    case j1939::TpOutcome::Replaced: return "a new announcement for the same addresses";
+    case j1939::TpOutcome::ProtocolError:
+    case j1939::TpOutcome::Refused: return std::string(j1939::tpErrorText(end.error));
+    case j1939::TpOutcome::Incomplete: return "the log ended";
+    case j1939::TpOutcome::Completed: break;
+  }
+  return {};
+}
+
+void appendTpObject(std::string& out, const j1939::TpSessionInfo& session) {
+  out += ",\"tp\":{\"pgn\":";
+  out += std::to_string(session.pgn);
+  out += ",\"sa\":";
+  out += std::to_string(session.source);
+  out += ",\"da\":";
+  out += std::to_string(session.destination);
+  out += ",\"size\":";
+  out += std::to_string(session.size);
+  out += session.broadcast ? ",\"bam\":true}" : ",\"bam\":false}";
+}
+
+/// Removes the closing "}\n" of the JSON object just written, to add keys to it.
+void reopenJsonObject(std::string& out) { out.resize(out.size() - 2); }
+
 std::string csvField(std::string_view text) {
   std::string field;
   appendCsvField(field, text);
@@ -270,6 +302,142 @@ void FrameWriter::appendCsvFrame(std::string& out, const can::LogRecord& record,
     *p++ = '\n';
   }
   finish(out, p);
+}
+
+const FrameWriter::MessageText* FrameWriter::messageText(std::int32_t messageIndex) const noexcept {
+  if (messageIndex < 0 || static_cast<std::size_t>(messageIndex) >= m_messages.size()) return nullptr;
+  return &m_messages[static_cast<std::size_t>(messageIndex)];
+}
+
+void FrameWriter::appendDmFrame(std::string& out, const can::LogRecord& record, std::int32_t messageIndex,
+                                std::span<const SignalValue> values, const j1939::Dm1& dm, bool previouslyActive) {
+  if (m_format == DecodeFormat::Jsonl) {
+    appendFrame(out, record, messageIndex, values);
+    reopenJsonObject(out);
+    appendJsonDm(out, dm, previouslyActive);
+    out += "}\n";
+    return;
+  }
+  // CSV: the signal rows (or the one empty row of an unknown frame), then the DM rows.
+  if (messageText(messageIndex) != nullptr) appendFrame(out, record, messageIndex, values);
+  rememberChannel(record.channel);
+  appendCsvDmRows(out, record, messageIndex, dm, previouslyActive);
+}
+
+void FrameWriter::appendTransportMessage(std::string& out, const can::LogRecord& record,
+                                         const j1939::TpSessionInfo& session, std::int32_t messageIndex,
+                                         std::span<const SignalValue> values, const j1939::Dm1* dm,
+                                         bool previouslyActive) {
+  if (m_format == DecodeFormat::Jsonl) {
+    appendFrame(out, record, messageIndex, values);
+    reopenJsonObject(out);
+    appendTpObject(out, session);
+    if (dm != nullptr) appendJsonDm(out, *dm, previouslyActive);
+    out += "}\n";
+    return;
+  }
+  if (dm == nullptr || messageText(messageIndex) != nullptr) appendFrame(out, record, messageIndex, values);
+  rememberChannel(record.channel);
+  if (dm != nullptr) appendCsvDmRows(out, record, messageIndex, *dm, previouslyActive);
+}
+
+void FrameWriter::appendTransportEnd(std::string& out, const can::LogRecord& record, const j1939::TpSessionEnd& end,
+                                     std::int32_t messageIndex) {
+  rememberChannel(record.channel);
+  const std::string reason = sessionEndReason(end);
+  if (m_format == DecodeFormat::Jsonl) {
+    appendFrame(out, record, messageIndex, {});
+    reopenJsonObject(out);
+    appendTpObject(out, end.session);
+    out += ",\"tp_end\":{\"outcome\":";
+    appendJsonString(out, j1939::tpOutcomeName(end.outcome));
+    out += ",\"reason\":";
+    appendJsonString(out, reason);
+    out += ",\"received\":";
+    out += std::to_string(end.session.packetsReceived);
+    out += ",\"packets\":";
+    out += std::to_string(end.session.packets);
+    out += ",\"start\":";
+    appendSeconds(out, end.session.startNs);
+    out += "}}\n";
+    return;
+  }
+  appendCsvPrefix(out, record, "tp_end");
+  appendCsvField(out, std::string(j1939::tpOutcomeName(end.outcome)) + ": " + reason + ", " +
+                          std::to_string(end.session.packetsReceived) + " of " +
+                          std::to_string(end.session.packets) + " packets");
+  out += ",,\n";
+}
+
+void FrameWriter::appendJsonDm(std::string& out, const j1939::Dm1& dm, bool previouslyActive) const {
+  out += previouslyActive ? ",\"dm1\":{\"type\":\"DM2\",\"lamps\":{" : ",\"dm1\":{\"type\":\"DM1\",\"lamps\":{";
+  const auto lamp = [&out](std::string_view key, j1939::LampStatus status, bool last) {
+    out += '"';
+    out += key;
+    out += "\":\"";
+    out += j1939::lampStatusName(status);
+    out += last ? "\"" : "\",";
+  };
+  lamp("malfunction", dm.lamps.malfunction, false);
+  lamp("redStop", dm.lamps.redStop, false);
+  lamp("amberWarning", dm.lamps.amberWarning, false);
+  lamp("protect", dm.lamps.protect, true);
+  out += "},\"dtcs\":[";
+  bool first = true;
+  for (const j1939::Dtc& dtc : dm.activeDtcs()) {
+    if (!first) out += ',';
+    first = false;
+    out += "{\"spn\":";
+    out += std::to_string(dtc.spn);
+    out += ",\"fmi\":";
+    out += std::to_string(dtc.fmi);
+    out += ",\"oc\":";
+    out += std::to_string(dtc.occurrenceCount);
+    out += dtc.spnConversionMethod ? ",\"cm\":1}" : ",\"cm\":0}";
+  }
+  out += "]}";
+}
+
+void FrameWriter::appendCsvPrefix(std::string& out, const can::LogRecord& record,
+                                  std::string_view messageField) const {
+  if (record.hasTime) appendSeconds(out, record.frame.timestampNs);
+  out += ',';
+  out += m_channelText;
+  out += ',';
+  out += std::to_string(record.frame.id);
+  out += record.frame.extended() ? ",true," : ",false,";
+  out += messageField;  // already escaped
+  out += ',';
+}
+
+void FrameWriter::appendCsvDmRows(std::string& out, const can::LogRecord& record, std::int32_t messageIndex,
+                                  const j1939::Dm1& dm, bool previouslyActive) const {
+  const MessageText* message = messageText(messageIndex);
+  const std::string_view messageField = message != nullptr ? std::string_view(message->name)
+                                        : previouslyActive ? std::string_view("DM2")
+                                                           : std::string_view("DM1");
+  const auto row = [&](std::string_view signal, unsigned value) {
+    appendCsvPrefix(out, record, messageField);
+    out += signal;
+    const std::string number = std::to_string(value);
+    out += ',';
+    out += number;
+    out += ',';
+    out += number;
+    out += '\n';
+  };
+  row("lamp.malfunction", static_cast<unsigned>(dm.lamps.malfunction));
+  row("lamp.redStop", static_cast<unsigned>(dm.lamps.redStop));
+  row("lamp.amberWarning", static_cast<unsigned>(dm.lamps.amberWarning));
+  row("lamp.protect", static_cast<unsigned>(dm.lamps.protect));
+  std::size_t number = 0;
+  for (const j1939::Dtc& dtc : dm.activeDtcs()) {
+    const std::string name = "dtc" + std::to_string(++number);
+    row(name + ".spn", dtc.spn);
+    row(name + ".fmi", dtc.fmi);
+    row(name + ".oc", dtc.occurrenceCount);
+    row(name + ".cm", dtc.spnConversionMethod ? 1u : 0u);
+  }
 }
 
 }  // namespace openvcu::trace

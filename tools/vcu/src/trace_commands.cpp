@@ -32,7 +32,8 @@ void addTraceInputOptions(CLI::App& command, TraceInputOptions& options) {
                      ->option_text("FILE");
   auto* dbcOption = command.add_option("-d,--dbc", options.dbcFiles, "DBC file (repeat for several; merged in order)")
                         ->option_text("FILE")
-                        ->take_all();
+                        ->take_all()
+                        ->allow_extra_args(false);  // one file per --dbc: "--dbc a.dbc drive.log -f json" leaves the log a LOG
   config->excludes(dbcOption);
   command
       .add_option_function<std::string>(
@@ -121,8 +122,9 @@ std::string relativeSeconds(std::int64_t timeNs, std::int64_t startNs) {
 void registerTraceCommands(CLI::App& app, CommandContext& context) {
   CLI::App* traceGroup = app.add_subcommand(
       "trace", "CAN log analysis: traffic statistics, protocol checks (J1939-21/73/76), an HTML report");
-  (void)traceGroup;
-  (void)context;
+  addTraceStats(*traceGroup, context);
+  addTraceCheck(*traceGroup, context);
+  addTraceReport(*traceGroup, context);
 }
 
 }  // namespace openvcu::cli

@@ -60,6 +60,13 @@ void reportSkipped(TraceInput& input, Sink& err);
 /// Seconds from the timeline's start: "12.345678".
 [[nodiscard]] std::string relativeSeconds(std::int64_t timeNs, std::int64_t startNs);
 
+/// `vcu trace stats` (trace_stats.cpp).
+void addTraceStats(CLI::App& trace, CommandContext& context);
+/// Adds `vcu trace check` (trace_check.cpp) to the `trace` group.
+void addTraceCheck(CLI::App& trace, CommandContext& context);
+/// Adds `vcu trace report` (trace_report.cpp) to the `trace` group.
+void addTraceReport(CLI::App& trace, CommandContext& context);
+
 /// Adds `trace` and its subcommands to `app`.
 void registerTraceCommands(CLI::App& app, CommandContext& context);
 

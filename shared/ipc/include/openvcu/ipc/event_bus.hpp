@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -47,6 +48,11 @@ enum class HandleResult : std::uint8_t {
 /// (lcm-gen 1.3 trusts those fields: SIGSEGV or 64 GiB allocations otherwise). For tools and
 /// fuzzers that decode events themselves.
 [[nodiscard]] bool fitsEventLayout(EventKind kind, const void* data, std::size_t size) noexcept;
+
+/// An encoded fsm_transition_t / fault_event_t (with its fingerprint) -> the plain struct;
+/// empty when it does not fit the layout or decode (event_log.hpp reads logs with these).
+[[nodiscard]] std::optional<FsmTransition> decodeFsmTransition(const void* data, std::size_t size);
+[[nodiscard]] std::optional<FaultEvent> decodeFaultEvent(const void* data, std::size_t size);
 
 class EventBus {
  public:

@@ -20,6 +20,20 @@
 // (strings in JSON, bare in CSV); anything else as the shortest text that reads back to
 // the same double. Integer raw values print exactly; float raws like physical values.
 // Times print exactly as logged: seconds with 6 decimals, 9 when the log had nanoseconds.
+//
+// J1939 records (`vcu dbc decode`, issue 21) extend these shapes; normal frames are unchanged:
+//   DM1/DM2 frame:        ...,"raw":{...},"dm1":{"type":"DM1","lamps":{"malfunction":"Off",
+//                         "redStop":"Off","amberWarning":"On","protect":"Off"},
+//                         "dtcs":[{"spn":100,"fmi":1,"oc":3,"cm":0}]}}
+//   reassembled message:  {"t":..,"bus":..,"id":<priority 6, PGN, SA, DA>,"ext":true,"msg":..,
+//                         "signals":{..},"raw":{..},"tp":{"pgn":65251,"sa":0,"da":255,"size":34,"bam":true}}
+//   session not completed: ...,"tp":{..},"tp_end":{"outcome":"Aborted","reason":"by the responder,
+//                         reason 1 AlreadyInSession","received":0,"packets":3,"start":1.5}}
+//   CSV: a DM1/DM2 adds rows lamp.malfunction, lamp.redStop, lamp.amberWarning, lamp.protect
+//   (raw = physical = the 2-bit state) and dtcN.spn, dtcN.fmi, dtcN.oc, dtcN.cm per DTC
+//   (N from 1), msg the DBC name or DM1/DM2; a session not completed is one row with msg
+//   "tp_end", signal "<Outcome>: <reason>, <received> of <packets> packets", raw and
+//   physical empty.
 
 #include <cstdint>
 #include <span>
@@ -30,6 +44,8 @@
 #include "openvcu/can/log_reader.hpp"
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/model.hpp"
+#include "openvcu/j1939/dm1.hpp"
+#include "openvcu/j1939/transport_monitor.hpp"
 
 namespace openvcu::trace {
 
@@ -66,6 +82,23 @@ class FrameWriter {
   void appendFrame(std::string& out, const can::LogRecord& record, std::int32_t messageIndex,
                    std::span<const SignalValue> values);
 
+  /// A frame carrying a J1939-73 DM1 (or DM2: `previouslyActive`): appendFrame()'s record
+  /// plus JSONL "dm1", CSV lamp and DTC rows.
+  void appendDmFrame(std::string& out, const can::LogRecord& record, std::int32_t messageIndex,
+                     std::span<const SignalValue> values, const j1939::Dm1& dm, bool previouslyActive);
+
+  /// A message reassembled from a J1939-21 session. `record` carries the time and channel
+  /// of the TP.DT that completed it and the message's identifier (priority 6, PGN, source,
+  /// destination); `dm` (optional) its DM1/DM2 content. JSONL adds "tp" (and "dm1").
+  void appendTransportMessage(std::string& out, const can::LogRecord& record, const j1939::TpSessionInfo& session,
+                              std::int32_t messageIndex, std::span<const SignalValue> values,
+                              const j1939::Dm1* dm, bool previouslyActive);
+
+  /// A J1939-21 session that ended without completing (aborted, timed out, replaced,
+  /// protocol error, incomplete, refused); `record` as for appendTransportMessage().
+  void appendTransportEnd(std::string& out, const can::LogRecord& record, const j1939::TpSessionEnd& end,
+                          std::int32_t messageIndex);
+
  private:
   struct MessageText {
     std::string name;                      ///< JSON: "\"EEC1\""; CSV: the escaped field
@@ -78,6 +111,11 @@ class FrameWriter {
   void appendCsvFrame(std::string& out, const can::LogRecord& record, const MessageText* message,
                       std::span<const SignalValue> values) const;
   void rememberChannel(std::string_view channel);
+  void appendJsonDm(std::string& out, const j1939::Dm1& dm, bool previouslyActive) const;
+  void appendCsvDmRows(std::string& out, const can::LogRecord& record, std::int32_t messageIndex,
+                       const j1939::Dm1& dm, bool previouslyActive) const;
+  void appendCsvPrefix(std::string& out, const can::LogRecord& record, std::string_view messageField) const;
+  [[nodiscard]] const MessageText* messageText(std::int32_t messageIndex) const noexcept;
 
   std::vector<MessageText> m_messages;  ///< by message index
   std::string m_channel;                ///< the last channel seen ...

@@ -60,6 +60,7 @@ struct TransportCounts {
   std::uint64_t incomplete{};    ///< still open when the log ended
   std::uint64_t replaced{};
   std::uint64_t protocolErrors{};  ///< bad/duplicate sequence, unexpected packets
+  std::uint64_t refused{};         ///< announcements not followed: invalid, or the session pool was full
   std::uint64_t dm1Messages{};     ///< DM1 + DM2 decoded (single frame or reassembled)
   std::uint64_t dtcIntervalsSkipped{};
 };
@@ -71,6 +72,7 @@ class TransportAnalysis {
   using OnMessage = std::function<void(const ReassembledMessage&)>;
 
   /// `onMessage` (optional) receives every reassembled message and every DM1/DM2.
+  /// `setup` must outlive the analysis (its database names messages in findings).
   explicit TransportAnalysis(const AnalysisSetup& setup, OnMessage onMessage = {});
   TransportAnalysis(TransportAnalysis&&) noexcept;
   TransportAnalysis& operator=(TransportAnalysis&&) noexcept;
