@@ -173,7 +173,7 @@ void TraceStatsModel::start(const QStringList& paths) {
     if (!timeline) {
       outcome->openError = timeline.error().toString();
     } else {
-      trace::TraceStats stats(*setup);
+      trace::TraceStats stats(*setup, timeline->buses());  // the configured bit rates per bus
       trace::TraceFrame frame;
       std::uint64_t frames = 0;
       while (timeline->next(frame)) {
