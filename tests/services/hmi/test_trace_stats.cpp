@@ -175,6 +175,7 @@ TEST_CASE("the statistics model gives the known cycle, gap, node and bus load fi
   REQUIRE_FALSE(series.isEmpty());
   CHECK(series.size() <= static_cast<qsizetype>(trace::LOAD_SERIES_POINTS));
   CHECK(series.front().toPointF().x() >= 0);
+  CHECK(bus["seriesMaxPct"].toDouble() >= bus["loadMaxPct"].toDouble() * 0.95);  // buckets are shorter than the window
   CHECK(sut.summary().contains("149 frames"));
 }
 

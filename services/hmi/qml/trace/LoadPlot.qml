@@ -1,13 +1,15 @@
 import QtQuick
 import OpenVcu.Hmi
 
-// The bus load over time of one bus (TraceStatsModel.buses[i].series: points (s, %)) as a
-// line on a 0..max % scale with the mean as a dashed line; the axis texts in the corners.
+// The bus load over time of one bus (TraceStatsModel.buses[i].series: points (s, %), one
+// per bucket of bucketS) as a line on a 0..max % scale (the highest bucket rounded up to
+// 10 %) with the mean as a dashed line; the axis texts in the corners.
 Rectangle {
     id: plot
     property var series: []
     property real meanPct: 0
     property real peakPct: 0
+    property real bucketS: 0
     color: Theme.panel
     // the scale: the peak rounded up to 10 %, at least 10 %
     readonly property real topPct: Math.max(10, Math.ceil(peakPct / 10) * 10)
@@ -47,4 +49,5 @@ Rectangle {
     Text { anchors.left: parent.left; anchors.top: parent.top; anchors.margins: 2; text: plot.topPct + " %"; color: Theme.textDim; font.pixelSize: 11 }
     Text { anchors.left: parent.left; anchors.bottom: parent.bottom; anchors.margins: 2; text: "0"; color: Theme.textDim; font.pixelSize: 11 }
     Text { anchors.right: parent.right; anchors.bottom: parent.bottom; anchors.margins: 2; text: plot.endS.toFixed(1) + " s"; color: Theme.textDim; font.pixelSize: 11 }
+    Text { anchors.right: parent.right; anchors.top: parent.top; anchors.margins: 2; text: "per " + (plot.bucketS * 1000).toFixed(0) + " ms, mean dashed"; color: Theme.textDim; font.pixelSize: 11; visible: plot.bucketS > 0 }
 }

@@ -76,7 +76,8 @@ ColumnLayout {
         readonly property var bus: page.stats.buses.length > 0 ? page.stats.buses[Math.min(page.busIndex, page.stats.buses.length - 1)] : null
         series: bus ? bus.series : []
         meanPct: bus ? bus.loadMeanPct : 0
-        peakPct: bus ? bus.loadMaxPct : 0
+        peakPct: bus ? Math.max(bus.loadMaxPct, bus.seriesMaxPct) : 0
+        bucketS: bus ? bus.bucketS : 0
     }
     TabBar {
         id: tables

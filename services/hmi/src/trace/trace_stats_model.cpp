@@ -7,6 +7,7 @@
 #include <QPointF>
 #include <QUrl>
 #include <QVariantMap>
+#include <algorithm>
 #include <cmath>
 
 #include "common/model_helpers.hpp"
@@ -219,7 +220,11 @@ void TraceStatsModel::finish(std::shared_ptr<Outcome> outcome) {
   for (const trace::BusStats& bus : m_report.buses) {
     QVariantList series;
     series.reserve(static_cast<qsizetype>(bus.loadSeries.size()));
-    for (const auto& [seconds, percent] : bus.loadSeries) series << QPointF(seconds, percent);
+    double seriesMax = 0;  // a bucket (10 ms and up) can be far above the busiest 1 s window
+    for (const auto& [seconds, percent] : bus.loadSeries) {
+      series << QPointF(seconds, percent);
+      seriesMax = std::max(seriesMax, percent);
+    }
     m_buses << QVariantMap{{QStringLiteral("bus"), toQ(bus.bus)},
                            {QStringLiteral("bitrate"), bus.bitrate},
                            {QStringLiteral("frames"), static_cast<qulonglong>(bus.frames)},
@@ -228,6 +233,7 @@ void TraceStatsModel::finish(std::shared_ptr<Outcome> outcome) {
                            {QStringLiteral("loadMeanPct"), bus.loadMeanPct},
                            {QStringLiteral("loadMaxPct"), bus.loadMaxPct},
                            {QStringLiteral("bucketS"), bus.loadBucketS},
+                           {QStringLiteral("seriesMaxPct"), seriesMax},
                            {QStringLiteral("series"), series}};
   }
   QStringList notes;

@@ -11,7 +11,7 @@
 //   stats.compute(["drive1/vehicle.log", "drive1/body.log"])   // "computing", then Ready
 //   ListView { model: stats }             // messages: bus, frameId, name, count, meanMs, flagged ...
 //   ListView { model: stats.nodes }       // bus, saText, name, frames, bitsPerS, sharePct
-//   Repeater { model: stats.buses }       // {bus, loadMeanPct, loadMaxPct, series: [Qt.point(s, %)]}
+//   Repeater { model: stats.buses }       // {bus, loadMeanPct, loadMaxPct, series: [Qt.point(s, %)], seriesMaxPct}
 //
 // Bad input: a log that cannot be opened sets Error and the reason; malformed lines and
 // time going backwards set Stale with their count and the first reasons (file:line); a
