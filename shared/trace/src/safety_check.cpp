@@ -289,13 +289,24 @@ void SafetyCheck::onData(Pair& pair, const TraceFrame& frame, FindingSink& sink)
                            " (tolerance " + micros(tolerance) + ")"});
 }
 
+namespace {
+const std::string NO_GROUP;
+}  // namespace
+
 void SafetyCheck::poll(std::int64_t nowNs, FindingSink& sink) {
   for (Pair& pair : m_pairs) {
     if (!pair.hasLastHeader || pair.overdueReported || !pair.checker.headerOverdue(nowNs)) continue;
     pair.overdueReported = true;
-    sink.finding(Finding{nowNs, pair.stats.bus, Severity::Fault, Check::Safety,
-                         pair.name + ": no SHM for " + micros(nowNs - pair.lastHeaderNs) + " (SCT " +
-                             micros(pair.stats.maxHeaderCycleNs) + "): the sender stopped or its SHMs are lost"});
+    const std::string& switchedBy =
+        pair.configIndex >= 0 ? m_setup->safetyPairs[static_cast<std::size_t>(pair.configIndex)].switchedBy : NO_GROUP;
+    std::string text = pair.name + ": no SHM for " + micros(nowNs - pair.lastHeaderNs) + " (SCT " +
+                       micros(pair.stats.maxHeaderCycleNs) + "): ";
+    // A pair of a send group stops when the group is switched off (the FSM's Stop): expected,
+    // but worth a line; any other pair that falls silent is a fault for its receivers.
+    text += switchedBy.empty() ? "the sender stopped or its SHMs are lost"
+                               : "stopped; it is in send group " + switchedBy + ", which switches it off";
+    sink.finding(Finding{nowNs, pair.stats.bus, switchedBy.empty() ? Severity::Fault : Severity::Warning, Check::Safety,
+                         std::move(text)});
   }
 }
 

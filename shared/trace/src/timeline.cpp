@@ -2,6 +2,7 @@
 // logs merged by time, one pending record per log.
 #include "openvcu/trace/timeline.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <utility>
 
@@ -32,8 +33,17 @@ void fillFromDatabase(AnalysisSetup& setup) {
     if (!message.extended || message.pseudo || message.transmitter.empty() || message.transmitter == dbc::NO_NODE) {
       continue;
     }
+    // Several DBC nodes may send with one address (hhea.dbc: the VCU's HC*_Demands and the
+    // HVLP string's HS* feedback both use 0x71): all are named, in DBC order.
     std::string& name = setup.nodeNames[message.id & 0xFFu];
-    if (name.empty()) name = message.transmitter;
+    const std::string& node = message.transmitter;
+    bool listed = false;
+    for (std::size_t start = 0; start <= name.size() && !name.empty();) {
+      const std::size_t end = std::min(name.find('/', start), name.size());
+      if (name.compare(start, end - start, node) == 0) listed = true;
+      start = end + 1;
+    }
+    if (!listed) name += (name.empty() ? "" : "/") + node;
   }
 }
 
@@ -92,13 +102,14 @@ Result<AnalysisSetup> loadSetupFromConfig(const std::string& path) {
       const std::int64_t cycle = scheduled.cycleNs > 0 ? scheduled.cycleNs : 0;
       setup.safetyPairs.push_back(SafetyPairSetup{
           index, scheduled.canId, *scheduled.safetyDeltaNs, DEFAULT_SRVT_NS,
-          cycle > 0 ? DEFAULT_SCT_CYCLES * cycle : std::numeric_limits<std::int64_t>::max()});
+          cycle > 0 ? DEFAULT_SCT_CYCLES * cycle : std::numeric_limits<std::int64_t>::max(),
+          scheduled.group ? scheduleResult->groups[*scheduled.group].name : std::string()});
     }
   }
   for (const config::SafetyGroup& group : receiveResult->safety) {
     const dbc::Message& message = setup.database.messages[group.dataMessage];
     setup.safetyPairs.push_back(SafetyPairSetup{static_cast<std::int32_t>(group.dataMessage), message.id, 0,
-                                                group.maxHeaderToDataNs, group.maxHeaderCycleNs});
+                                                group.maxHeaderToDataNs, group.maxHeaderCycleNs, {}});
   }
   return setup;
 }
@@ -152,7 +163,7 @@ struct LogTimeline::Impl {
         if (count.backwards == 0 && onError) {
           onError(Error{"time goes backwards (" + std::to_string(frame.timeNs - source.lastTimeNs) +
                             " ns); the periods across such steps are not measured",
-                        Location{count.path, static_cast<std::uint32_t>(record->line), 0, {}}});
+                        Location{count.path, static_cast<std::uint32_t>(record->line), 0, {}}, openvcu::Severity::Warning});
         }
         ++count.backwards;
       }

@@ -45,7 +45,7 @@ AnalysisSetup makeSetup(bool configured) {
   setup.database = std::move(parsed.database);
   setup.expectedCycleNs.assign(setup.database.messages.size(), CYCLE_NS);
   setup.cycleSource.assign(setup.database.messages.size(), CycleSource::Attribute);
-  if (configured) setup.safetyPairs.push_back(SafetyPairSetup{0, S1_ES_ID, DELTA_NS, SRVT_NS, SCT_NS});
+  if (configured) setup.safetyPairs.push_back(SafetyPairSetup{0, S1_ES_ID, DELTA_NS, SRVT_NS, SCT_NS, {}});
   return setup;
 }
 
@@ -371,6 +371,25 @@ TEST_CASE("requests beyond the open-request table are counted, not checked") {
   CHECK(sink.findings[0].text ==
         "more than 1024 requests waiting for an answer: further ones are not checked (counted at the end)");
   CHECK(sink.findings[1].text == "1 requests not checked (table full)");
+}
+
+TEST_CASE("a pair of a send group that falls silent is a warning naming the group, not a fault") {
+  AnalysisSetup setup = makeSetup(true);
+  setup.safetyPairs[0].switchedBy = "keepAlive";
+  TraceChecker sut(setup);
+  Collector sink;
+  PairSender sender{sut, sink};
+  for (int i = 0; i < 5; ++i) sender.send();  // the last SHM at +80 ms
+  const std::array<std::uint8_t, 8> other{};
+  for (std::int64_t t = 90 * MS; t <= 300 * MS; t += 10 * MS) sut.add(frameAt(START_NS + t, 0x18FEF100, other), sink);
+  sut.finish(START_NS + 300 * MS, sink);
+
+  REQUIRE(sink.findings.size() == 1);
+  CHECK(sink.findings[0].severity == trace::Severity::Warning);
+  CHECK(sink.findings[0].text ==
+        "S1_ES (0x0CEFF321): no SHM for 70000 us (SCT 60000 us): stopped; it is in send group keepAlive, which "
+        "switches it off");
+  CHECK(sut.counts().faults == 0);
 }
 
 TEST_CASE("a sender that stops mid-log is found by polling within 10 ms of log time, once") {

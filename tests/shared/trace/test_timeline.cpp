@@ -188,7 +188,13 @@ TEST_CASE("setup from the HHEA configuration has the schedule's cycles, bit rate
   CHECK(withDelta == SCHEDULE_SAFETY_PAIRS);
   bool ignitionDelta = false;
   for (const SafetyPairSetup& pair : setup.safetyPairs) {
-    if (pair.message == ignition && pair.deltaNs == 292'000) ignitionDelta = true;
+    if (pair.message == ignition && pair.deltaNs == 292'000) {
+      ignitionDelta = true;
+      CHECK(pair.switchedBy == "keepAlive");  // the schedule's send group
+    }
   }
   CHECK(ignitionDelta);
+  // hhea.dbc: the VCU's HC1_Demands and the HVLP string's HS2_Status_Feedback both use 0x71
+  CHECK(setup.nodeNames[0x71] == "Vehicle_Control_Unit/HVLP_SA71");
+  CHECK(setup.nodeNames[0xFD] == "Editron");
 }

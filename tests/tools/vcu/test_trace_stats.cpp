@@ -126,7 +126,7 @@ TEST_CASE("vcu trace stats text has the bus, node and message tables") {
                            "EXPECTED", "P99", "MISSING", "0x18FF50E5  OBC", "500 kbit/s"}) {
     CHECK_MESSAGE(contains(result.out, part), part);
   }
-  CHECK(contains(result.err, "skipped 1 malformed lines"));
+  CHECK(contains(result.err, "1 malformed lines skipped"));
 }
 
 TEST_CASE("vcu trace stats without its DBC says so, exits 1 and still gives the statistics") {

@@ -100,11 +100,18 @@ std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink&
 
 void reportSkipped(TraceInput& input, Sink& err) {
   for (const trace::LogCounts& count : input.timeline->counts()) {
-    if (count.malformedLines == 0 && count.untimed == 0 && count.backwards == 0) continue;
-    std::string text = "skipped " + std::to_string(count.malformedLines) + " malformed lines and " +
-                       std::to_string(count.untimed) + " lines without a time; " + std::to_string(count.backwards) +
-                       " frames went back in time (their periods not measured)";
-    report(err, Error{std::move(text), Location{count.path, 0, 0, {}}});
+    std::string text;
+    const auto add = [&text](std::uint64_t n, const char* what) {
+      if (n == 0) return;
+      text += (text.empty() ? "" : ", ") + std::to_string(n) + what;
+    };
+    add(count.malformedLines, " malformed lines skipped");
+    add(count.untimed, " lines without a time skipped");
+    add(count.backwards, " frames earlier than the frame before them (the periods across them not measured)");
+    if (text.empty()) continue;
+    // Malformed lines are errors of the input; the rest is what the analysis left out.
+    report(err, Error{std::move(text), Location{count.path, 0, 0, {}},
+                      count.malformedLines > 0 ? Severity::Error : Severity::Warning});
     if (count.malformedLines > 0) input.failed = true;
   }
   if (*input.reportedErrors > MAX_REPORTED_LOG_ERRORS) {

@@ -3,8 +3,8 @@
 // (their time range is known by then, so each keeps a fixed number of min/max buckets), and
 // for a folder written by `vcu record` the FSM transitions and faults of its events.lcmlog.
 //
-//   vcu trace report --config config/hhea/vehicle.json drive1 -o drive1.html \
-//       --signals HVESSD1_PGN61600.HVESS_Voltage,EEC1.EngineSpeed
+//   vcu trace report --config config/hhea/vehicle.json drive1 -o drive1.html
+//       --signals HVESSD1_PGN61584.HS_ULvl,ST_MOT_1.st_mot_n
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>

@@ -52,6 +52,10 @@ struct SafetyPairSetup {
   std::int64_t deltaNs{};            ///< configured SHM -> SDM delay (schedule "safety.deltaUs")
   std::int64_t maxHeaderToDataNs{};  ///< SRVT: the longest accepted SHM -> SDM time
   std::int64_t maxHeaderCycleNs{};   ///< SCT: the longest accepted SHM -> SHM time
+  /// The schedule's send group that switches the SDM on and off ("keepAlive"); empty when it
+  /// is always sent. A switched pair that falls silent was most likely switched off: the
+  /// check reports it as a warning, not a fault.
+  std::string switchedBy;
 };
 
 /// What the analysis knows of the vehicle.
@@ -66,8 +70,9 @@ struct AnalysisSetup {
   /// Safety pairs from the schedule (--config). With --dbc only, the check finds pairs on
   /// the bus by their SHM (PGN 0x0E00) and uses the default timing below.
   std::vector<SafetyPairSetup> safetyPairs;
-  /// Node names by J1939 source address: the DBC node that transmits a message with that
-  /// source address (BO_ transmitter), empty when unknown.
+  /// Node names by J1939 source address: the DBC nodes that transmit a message with that
+  /// source address (BO_ transmitter), joined by '/' in DBC order when several do
+  /// ("Vehicle_Control_Unit/HVLP_SA71"), empty when unknown.
   std::array<std::string, 256> nodeNames;
 
   /// The bit rates of the bus named `name` (a configured bus, else the defaults).
