@@ -71,7 +71,23 @@ ApplicationWindow {
             initialFramesPage: typeof initialCanPageFrames !== "undefined" ? initialCanPageFrames : false
         }
         EcuSetupTab { anchors.fill: parent; visible: tabs.currentIndex === 3 }
-        DebugTab { anchors.fill: parent; visible: tabs.currentIndex === 4; health: health; fsm: fsm }
-        TraceViewer { anchors.fill: parent; visible: tabs.currentIndex === 5 }
+        DebugTab {
+            anchors.fill: parent
+            visible: tabs.currentIndex === 4
+            health: health
+            fsm: fsm
+            onAnalyse: (logs) => {
+                tabs.currentIndex = 5
+                traceViewer.openPaths(logs, logs[0].substring(0, logs[0].lastIndexOf("/")))
+            }
+        }
+        TraceViewer {
+            id: traceViewer
+            objectName: "traceViewer"
+            anchors.fill: parent
+            visible: tabs.currentIndex === 5
+            initialPath: typeof initialTracePath !== "undefined" ? initialTracePath : ""
+            initialStatistics: typeof initialTraceStatistics !== "undefined" ? initialTraceStatistics : false
+        }
     }
 }

@@ -518,6 +518,16 @@ TEST_CASE("the command line refuses bad options with a message and checks the co
   CHECK(bench->plotWindowSeconds == 600);
   CHECK(bench->framesPage);
   CHECK(bench->stack.dataFolder == "/srv/x");
+  // issue 21: the vcu of the Record button, a log or folder opened in the Trace tab at start
+  const QString logs = QString(OPENVCU_SOURCE_DIR) + "/tests/data/logs";
+  const auto trace = parseCommandLine(
+      {"vcu-hmi", "--config", hhea, "--vcu", "/opt/openvcu/bin/vcu", "--trace", logs, "--trace-page", "statistics"});
+  REQUIRE_MESSAGE(trace, trace.error().toString());
+  CHECK(trace->stack.vcuProgram == "/opt/openvcu/bin/vcu");
+  CHECK(trace->tracePath == logs);
+  CHECK(trace->tracePageStatistics);
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--trace-page", "graphs"}));
+  CHECK_FALSE(parseCommandLine({"vcu-hmi", "--config", hhea, "--trace", "/nonexistent/drive.log"}));
   HmiOptions missing;
   missing.stack.configPath = "/nonexistent/vehicle.json";
   const auto checked = checkBeforeStart(missing);

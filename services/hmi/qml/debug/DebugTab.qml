@@ -5,11 +5,14 @@ import OpenVcu.Models
 import OpenVcu.Hmi
 
 // Log (filter by service and level, export), FSM transitions, active faults with reset,
-// service health with restart, system figures, reboot/shutdown after confirmation.
+// service health with restart, system figures, reboot/shutdown after confirmation, and
+// Record (vcu record into the data folder; Analyse hands the logs to the Trace tab).
 ColumnLayout {
     id: debugTab
     property var health
     property var fsm
+    /// Record's Analyse: the window opens `logs` in the Trace tab.
+    signal analyse(var logs)
     spacing: 4
     LogModel { id: logModel }
     FileBrowserModel { id: exportFolder }  // only its data folder: exports go there
@@ -20,7 +23,7 @@ ColumnLayout {
         id: pages
         Layout.fillWidth: true
         Repeater {
-            model: ["Log", "Transitions", "Faults (" + faults.activeCount + ")", "Services"]
+            model: ["Log", "Transitions", "Faults (" + faults.activeCount + ")", "Services", "Record"]
             TabButton { text: modelData; font.pixelSize: Theme.fontSmall; implicitHeight: 40 }
         }
     }
@@ -140,6 +143,12 @@ ColumnLayout {
                 TouchButton { text: "Shut down"; tint: Theme.bad; onClicked: { confirm.action = () => actions.power("poweroff"); confirm.question = "Shut the VCU down?"; confirm.open() } }
                 Text { text: actions.lastResult; color: Theme.textDim; font.pixelSize: Theme.fontSmall; Layout.fillWidth: true; elide: Text.ElideRight }
             }
+        }
+
+        RecordPage {
+            anchors.fill: parent
+            visible: pages.currentIndex === 4
+            onAnalyse: (logs) => debugTab.analyse(logs)
         }
     }
 

@@ -47,7 +47,12 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   const QCommandLineOption lcmUrl("lcm-url", "event bus URL; overrides the configuration's", "URL");
   const QCommandLineOption supervisor("supervisor-config", "supervisord file, for restarting a service", "FILE");
   const QCommandLineOption dataFolder(
-      "data-folder", "where exports go and the trace viewer's Browse starts (default: $HOME/openvcu)", "DIR");
+      "data-folder",
+      "where exports and recordings (DIR/recordings/<time>) go and the trace viewer's Browse starts (default: "
+      "$HOME/openvcu)",
+      "DIR");
+  const QCommandLineOption vcu("vcu", "the vcu program the Record button runs (default: vcu beside vcu-hmi, else PATH)",
+                               "PROGRAM");
   const QCommandLineOption zone("time-zone", "IANA time zone of the header clock (default: the system's)", "ZONE");
   const QCommandLineOption size("size", "window size (default 720x600; 800x480 also fits)", "WxH", "720x600");
   const QCommandLineOption screenshot("screenshot", "save every tab as DIR/tab-N-NAME.png once the stack is attached",
@@ -58,6 +63,10 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   const QCommandLineOption plotWindow("plot-window", "the live plot's first window: 10, 30, 60, 300 or 600 s",
                                       "SECONDS", "30");
   const QCommandLineOption canPage("can-page", "CAN Data's first page: plot or frames", "PAGE", "plot");
+  const QCommandLineOption trace("trace", "open this log, or the *.log files of this folder, in the Trace tab at start",
+                                 "PATH");
+  const QCommandLineOption tracePage("trace-page", "the Trace tab's first page: signals or statistics", "PAGE",
+                                     "signals");
   const QCommandLineOption noFrames("no-frames", "do not subscribe to raw frames (no iceoryx / iox-roudi)");
   const QCommandLineOption plot("plot", "plot these signals from the start (comma-separated keys)", "KEYS");
   const QCommandLineOption renderer(
@@ -67,8 +76,8 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
       "NAME", "software");
   const QCommandLineOption tab(
       "tab", "the tab shown first: 0 Vehicle, 1 Dashboard, 2 CAN Data, 3 ECU Setup, 4 Debug, 5 Trace", "INDEX", "0");
-  parser.addOptions({plotWindow, canPage});
-  parser.addOptions({config, dashboard, instance, lcmUrl, supervisor, dataFolder, zone, size, screenshot, exitAfter, fps, quitAfter,
+  parser.addOptions({plotWindow, canPage, trace, tracePage});
+  parser.addOptions({config, dashboard, instance, lcmUrl, supervisor, dataFolder, vcu, zone, size, screenshot, exitAfter, fps, quitAfter,
                      plot, tab, noFrames, renderer});
   if (!parser.parse(arguments)) return Error{parser.errorText().toStdString()};
   if (parser.isSet(QStringLiteral("help"))) {
@@ -101,6 +110,7 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   options.stack.supervisorConfig = parser.value(supervisor).toStdString();
   options.stack.timeZone = parser.value(zone).toStdString();
   options.stack.dataFolder = parser.value(dataFolder).toStdString();
+  options.stack.vcuProgram = parser.value(vcu).toStdString();
   if (!options.stack.timeZone.empty() && !QTimeZone(QByteArray::fromStdString(options.stack.timeZone)).isValid()) {
     return Error{"--time-zone '" + options.stack.timeZone +
                  "': unknown time zone (an IANA name, e.g. Europe/Helsinki)"};
@@ -145,6 +155,17 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
     return Error{"--can-page '" + parser.value(canPage).toStdString() + "': expected plot or frames"};
   }
   options.framesPage = parser.value(canPage) == QLatin1String("frames");
+  if (parser.value(tracePage) != QLatin1String("signals") && parser.value(tracePage) != QLatin1String("statistics")) {
+    return Error{"--trace-page '" + parser.value(tracePage).toStdString() + "': expected signals or statistics"};
+  }
+  options.tracePageStatistics = parser.value(tracePage) == QLatin1String("statistics");
+  options.tracePath = parser.value(trace);
+  if (!options.tracePath.isEmpty()) {
+    options.tracePath = QFileInfo(options.tracePath).absoluteFilePath();
+    if (!QFileInfo::exists(options.tracePath)) {
+      return Error{"--trace '" + parser.value(trace).toStdString() + "': no such file or folder"};
+    }
+  }
   if (!parser.positionalArguments().isEmpty()) {
     return Error{"unexpected argument '" + parser.positionalArguments().first().toStdString() + "' (see --help)"};
   }
@@ -186,6 +207,8 @@ Status HmiApp::load() {
   m_engine.rootContext()->setContextProperty(QStringLiteral("initialPlotKeys"), m_options.plotKeys);
   m_engine.rootContext()->setContextProperty(QStringLiteral("initialPlotWindow"), m_options.plotWindowSeconds);
   m_engine.rootContext()->setContextProperty(QStringLiteral("initialCanPageFrames"), m_options.framesPage);
+  m_engine.rootContext()->setContextProperty(QStringLiteral("initialTracePath"), m_options.tracePath);
+  m_engine.rootContext()->setContextProperty(QStringLiteral("initialTraceStatistics"), m_options.tracePageStatistics);
   m_engine.addImportPath(QStringLiteral("qrc:/"));  // the OpenVcu.Hmi module lives at qrc:/OpenVcu/Hmi
   m_engine.load(QUrl(QStringLiteral("qrc:/OpenVcu/Hmi/qml/Main.qml")));
   if (m_engine.rootObjects().isEmpty()) return Error{"the QML user interface did not load (see the messages above)"};

@@ -39,6 +39,8 @@ struct HmiOptions {
   QStringList plotKeys;                         ///< signals plotted from the start (benchmarks, demos)
   int plotWindowSeconds{30};                    ///< the plot's first window: 10, 30, 60, 300 or 600
   bool framesPage{};                            ///< CAN Data shows the Frames page first
+  QString tracePath;                            ///< a log or recording folder the Trace tab opens at start
+  bool tracePageStatistics{};                   ///< the Trace tab shows its Statistics page first
   int tab{0};                                   ///< the tab shown first (0 Vehicle ... 5 Trace)
   bool softwareRenderer{true};                  ///< --renderer software (default) or gpu
   bool exitNow{};                               ///< --help / --version were answered

@@ -51,7 +51,8 @@ struct StackSettings {
   std::string instance;          ///< empty: the configuration's
   std::string supervisorConfig;  ///< supervisord file for "restart a service"; empty: not offered
   std::string timeZone;          ///< IANA name for the header clock; empty: the system's
-  std::string dataFolder;        ///< exports and the file browser's start; empty: $HOME/openvcu
+  std::string dataFolder;        ///< exports, recordings and the file browser's start; empty: $HOME/openvcu
+  std::string vcuProgram;        ///< the `vcu` the Record button runs; empty: beside vcu-hmi, else PATH
   bool frameStreams{};           ///< subscribe to the raw frames over iceoryx (vcu-hmi: on; tests: off, no RouDi)
   int displayHz{10};             ///< text refresh; plots sample on their own timer
 };

@@ -118,6 +118,39 @@ Item {
             tryVerify(() => findChild(screen, "traceList").count > 0, 5000, "the tapped log was not opened")
         }
 
+        function test_the_statistics_page_computes_all_logs_of_a_folder() {
+            const screen = createTemporaryObject(traceTab, root)
+            waitForRendering(screen)
+            mouseClick(findChild(screen, "browseButton"))
+            const popup = findChild(screen, "browsePopup")
+            tryCompare(popup, "opened", true)
+            const all = findText(popup.contentItem, "All *.log", true)
+            verify(all !== null && all.enabled, "no 'All *.log' for the data folder")
+            mouseClick(all)
+            tryCompare(popup, "opened", false)
+            verify(screen.paths.length >= 4, "the folder's logs were not all opened: " + screen.paths.length)
+            mouseClick(findText(screen, "Statistics", true))
+            const messages = findChild(screen, "messageTable")
+            tryVerify(() => messages.count > 0, 10000, "no message statistics")
+            verify(findChild(screen, "nodeTable").count > 0, "no node statistics")
+            verify(findChild(screen, "loadPlot").visible, "no bus load plot")
+            verify(findChild(screen, "statsSummary").text.indexOf("frames in") >= 0, findChild(screen, "statsSummary").text)
+            // candump_malformed.log: the skipped lines are said, with file:line
+            verify(findChild(screen, "statsError").text.indexOf("malformed") >= 0, findChild(screen, "statsError").text)
+        }
+
+        function test_the_debug_tab_offers_record_and_names_the_data_folder() {
+            const screen = createTemporaryObject(debugTab, root)
+            waitForRendering(screen)
+            mouseClick(findText(screen, "Record", true))
+            const button = findChild(screen, "recordButton")
+            verify(button !== null && button.visible, "no Record button")
+            compare(button.text, "● Record")
+            compare(findChild(screen, "recordState").text, "not recording")
+            verify(findText(screen, "/recordings/<date-time>", false) !== null, "the target folder is not shown")
+            verify(!findChild(screen, "analyseButton").visible, "Analyse before any recording")
+        }
+
         function test_the_on_screen_keyboard_types_a_search() {
             const screen = createTemporaryObject(canTab, root)
             waitForRendering(screen)
