@@ -12,7 +12,6 @@
 #include <limits>
 
 #include "openvcu/can/wire_time.hpp"
-#include "openvcu/trace/wire_bits.hpp"
 
 namespace openvcu::trace {
 namespace {
@@ -270,7 +269,7 @@ struct TraceStats::Impl {
       }
     }
 
-    const can::WireBits bits = frameWireBits(frame.frame);
+    const can::WireBits bits = can::wireBits(frame.frame);
     const std::uint32_t frameBits = bits.nominalBits + bits.dataBits;
     // The same arithmetic as can::wireTimeNs (one rounding per frame).
     std::int64_t wireNs = 0;

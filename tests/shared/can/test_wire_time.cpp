@@ -1,6 +1,8 @@
 // Wire time and bus load: exact bit counts checked against an independent oracle (the
 // whole frame built as a bit vector, CRC by polynomial long division, stuffing by looking
-// back at the stuffed output), hand-checked anchors, CAN FD field rules, the load meter.
+// back at the stuffed output), the table-driven classic count against the bit-by-bit
+// reference (detail::referenceWireBits) on 200,000 frames, hand-checked anchors, CAN FD
+// field rules, the load meter.
 
 #include <doctest/doctest.h>
 
@@ -9,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "openvcu/can/wire_bits_reference.hpp"
 #include "openvcu/can/wire_time.hpp"
 
 using namespace openvcu::can;
@@ -215,8 +218,11 @@ TEST_CASE("classic frame bit counts and CRCs equal the independent oracle's on r
     const Frame frame = randomFrame(random, false);
     const OracleResult expected = oracle(frame);
     const WireBits sut = wireBits(frame);
+    const WireBits reference = detail::referenceWireBits(frame);
     if (sut.nominalBits != expected.nominal || sut.dataBits != 0 || sut.stuffBits != expected.stuff ||
-        classicCrc15(frame) != expected.crc || frameBits(frame) != expected.nominal) {
+        classicCrc15(frame) != expected.crc || frameBits(frame) != expected.nominal ||
+        reference.nominalBits != expected.nominal || reference.stuffBits != expected.stuff ||
+        detail::referenceClassicCrc15(frame) != expected.crc) {
       ++mismatches;
       INFO("id " << frame.id << " flags " << int(frame.flags) << " length " << int(frame.length));
       CHECK(sut.nominalBits == expected.nominal);
@@ -226,6 +232,47 @@ TEST_CASE("classic frame bit counts and CRCs equal the independent oracle's on r
     if (mismatches > 5) break;
   }
   CHECK(mismatches == 0);
+}
+
+TEST_CASE("the table-driven count equals the bit-by-bit reference on random and stuffing-heavy frames") {
+  std::mt19937 random(21);  // fixed seed: the same frames every run
+  constexpr int FRAMES = 200'000;
+  constexpr int ERROR_FRAME_EVERY = 50;
+  int mismatches = 0;
+  int crcMismatches = 0;
+  for (int i = 0; i < FRAMES; ++i) {
+    Frame frame;
+    const std::uint32_t kind = random() % 8;
+    frame.flags = (kind & 1u) != 0 ? FLAG_EXTENDED : 0;
+    if (kind == 2) frame.flags |= FLAG_RTR;
+    if (kind == 4) frame.flags |= FLAG_FD | FLAG_BRS;
+    if (kind == 6 && i % ERROR_FRAME_EVERY == 0) frame.flags = FLAG_ERROR;
+    frame.id = static_cast<std::uint32_t>(random()) & (frame.extended() ? EXTENDED_ID_MASK : STANDARD_ID_MASK);
+    // Classic lengths up to 11: past 8 both count 8 bytes.
+    frame.length = static_cast<std::uint8_t>(random() % ((frame.flags & FLAG_FD) != 0 ? 65 : 12));
+    const std::uint32_t pattern = random() % 4;  // random bytes, all 0, all 1, runs
+    for (std::size_t b = 0; b < MAX_DATA_LENGTH; ++b) {
+      frame.data[b] = pattern == 0 ? static_cast<std::uint8_t>(random())
+                      : pattern == 1 ? 0x00
+                      : pattern == 2 ? 0xFF
+                                     : static_cast<std::uint8_t>((b / 2) % 2 != 0 ? 0xF8 : 0x07);
+    }
+    if (pattern != 0) frame.id = (frame.extended() ? EXTENDED_ID_MASK : STANDARD_ID_MASK) & (pattern == 2 ? ~0u : 0u);
+    if (!(wireBits(frame) == detail::referenceWireBits(frame))) {
+      ++mismatches;
+      if (mismatches <= 5) {
+        INFO("id " << frame.id << " flags " << int(frame.flags) << " length " << int(frame.length));
+        CHECK(wireBits(frame).nominalBits == detail::referenceWireBits(frame).nominalBits);
+        CHECK(wireBits(frame).stuffBits == detail::referenceWireBits(frame).stuffBits);
+      }
+    }
+    if (classicCrc15(frame) != detail::referenceClassicCrc15(frame)) ++crcMismatches;
+  }
+  CHECK(mismatches == 0);
+  CHECK(crcMismatches == 0);
+  const Frame known = repeated(0x555, 0xA5, 8);
+  CHECK(detail::referenceWireBits(known) == WireBits{111, 0, 0});
+  CHECK(wireBits(known) == WireBits{111, 0, 0});
 }
 
 TEST_CASE("CAN FD bit counts per phase equal the independent oracle's on random frames") {

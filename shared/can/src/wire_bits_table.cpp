@@ -1,23 +1,21 @@
-// frameWireBits: classic frames counted with a CRC-15 byte table and a bit-stuffing table.
+// detail::classicWireBits: the wire bits of a classic frame counted with a CRC-15 byte
+// table and a bit-stuffing table, the implementation behind can::wireBits / classicCrc15.
 //
 //   stuffing state = (length of the current run of equal bits 0..5, its bit value); a run
 //   of 5 owes a complementary stuff bit before the next bit (ISO 11898-1:2015, bit stuffing)
-#include "openvcu/trace/wire_bits.hpp"
-
+//   stuff table[state x 256 + byte] -> (stuff bits the byte's 8 bits add, next state)
+//
+// Why tables: the bit-by-bit count (wire_bits_reference.cpp) costs about 0.4 us a frame,
+// and can::BusLoadMeter and `vcu trace stats` count every frame they see.
 #include <algorithm>
 #include <array>
 #include <cstdint>
 
-namespace openvcu::trace {
+#include "wire_bits_internal.hpp"
+
+namespace openvcu::can::detail {
 namespace {
 
-/// CRC-15 generator x^15+x^14+x^10+x^8+x^7+x^4+x^3+1 without its x^15 term: 0x4599 (17817).
-constexpr std::uint16_t CRC15_POLYNOMIAL = 0x4599;
-constexpr std::uint16_t CRC15_MASK = 0x7FFF;
-constexpr unsigned CRC15_BITS = 15;
-constexpr unsigned STUFF_RUN = 5;
-/// CRC delimiter (1) + ACK slot (1) + ACK delimiter (1) + EOF (7) + intermission (3).
-constexpr std::uint32_t TRAILER_BITS = 13;
 /// SOF + 11-bit identifier + RTR + IDE + r0 + DLC (4).
 constexpr unsigned STANDARD_HEADER_BITS = 19;
 /// SOF + base identifier (11) + SRR + IDE + extension (18) + RTR + r1 + r0 + DLC (4).
@@ -29,7 +27,7 @@ struct Step {
   std::uint8_t stuffBits;
 };
 
-/// One frame bit through the stuffing state (as can::wireBits' BitCounter::push).
+/// One frame bit through the stuffing state (as the bit-by-bit counter's BitCounter::push).
 constexpr Step stuffStep(std::uint8_t state, bool bit) {
   unsigned run = state / 2;
   bool last = (state % 2) != 0;
@@ -88,14 +86,13 @@ __extension__ using Bits128 = unsigned __int128;  // SOF..CRC of a classic frame
 
 }  // namespace
 
-can::WireBits frameWireBits(const can::Frame& frame) noexcept {
-  if ((frame.flags & (can::FLAG_ERROR | can::FLAG_FD)) != 0) return can::wireBits(frame);
-  const bool remote = (frame.flags & can::FLAG_RTR) != 0;
-  const auto length = static_cast<std::uint8_t>(std::min<std::size_t>(frame.length, can::CLASSIC_DATA_LENGTH));
+WireBits classicWireBits(const Frame& frame, std::uint16_t& crcOut) noexcept {
+  const bool remote = (frame.flags & FLAG_RTR) != 0;
+  const auto length = static_cast<std::uint8_t>(std::min<std::size_t>(frame.length, CLASSIC_DATA_LENGTH));
   std::uint64_t header = 0;  // SOF (dominant 0) first
   unsigned headerBits = 0;
   if (frame.extended()) {
-    const std::uint32_t id = frame.id & can::EXTENDED_ID_MASK;
+    const std::uint32_t id = frame.id & EXTENDED_ID_MASK;
     header = (header << 11) | (id >> 18);
     header = (header << 2) | 0b11u;  // SRR, IDE recessive
     header = (header << 18) | (id & 0x3FFFFu);
@@ -103,7 +100,7 @@ can::WireBits frameWireBits(const can::Frame& frame) noexcept {
     header = (header << 2);  // r1, r0
     headerBits = EXTENDED_HEADER_BITS;
   } else {
-    header = (header << 11) | (frame.id & can::STANDARD_ID_MASK);
+    header = (header << 11) | (frame.id & STANDARD_ID_MASK);
     header = (header << 1) | (remote ? 1u : 0u);
     header = (header << 2);  // IDE (standard), r0
     headerBits = STANDARD_HEADER_BITS;
@@ -122,6 +119,7 @@ can::WireBits frameWireBits(const can::Frame& frame) noexcept {
     crc = crcByte(crc, frame.data[i]);
     stream = (stream << 8) | frame.data[i];
   }
+  crcOut = crc;
   stream = (stream << CRC15_BITS) | crc;
   const unsigned streamBits = headerBits + 8 * dataBytes + CRC15_BITS;
 
@@ -139,7 +137,7 @@ can::WireBits frameWireBits(const can::Frame& frame) noexcept {
     stuffBits += step.stuffBits;
   }
   if (state / 2 == STUFF_RUN) ++stuffBits;  // classic CAN sends a stuff bit still owed after the CRC
-  return can::WireBits{streamBits + stuffBits + TRAILER_BITS, 0, stuffBits};
+  return WireBits{streamBits + stuffBits + TRAILER_BITS, 0, stuffBits};
 }
 
-}  // namespace openvcu::trace
+}  // namespace openvcu::can::detail
