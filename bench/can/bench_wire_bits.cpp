@@ -62,5 +62,8 @@ int main(int argc, char** argv) {
   std::printf("can::frameBits: best %.1f ns/frame, median %.1f ns/frame (%ld frames x %ld passes, bits sum %llu)\n",
               nsPerFrame.front(), nsPerFrame[nsPerFrame.size() / 2], frameCount, passes,
               static_cast<unsigned long long>(bitsSum));
+  std::printf("RESULT frame_bits_best_ns=%.1f frame_bits_median_ns=%.1f frames=%ld passes=%ld bits_sum=%llu\n",
+              nsPerFrame.front(), nsPerFrame[nsPerFrame.size() / 2], frameCount, passes,
+              static_cast<unsigned long long>(bitsSum));
   return 0;
 }
