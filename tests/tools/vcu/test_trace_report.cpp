@@ -63,7 +63,9 @@ TEST_CASE("vcu trace report on a vcu record folder puts the FSM states and fault
                                              ipc::FaultSeverity::Critical, true, "isolation low"}));
   }
   const std::string html = (std::filesystem::path(VCU_TEST_WORK_DIR) / "report_record.html").string();
-  const RunResult result = runVcu({"trace", "report", "--dbc", dbc, folder.string(), "-o", html, "--signals", "OBC.Voltage"});
+  // the signal by its table key (NODE.MESSAGE.SIGNAL, as `vcu signal list` shows it)
+  const RunResult result =
+      runVcu({"trace", "report", "--dbc", dbc, folder.string(), "-o", html, "--signals", "OBC.OBC.Voltage"});
   INFO(result.err);
   CHECK(result.exitCode == EXIT_OK);
   CHECK(contains(result.out, "50 frames"));
@@ -82,6 +84,8 @@ TEST_CASE("vcu trace report names an unknown signal and a missing log") {
   const RunResult unknown = runVcu({"trace", "report", "--dbc", dbc, log, "-o", html, "--signals", "OBC.Current"});
   CHECK(unknown.exitCode == EXIT_INPUT_ERROR);
   CHECK(contains(unknown.err, "OBC.Current: no such signal"));
+  const RunResult wrongNode = runVcu({"trace", "report", "--dbc", dbc, log, "-o", html, "--signals", "VCU.OBC.Voltage"});
+  CHECK(wrongNode.exitCode == EXIT_INPUT_ERROR);  // OBC is sent by OBC, not VCU
   CHECK(contains(readText(html), "</html>"));  // written anyway, with what could be read
 
   const RunResult missing = runVcu({"trace", "report", "/nonexistent/drive.log", "-o", html});

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "diagnostics.hpp"
+#include "openvcu/config/catalog.hpp"
 #include "openvcu/ipc/event_log.hpp"
 #include "openvcu/trace/check.hpp"
 #include "openvcu/trace/frame_decoder.hpp"
@@ -98,6 +99,19 @@ class BucketedSeries {
   double m_durationS;
   std::vector<Bucket> m_buckets;
 };
+
+/// MESSAGE.SIGNAL, or the signal table's key of a bus signal (config::signalKey:
+/// TRANSMITTER.MESSAGE.SIGNAL, as `vcu signal list` shows it).
+std::optional<trace::SignalRef> findSignalByName(const dbc::Database& database, const std::string& name) {
+  if (std::optional<trace::SignalRef> ref = trace::findSignal(database, name)) return ref;
+  const std::size_t dot = name.find('.');
+  if (dot == std::string::npos) return std::nullopt;
+  std::optional<trace::SignalRef> ref = trace::findSignal(database, std::string_view(name).substr(dot + 1));
+  if (!ref) return std::nullopt;
+  const dbc::Message& message = database.messages[static_cast<std::size_t>(ref->message)];
+  if (config::signalKey(message, message.signals[ref->signal]) != name) return std::nullopt;
+  return ref;
+}
 
 std::string seriesName(const dbc::Database& database, trace::SignalRef ref) {
   const dbc::Message& message = database.messages[static_cast<std::size_t>(ref.message)];
@@ -192,9 +206,11 @@ ExitCode runReport(const ReportArguments& arguments, Streams streams) {
 
   std::vector<trace::SignalRef> refs;
   for (const std::string& name : arguments.signals) {
-    std::optional<trace::SignalRef> ref = trace::findSignal(database, name);
+    std::optional<trace::SignalRef> ref = findSignalByName(database, name);
     if (!ref) {
-      reportError(streams.err, "--signals " + name + ": no such signal in the DBC (MESSAGE.SIGNAL, as `vcu dbc info` lists them)");
+      reportError(streams.err, "--signals " + name +
+                                   ": no such signal in the DBC (MESSAGE.SIGNAL as `vcu dbc info` lists them, or the "
+                                   "table key NODE.MESSAGE.SIGNAL as `vcu signal list` does)");
       input.failed = true;
       continue;
     }
@@ -253,7 +269,8 @@ void addTraceReport(CLI::App& traceGroup, CommandContext& context) {
   command->footer(REPORT_FOOTER);
   addTraceInputOptions(*command, arguments->input);
   command->add_option("-o,--output", arguments->output, "the HTML file to write")->required()->option_text("FILE");
-  command->add_option("--signals", arguments->signals, "signals to draw: MESSAGE.SIGNAL,... (as in the DBC)")
+  command->add_option("--signals", arguments->signals,
+                      "signals to draw: MESSAGE.SIGNAL (as in the DBC) or NODE.MESSAGE.SIGNAL (the table key), comma-separated")
       ->delimiter(',')
       ->option_text("KEY,...");
   command->add_option("--title", arguments->title, "the report's heading (default: the first log's name)")
