@@ -11,14 +11,29 @@
 
 namespace openvcu::testing {
 
+/// The DBC signal of the catalog: the VIC's fast-update SOC in %, 0..100.
+inline signals::SignalInfo socSignalInfo() {
+  signals::SignalInfo soc;
+  soc.key = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC";
+  soc.unit = "%";
+  soc.minimum = 0;
+  soc.maximum = 100;
+  return soc;
+}
+
 inline signals::Catalog dashboardCatalog() {
   std::vector<signals::SignalInfo> infos;
-  infos.push_back({.key = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", .unit = "%", .minimum = 0, .maximum = 100});
-  signals::SignalInfo relay{
-      .key = "internal.relay.Cl15", .minimum = 0, .maximum = 1, .kind = signals::SignalKind::Internal};
+  infos.push_back(socSignalInfo());
+  signals::SignalInfo relay;
+  relay.key = "internal.relay.Cl15";
+  relay.minimum = 0;
+  relay.maximum = 1;
+  relay.kind = signals::SignalKind::Internal;
   relay.valueTexts = {{0, "Off"}, {1, "On"}};
   infos.push_back(relay);
-  signals::SignalInfo contactor{.key = "internal.fault.Contactor", .kind = signals::SignalKind::Internal};
+  signals::SignalInfo contactor;
+  contactor.key = "internal.fault.Contactor";
+  contactor.kind = signals::SignalKind::Internal;
   contactor.valueTexts = {{0, "Normal"}, {1, "Fault"}};
   infos.push_back(contactor);
   auto catalog = signals::Catalog::create(std::move(infos));

@@ -610,7 +610,7 @@ std::optional<std::string> checkBusLoad(const Schedule& schedule, const config::
     }
     const double load = config::cyclicBusLoad(frames, bus);
     if (load <= config::MAX_CYCLIC_BUS_LOAD) continue;
-    std::sort(shares.begin(), shares.end(), [](const Share& a, const Share& b) { return a.load > b.load; });
+    std::sort(shares.begin(), shares.end(), [](const Share& left, const Share& right) { return left.load > right.load; });
     const auto percent = [](double share) {
       std::ostringstream text;
       text << std::fixed << std::setprecision(1) << share * 100 << " %";

@@ -85,10 +85,6 @@ struct Fixture : openvcu::testing::VehicleTable {
   }
 };
 
-std::vector<std::uint8_t> bytes(const j1939::TpFrame& frame) {
-  return {frame.data.begin(), frame.data.begin() + frame.length};
-}
-
 }  // namespace
 
 TEST_CASE("a frame is decoded into the bus plane with its time, source address and quality") {

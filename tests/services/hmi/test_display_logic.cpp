@@ -38,7 +38,9 @@ TEST_CASE("a fresh valid bus value is Ready, an old one Stale, a never written o
 }
 
 TEST_CASE("a commanded value without a bus value is Ready and shown and the bus value wins when there is one") {
-  signals::SignalInfo internal{.key = "internal.operator.Start", .kind = signals::SignalKind::Internal};
+  signals::SignalInfo internal;
+  internal.key = "internal.operator.Start";
+  internal.kind = signals::SignalKind::Internal;
   internal.direction = signals::SignalDirection::Internal;
   signals::SlotSnapshot slot;
   slot.command = {.value = 1, .timestampNs = 5, .writer = 3, .updates = 1};
@@ -51,7 +53,9 @@ TEST_CASE("a commanded value without a bus value is Ready and shown and the bus 
 }
 
 TEST_CASE("a received signal shows only what came from the bus, never a command (#20)") {
-  signals::SignalInfo received{.key = "BMS.Status.SOC", .kind = signals::SignalKind::Bus};
+  signals::SignalInfo received;
+  received.key = "BMS.Status.SOC";
+  received.kind = signals::SignalKind::Bus;
   received.direction = signals::SignalDirection::Received;
   signals::SlotSnapshot slot;
   slot.command = {.value = 1, .timestampNs = 5, .writer = 240, .updates = 1};
@@ -128,7 +132,8 @@ TEST_CASE(
   HealthTracker sut({"vcu-fsm"}, STALE_AFTER_NS);
   REQUIRE(sut.services().size() == 1);
   CHECK(sut.statusOf(sut.services()[0], 0) == ValueStatus::NotConnected);
-  ipc::Heartbeat beat{.service = "vcu-fsm", .pid = 100, .uptimeMs = 10, .status = "ready"};
+  ipc::Heartbeat beat{
+      .service = "vcu-fsm", .instance = {}, .pid = 100, .uptimeMs = 10, .counters = {}, .status = "ready"};
   CHECK_FALSE(sut.onHeartbeat(beat, 10 * SECOND_NS));
   const ServiceHealth& fsm = sut.services()[0];
   CHECK(sut.statusOf(fsm, 11 * SECOND_NS) == ValueStatus::Ready);
@@ -152,7 +157,7 @@ TEST_CASE("a command is answered by its own ack only, refused with the reason, o
   CHECK(first.requestId == 41);
   CHECK(second.requestId == 42);
   CHECK(first.issuer == "vcu-hmi");
-  CHECK_FALSE(sut.onAck({.requestId = 41, .issuer = "vcu", .responder = "vcu-fsm", .accepted = true}));
+  CHECK_FALSE(sut.onAck({.requestId = 41, .issuer = "vcu", .responder = "vcu-fsm", .accepted = true, .reason = {}, .owner = true}));
   const auto refused = sut.onAck({.requestId = 41,
                                   .issuer = "vcu-hmi",
                                   .responder = "vcu-fsm",

@@ -269,7 +269,8 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   CHECK_FALSE(sut.candidates("hvessd").contains("HVESSD2_PGN61585"));
   // heartbeat counters of the old names change nothing: the schedule has its own channel
   stack->events()->publish(ipc::Heartbeat{
-      .service = "vcu-can-tx", .instance = "x", .pid = 1, .counters = {{"tx.CCVS1_PGN65265.cycle_us", 7'000}}});
+      .service = "vcu-can-tx", .instance = "x", .pid = 1, .counters = {{"tx.CCVS1_PGN65265.cycle_us", 7'000}},
+      .status = "ok"});
   deliver(*stack);
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
 }

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "dashboard_test_catalog.hpp"
 #include "openvcu/config/dashboard.hpp"
 
 using namespace openvcu;
@@ -13,7 +14,7 @@ using namespace openvcu::config;
 
 TEST_CASE("#19 a dashboard file with a key given twice is refused with both places") {
   std::vector<signals::SignalInfo> infos;
-  infos.push_back({.key = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC", .unit = "%", .minimum = 0, .maximum = 100});
+  infos.push_back(openvcu::testing::socSignalInfo());
   auto catalog = signals::Catalog::create(std::move(infos));
   REQUIRE(catalog);
 

@@ -107,8 +107,8 @@ class FakeService {
       std::strncpy(address.sun_path, socketPath.c_str(), sizeof(address.sun_path) - 1);
       const bool up = ::connect(probe, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0;
       ::close(probe);
-      std::ifstream arguments(cmdline, std::ios::binary);
-      const std::string text((std::istreambuf_iterator<char>(arguments)), std::istreambuf_iterator<char>());
+      std::ifstream cmdlineFile(cmdline, std::ios::binary);
+      const std::string text((std::istreambuf_iterator<char>(cmdlineFile)), std::istreambuf_iterator<char>());
       if (up && text.find(script) != std::string::npos) return;
       ::usleep(10'000);
     }
