@@ -157,7 +157,10 @@ void VehicleModel::receive(const can::Frame& frame, std::int64_t atNs) noexcept 
   // without its SHM: MissingHeader), unless another frame just took its SHM: that pair has
   // its verdict already (one per SHM, so a fault is reported as what it is, not flipping).
   // Other frames of its identity are ordinary frames.
+  // Asleep, the VIC checks no pairs (a powered-down ECU has no receiver state): the pairs the
+  // VCU sends while it wakes or after it went to sleep are neither used nor refused.
   for (Pair& pair : m_pairs) {
+    if (!m_awake) break;
     const std::uint32_t dataId = pair.checker.dataCanId();
     if (frame.extended() && j1939::sameSafetyIdentity(frame.id, pair.headerId)) {
       const auto header = j1939::parseSafetyHeader(frame.payload());
@@ -223,7 +226,16 @@ void VehicleModel::stepVic(std::int64_t nowNs, double dt, bool wake) {
   const bool keepAlive = recent(m_ccvsAny) && recent(m_hvesscAny) && recent(m_crashType);
   const bool wasAwake = m_awake;
   m_awake = keepAlive && wake;
-  if (m_awake != wasAwake) m_bus->setSilent("VIC", !m_awake);
+  if (m_awake != wasAwake) {
+    m_bus->setSilent("VIC", !m_awake);
+    // Woken, its J1939-76 receivers start without history: the first pair synchronises, and
+    // the gap since the pairs it saw before it slept is no cycle timeout.
+    for (Pair& pair : m_pairs) {
+      pair.checker.reset();
+      pair.awaitingData = false;
+      pair.headerTakenByOther = false;
+    }
+  }
   // the relay request lapses when no good pair came for the keep-alive timeout
   const bool pairsFresh = m_lastGoodPairNs != 0 && nowNs - m_lastGoodPairNs <= m_config->keepAliveTimeoutNs;
   const int request = pairsFresh ? static_cast<int>(std::lround(m_relayRequest)) : 0;

@@ -154,6 +154,27 @@ TEST_CASE("pairs with a bad CRC are refused and the VIC does not connect, and sa
   CHECK_FALSE(f.model->takeSafetyChange());  // reported once, not per pair
 }
 
+TEST_CASE("the VIC judges no pairs while asleep and after waking again its first pair synchronises and none is refused") {
+  Fixture f;
+  f.run(T0, T0 + 1000 * MS, 3);
+  REQUIRE(f.model->connection() == 1);
+  const std::uint64_t okBefore = f.model->safety().ok;
+  const auto send = [](std::size_t, const can::Frame&) {};
+  f.model->step(T0 + 2300 * MS, 0, true, send);  // the VCU stopped: no keep-alive for over 1 s
+  REQUIRE_FALSE(f.model->awake());
+  // pairs resume 10 s later (far past the SCT): judged neither while it sleeps nor once woken
+  f.run(T0 + 12'000 * MS, T0 + 13'000 * MS, 3);
+  CHECK(f.model->awake());
+  CHECK(f.model->safety().refused == 0);
+  CHECK(f.model->safety().ok > okBefore + 40);
+  CHECK(f.model->connection() == 1);
+
+  // awake, a gap past the SCT is still refused (CycleTimeout): the check itself is unchanged
+  f.run(T0 + 13'500 * MS, T0 + 13'600 * MS, 3);  // 500 ms without a pair, the keep-alive (1 s) not lost
+  CHECK(f.model->awake());
+  CHECK(f.model->safety().refused == 1);
+}
+
 TEST_CASE("a battery fault reports 14 and clears to awaiting, the keep-alive lost sends the VIC to sleep") {
   Fixture f;
   f.run(T0, T0 + 1000 * MS, 3);
@@ -185,6 +206,10 @@ TEST_CASE("issue 18: a frame with S1_ES's PGN, SA and DA between its SHM and SDM
   shm.length = 8;
   std::copy(header.begin(), header.end(), shm.data.begin());
 
+  f.run(T0 - 200 * MS, T0 - 20 * MS, 0);  // awake (asleep, the VIC checks no pairs)
+  REQUIRE(f.model->awake());
+  REQUIRE(f.model->safety().refused == 0);
+  const std::uint64_t okAwake = f.model->safety().ok;
   f.model->receive(shm, T0);
   f.model->receive(propA, T0 + 100'000);
   CHECK(f.model->safety().last == j1939::SafetyResult::CrcMismatch);  // PropA_C4 taken as the SDM
@@ -200,7 +225,7 @@ TEST_CASE("issue 18: a frame with S1_ES's PGN, SA and DA between its SHM and SDM
   f.betweenShmAndSdm.push_back(propA);  // every pair so: the VIC never connects
   f.run(T0 + 20 * MS, T0 + 1000 * MS, 3);
   CHECK(f.model->connection() == 0);
-  CHECK(f.model->safety().ok == 0);
+  CHECK(f.model->safety().ok == okAwake);
   CHECK(f.model->safety().last == j1939::SafetyResult::CrcMismatch);  // the cause, every pair
 }
 
