@@ -163,4 +163,9 @@ printf '   %s\n' "${results[@]}"
 echo "   targets: p99 <= 1000 us, no timeout; idle CPU <= $idleTarget %: $( ((status == 0)) && echo met || echo "NOT met")"
 echo "== vcu-fsm log (last lines)"
 tail -n 5 "$work/fsm.log"
+# one machine-readable line: the worst latency run and the idle CPU (schedstat)
+printf '%s\n' "${results[@]}" | awk -v met="$( ((status == 0)) && echo 1 || echo 0)" '
+  $1 == "idle" { idle = $9; next }
+  { if ($4 + 0 > p99) p99 = $4 + 0; if ($6 + 0 > max) max = $6 + 0; timeouts += $7 }
+  END { printf "RESULT latency_p99_us=%s latency_max_us=%s timeouts=%d idle_cpu_pct=%s targets_met=%d\n", p99, max, timeouts, idle, met }'
 exit "$status"

@@ -17,7 +17,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 bin=${OPENVCU_BIN:-$root/build/bin}
 config=$root/config/hhea/vehicle.json
 run=$(mktemp -d)
-export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run XDG_RUNTIME_DIR=$run/xdg
+export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run XDG_RUNTIME_DIR=$run/xdg OPENVCU_ROUDI=$root/config/iceoryx/iox-roudi.sh
 mkdir -m 700 "$run/xdg"
 sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
 supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
@@ -58,9 +58,14 @@ measure() {  # $1 = label, $2 = --renderer, $3 = more vcu-hmi options, $4 = seco
   fps=$(grep '^fps ' "$run/$label.out" | tail -n +3 | awk '{print $2}' | sort -n)
   local n
   n=$(echo "$fps" | wc -l)
-  printf '%-10s %8s %8s %8.1f %10.1f\n' "$label" "$(echo "$fps" | sed -n "$(( (n + 1) / 2 ))p")" \
-    "$(echo "$fps" | head -1)" "$(echo "100 * $used / $hz / ($t1 - $t0)" | bc -l)" "$(echo "$rss / 1024" | bc -l)"
+  local p50 cpu mb
+  p50=$(echo "$fps" | sed -n "$(( (n + 1) / 2 ))p")
+  cpu=$(printf '%.1f' "$(echo "100 * $used / $hz / ($t1 - $t0)" | bc -l)")
+  mb=$(printf '%.1f' "$(echo "$rss / 1024" | bc -l)")
+  printf '%-10s %8s %8s %8s %10s\n' "$label" "$p50" "$(echo "$fps" | head -1)" "$cpu" "$mb"
+  result+=" ${label//[-+]/_}_fps=${p50:-0} ${label//[-+]/_}_cpu_pct=$cpu ${label//[-+]/_}_rss_mb=$mb"
 }
+result=""
 
 measure offscreen software "" "$seconds" QT_QPA_PLATFORM=offscreen
 measure off-frames software "--can-page frames" "$seconds" QT_QPA_PLATFORM=offscreen
@@ -75,3 +80,4 @@ if command -v Xvfb >/dev/null; then
   measure xvfb-sw software "" "$seconds" QT_QPA_PLATFORM=xcb DISPLAY=:7
   measure xvfb-frames software "--can-page frames" "$seconds" QT_QPA_PLATFORM=xcb DISPLAY=:7
 fi
+echo "RESULT${result}"

@@ -56,7 +56,10 @@ void pace(const timespec& start, std::int64_t periodUs, std::size_t index) {
   }
 }
 
-void report(const std::string& title, std::vector<std::int64_t> latenciesNs, std::size_t expected) {
+/// The final RESULT line's fields (key prefix per measurement).
+std::string g_result;
+
+void report(const std::string& title, const char* key, std::vector<std::int64_t> latenciesNs, std::size_t expected) {
   std::sort(latenciesNs.begin(), latenciesNs.end());
   auto percentile = [&](double p) {
     if (latenciesNs.empty()) return 0.0;
@@ -66,6 +69,10 @@ void report(const std::string& title, std::vector<std::int64_t> latenciesNs, std
   std::printf("%-58s n=%zu/%zu  p50 %7.1f us  p90 %7.1f us  p99 %7.1f us  max %8.1f us\n", title.c_str(),
               latenciesNs.size(), expected, percentile(0.50), percentile(0.90), percentile(0.99),
               latenciesNs.empty() ? 0.0 : static_cast<double>(latenciesNs.back()) / 1000.0);
+  char fields[160];
+  std::snprintf(fields, sizeof fields, " %s_n=%zu %s_p50_us=%.1f %s_p99_us=%.1f", key, latenciesNs.size(), key,
+                percentile(0.50), key, percentile(0.99));
+  g_result += fields;
   std::fflush(stdout);
 }
 
@@ -133,7 +140,7 @@ bool measureFrames(const Options& options) {
     if (takenThisWake > 1) ++batchedWakes;
   }
   publisher->wait(10s);
-  report("frames: publish -> Waiter wake -> take (iceoryx)", std::move(latencies), options.samples);
+  report("frames: publish -> Waiter wake -> take (iceoryx)", "frames", std::move(latencies), options.samples);
   std::printf("  (wake-ups that found more than one sample, i.e. the reader was late: %zu)\n", batchedWakes);
   return true;
 }
@@ -176,7 +183,7 @@ bool measureEvents(const Options& options, bool throughWaiter) {
   publisher->wait(10s);
   report(throughWaiter ? "events: publish -> Waiter::attachFd wake -> callback (LCM udpm)"
                        : "events: publish -> EventBus::handle -> callback (LCM udpm)",
-         std::move(latencies), options.samples);
+         throughWaiter ? "events_waiter" : "events", std::move(latencies), options.samples);
   return true;
 }
 
@@ -226,5 +233,6 @@ int main(int argc, char** argv) {
   std::printf("%zu samples after %zu warm-up, one every %lld us, two processes\n", options.samples, WARM_UP_SAMPLES,
               static_cast<long long>(options.periodUs));
   const bool ok = measureFrames(options) && measureEvents(options, false) && measureEvents(options, true);
+  std::printf("RESULT ok=%d%s\n", ok ? 1 : 0, g_result.c_str());
   return ok ? 0 : 1;
 }

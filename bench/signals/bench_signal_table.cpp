@@ -68,8 +68,18 @@ SignalTable attach(const Catalog& catalog, const std::string& instance) {
   return std::move(openResult).value();
 }
 
-void report(const char* what, double nsPerOp) {
+/// The final RESULT line's fields, gathered as the passes run.
+std::string g_result;
+
+void addResult(const char* key, double value) {
+  char field[96];
+  std::snprintf(field, sizeof field, " %s=%.1f", key, value);
+  g_result += field;
+}
+
+void report(const char* what, double nsPerOp, const char* key = nullptr) {
   std::printf("  %-58s %8.1f ns/op\n", what, nsPerOp);
+  if (key != nullptr) addResult(key, nsPerOp);
 }
 
 /// Runs `operation(i)` `count` times; ns per call.
@@ -89,7 +99,7 @@ void singleProcess(SignalTable& table, const Options& options) {
   const std::uint64_t n = options.operations;
   report("writeBus, same slot", timePerOp(n, [&](std::uint64_t i) {
            table.writeBus(HOT_SLOT, static_cast<double>(i), static_cast<std::int64_t>(i), 0xF3, Quality::Valid);
-         }));
+         }), "write_ns");
   report("writeBus, 1000 slots round robin", timePerOp(n, [&](std::uint64_t i) {
            table.writeBus(static_cast<SignalIndex>(i % SIGNALS), static_cast<double>(i), static_cast<std::int64_t>(i),
                           0xF3, Quality::Valid);
@@ -100,7 +110,7 @@ void singleProcess(SignalTable& table, const Options& options) {
   report("markBusQuality, same slot", timePerOp(n, [&](std::uint64_t i) {
            table.markBusQuality(HOT_SLOT, (i & 1) != 0 ? Quality::Stale : Quality::Valid);
          }));
-  report("readBus, same slot", timePerOp(n, [&](std::uint64_t) { g_sink = table.readBus(HOT_SLOT)->value; }));
+  report("readBus, same slot", timePerOp(n, [&](std::uint64_t) { g_sink = table.readBus(HOT_SLOT)->value; }), "read_ns");
   report("readBus, 1000 slots round robin",
          timePerOp(n, [&](std::uint64_t i) { g_sink = table.readBus(static_cast<SignalIndex>(i % SIGNALS))->value; }));
   report("read (all three planes), same slot",
@@ -165,12 +175,12 @@ void twoProcesses(SignalTable& table, const Catalog& catalog, const std::string&
   std::printf("two processes (on separate CPUs when the machine has them):\n");
   withChildren(catalog, instance, {ChildRole::Write}, n, [&] {
     report("readBus while another process writes that slot",
-           timePerOp(n, [&](std::uint64_t) { g_sink = table.readBus(HOT_SLOT)->value; }));
+           timePerOp(n, [&](std::uint64_t) { g_sink = table.readBus(HOT_SLOT)->value; }), "read_contended_ns");
   });
   withChildren(catalog, instance, {ChildRole::Read}, n, [&] {
     report("writeBus while another process reads that slot", timePerOp(n, [&](std::uint64_t i) {
              table.writeBus(HOT_SLOT, static_cast<double>(i), static_cast<std::int64_t>(i), 0, Quality::Valid);
-           }));
+           }), "write_contended_ns");
   });
   withChildren(catalog, instance, {ChildRole::WriteOtherSlot}, n, [&] {
     report("writeBus while another process writes another slot", timePerOp(n, [&](std::uint64_t i) {
@@ -245,6 +255,8 @@ void notificationLatency(SignalTable& table, const Catalog& catalog, const std::
   std::sort(latencies.begin(), latencies.end());
   std::printf("notification latency, write -> waiter awake in another process (%zu samples of %llu writes):\n",
               latencies.size(), static_cast<unsigned long long>(options.notifications));
+  addResult("notify_p50_us", static_cast<double>(percentile(latencies, 0.50)) / 1e3);
+  addResult("notify_p99_us", static_cast<double>(percentile(latencies, 0.99)) / 1e3);
   std::printf("  p50 %.1f us, p90 %.1f us, p99 %.1f us, p99.9 %.1f us, max %.1f us\n",
               static_cast<double>(percentile(latencies, 0.50)) / 1e3,
               static_cast<double>(percentile(latencies, 0.90)) / 1e3,
@@ -289,5 +301,6 @@ int main(int argc, char** argv) {
   notificationLatency(table, catalog, instance, options);
 
   (void)SignalTable::remove(instance);
+  std::printf("RESULT%s\n", g_result.c_str());
   return 0;
 }
