@@ -97,11 +97,22 @@ std::int64_t VirtualBus::nextDueNs() const noexcept {
 }
 
 void VirtualBus::start(std::int64_t nowNs) noexcept {
-  std::int64_t stagger = 0;
-  for (Tx& tx : m_tx) {
+  // Each node sends its messages from one task, as an ECU does: a node's messages share a
+  // phase, and the nodes are 1 ms apart in the order they first appear.
+  std::size_t phases = 0;
+  for (std::size_t i = 0; i < m_tx.size(); ++i) {
+    Tx& tx = m_tx[i];
     if (tx.cycleNs <= 0) continue;
-    tx.nextNs = nowNs + (stagger % tx.cycleNs);
-    stagger += 1'000'000;
+    std::size_t phase = phases;
+    for (std::size_t j = 0; j < i; ++j) {
+      if (m_tx[j].cycleNs > 0 && m_tx[j].node == tx.node) {
+        phase = m_tx[j].phase;
+        break;
+      }
+    }
+    if (phase == phases) ++phases;
+    tx.phase = phase;
+    tx.nextNs = nowNs + (static_cast<std::int64_t>(phase) * 1'000'000) % tx.cycleNs;
   }
 }
 

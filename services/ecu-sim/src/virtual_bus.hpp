@@ -69,7 +69,7 @@ class VirtualBus {
   void sendNow(std::size_t message, std::int64_t nowNs, Send&& send);
   [[nodiscard]] std::int64_t nextDueNs() const noexcept;
 
-  /// Starts the cycles at `nowNs` (each message after its own cycle, staggered by 1 ms steps).
+  /// Starts the cycles at `nowNs`: a node's messages share one phase, the nodes 1 ms apart.
   void start(std::int64_t nowNs) noexcept;
 
   /// Silences (or revives) every message `node` transmits. false for an unknown node.
@@ -87,6 +87,7 @@ class VirtualBus {
     can::Frame frame;
     std::int64_t cycleNs{};  ///< 0: on request only
     std::int64_t nextNs{NEVER};
+    std::size_t phase{};  ///< its node's phase in ms (start())
     bool silent{};
   };
   struct Rx {
