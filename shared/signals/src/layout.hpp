@@ -205,13 +205,17 @@ inline bool storeWord(Plane& plane, std::uint64_t ticket, std::size_t index, std
   return false;
 }
 
-/// A whole write: claim a ticket, then store the five words in order.
-inline void writePlane(Plane& plane, const Payload& payload) noexcept {
-  const std::uint64_t ticket = claimTicket(plane);
+/// Step 2 for all five words in order.
+inline void storeEntry(Plane& plane, std::uint64_t ticket, const Payload& payload) noexcept {
   const auto chunks = chunksOf(payload);
   for (std::size_t i = 0; i < ENTRY_WORDS; ++i) {
     if (!storeWord(plane, ticket, i, chunks[i])) return;
   }
+}
+
+/// A whole write: claim a ticket, then store the five words in order.
+inline void writePlane(Plane& plane, const Payload& payload) noexcept {
+  storeEntry(plane, claimTicket(plane), payload);
 }
 
 /// The entry of `ticket` if all five words carry its tag.

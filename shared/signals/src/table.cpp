@@ -237,8 +237,9 @@ TableInfo SignalTable::info() const {
 // Those adds are totally ordered: if the writer's comes first, the watch's add acquires the
 // writer's release and the watcher's first look sees the value; if the watch's comes first,
 // the writer's add acquires the watch's release and this load sees the bit.
-void SignalTable::notify(detail::Plane& plane) noexcept {
+void SignalTable::notify(detail::Plane& plane, bool changed) noexcept {
   detail::notifyChange(m_header->changeWord);
+  if (!changed) return;  // the same value again: the table's epoch moves, the watches sleep on
   std::uint64_t mask = plane.watchers.load(std::memory_order_relaxed);
   while (mask != 0) {
     const int bit = std::countr_zero(mask);
@@ -247,11 +248,36 @@ void SignalTable::notify(detail::Plane& plane) noexcept {
   }
 }
 
+namespace {
+
+/// Writes `entry` into `plane` and says whether it differs from the write just before it in
+/// ticket order (value bits or aux: source, quality as marked, writer, override flag); the
+/// time stamp alone is no change. When that write cannot be read (still being written by
+/// another writer, or lapped) the answer is "changed": a watch may wake for nothing, never
+/// miss a change.
+bool writeAndCompare(detail::Plane& plane, const detail::Payload& entry, bool busPlane) noexcept {
+  const std::uint64_t ticket = detail::claimTicket(plane);
+  bool changed = true;
+  detail::Record previous;
+  if (ticket > 1 && detail::readEntry(plane, ticket - 1, previous)) {
+    std::uint32_t aux = previous.payload.aux;
+    std::uint8_t marked{};
+    if (busPlane && detail::markedQuality(plane, ticket - 1, marked)) {
+      aux = (aux & LOW_16_BITS) | std::uint32_t{marked} << QUALITY_SHIFT;
+    }
+    changed = previous.payload.valueBits != entry.valueBits || aux != entry.aux;
+  }
+  detail::storeEntry(plane, ticket, entry);
+  return changed;
+}
+
+}  // namespace
+
 bool SignalTable::writeBus(SignalIndex index, double value, std::int64_t timestampNs, std::uint16_t source,
                            Quality quality) noexcept {
   if (index >= m_slotCount) return false;
-  detail::writePlane(m_slots[index].bus, payload(value, timestampNs, busAux(source, quality)));
-  notify(m_slots[index].bus);
+  const bool changed = writeAndCompare(m_slots[index].bus, payload(value, timestampNs, busAux(source, quality)), true);
+  notify(m_slots[index].bus, changed);
   return true;
 }
 
@@ -260,29 +286,34 @@ bool SignalTable::markBusQuality(SignalIndex index, Quality quality) noexcept {
   detail::Plane& plane = m_slots[index].bus;
   detail::Record current;
   if (!detail::readPlane(plane, current) || current.ticket == 0) return false;
+  auto before = static_cast<std::uint8_t>(current.payload.aux >> QUALITY_SHIFT);
+  std::uint8_t marked{};
+  if (detail::markedQuality(plane, current.ticket, marked)) before = marked;
   detail::markQuality(plane, current.ticket, static_cast<std::uint8_t>(quality));
-  notify(plane);
+  notify(plane, before != static_cast<std::uint8_t>(quality));
   return true;
 }
 
 bool SignalTable::writeCommand(SignalIndex index, double value, std::int64_t timestampNs, WriterId writer) noexcept {
   if (index >= m_slotCount) return false;
-  detail::writePlane(m_slots[index].command, payload(value, timestampNs, writer));
-  notify(m_slots[index].command);
+  const bool changed = writeAndCompare(m_slots[index].command, payload(value, timestampNs, writer), false);
+  notify(m_slots[index].command, changed);
   return true;
 }
 
 bool SignalTable::setOverride(SignalIndex index, double value, std::int64_t timestampNs, WriterId writer) noexcept {
   if (index >= m_slotCount) return false;
-  detail::writePlane(m_slots[index].override, payload(value, timestampNs, overrideAux(writer, true)));
-  notify(m_slots[index].override);
+  const bool changed =
+      writeAndCompare(m_slots[index].override, payload(value, timestampNs, overrideAux(writer, true)), false);
+  notify(m_slots[index].override, changed);
   return true;
 }
 
 bool SignalTable::clearOverride(SignalIndex index, std::int64_t timestampNs, WriterId writer) noexcept {
   if (index >= m_slotCount) return false;
-  detail::writePlane(m_slots[index].override, payload(0.0, timestampNs, overrideAux(writer, false)));
-  notify(m_slots[index].override);
+  const bool changed =
+      writeAndCompare(m_slots[index].override, payload(0.0, timestampNs, overrideAux(writer, false)), false);
+  notify(m_slots[index].override, changed);
   return true;
 }
 

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <chrono>
 #include <thread>
 #include <vector>
@@ -52,6 +53,59 @@ TEST_CASE("a watch's epoch moves for every plane and quality mark of its signals
   sut.setOverride(3, 1.0, TIME_NS, WRITER);
   sut.clearOverride(3, TIME_NS, WRITER);
   CHECK(watch.epoch() == before + 5);
+}
+
+TEST_CASE("a watch wakes for a change of its signals, not for the same value written again (the table's epoch moves for both)") {
+  const ScopedInstance instance("watch-change");
+  SignalTable sut = openTable(makeNumberedCatalog(2), instance.name());
+  const std::array<SignalIndex, 1> watched{1};
+  SignalWatch watch = sut.watch(watched);
+  REQUIRE(watch.dedicated());
+  std::uint32_t epoch = watch.epoch();
+  const auto moved = [&] {
+    const std::uint32_t now = watch.epoch();
+    const bool result = now != epoch;
+    epoch = now;
+    return result;
+  };
+
+  CHECK(sut.writeBus(1, 5.0, TIME_NS, 0x21, Quality::Valid));
+  CHECK(moved());  // the first write
+  const std::uint32_t tableBefore = sut.changeEpoch();
+  for (int i = 1; i <= 20; ++i) sut.writeBus(1, 5.0, TIME_NS + i, 0x21, Quality::Valid);  // newer stamps only
+  CHECK_FALSE(moved());
+  CHECK(sut.changeEpoch() != tableBefore);  // `vcu signal watch` and fallback watches still see every write
+  CHECK(sut.readBus(1)->timestampNs == TIME_NS + 20);
+
+  sut.writeBus(1, 6.0, TIME_NS, 0x21, Quality::Valid);
+  CHECK(moved());  // value
+  sut.writeBus(1, 6.0, TIME_NS, 0x22, Quality::Valid);
+  CHECK(moved());  // source
+  sut.writeBus(1, 6.0, TIME_NS, 0x22, Quality::OutOfRange);
+  CHECK(moved());  // quality
+  sut.markBusQuality(1, Quality::Stale);
+  CHECK(moved());
+  sut.markBusQuality(1, Quality::Stale);
+  CHECK_FALSE(moved());  // marked stale again: no change
+  sut.writeBus(1, 6.0, TIME_NS, 0x22, Quality::OutOfRange);
+  CHECK(moved());  // the write replaces a mark of Stale with OutOfRange
+  sut.writeBus(1, std::nan(""), TIME_NS, 0x22, Quality::OutOfRange);
+  CHECK(moved());
+  sut.writeBus(1, std::nan(""), TIME_NS, 0x22, Quality::OutOfRange);
+  CHECK_FALSE(moved());  // the same bits
+
+  sut.writeCommand(1, 1.0, TIME_NS, WRITER);
+  CHECK(moved());
+  sut.writeCommand(1, 1.0, TIME_NS + 1, WRITER);
+  CHECK_FALSE(moved());
+  sut.writeCommand(1, 1.0, TIME_NS + 2, WRITER + 1);
+  CHECK(moved());  // another writer
+  sut.setOverride(1, 2.0, TIME_NS, WRITER);
+  CHECK(moved());
+  sut.setOverride(1, 2.0, TIME_NS, WRITER);
+  CHECK_FALSE(moved());
+  sut.clearOverride(1, TIME_NS, WRITER);
+  CHECK(moved());
 }
 
 TEST_CASE("a watch's wait sleeps through other signals' writes and wakes for its own") {

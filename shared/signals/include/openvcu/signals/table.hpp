@@ -152,9 +152,10 @@ struct TableDamage {
 /// @note thread-safe and process-safe: any number of threads and processes may call any
 ///       method concurrently. Every per-signal method is noexcept, allocation-free,
 ///       lock-free and free of system calls (except the wake described at waitForChange).
-/// A watch on chosen signals (SignalTable::watch): its epoch moves when one of them is
-/// written on any plane or has its quality marked, and not for the rest of the table's
-/// traffic, so a thread that reacts to a few signals sleeps while can-rx writes hundreds.
+/// A watch on chosen signals (SignalTable::watch): its epoch moves when one of them changes
+/// on any plane (value bits, quality, source, writer, override flag; a newer time stamp
+/// alone is no change), and not for the rest of the table's traffic, so a thread that reacts
+/// to a few signals sleeps while can-rx writes hundreds and rewrites the same values.
 ///
 ///   signals::SignalWatch watch = table.watch(myIndexes);
 ///   for (;;) { const auto epoch = watch.epoch(); react(); (void)watch.wait(epoch, 250ms); }
@@ -267,8 +268,9 @@ class SignalTable {
   ///       call for the first change after a waiter went to sleep and none otherwise.
   std::uint32_t waitForChange(std::uint32_t lastEpoch, std::chrono::nanoseconds timeout) const noexcept;
 
-  /// A watch on `indexes` (indexes out of range are ignored): woken only by writes and
-  /// quality marks of those signals. Takes one of the table's 32 watch entries: a free
+  /// A watch on `indexes` (indexes out of range are ignored): woken only by changes of
+  /// those signals (a write whose value bits or aux differ from the write before it, or a
+  /// quality mark that changes the quality; the table's epoch moves for every write). Takes one of the table's 32 watch entries: a free
   /// one, or one whose owner is gone (its pid no longer exists) and has not waited for
   /// WATCH_LEASE. Clears the bits a previous owner
   /// left in every slot, then sets its own. With no entry free the watch falls back to the
@@ -304,7 +306,8 @@ class SignalTable {
   SignalTable(int lockFd, int segmentFd, void* base, std::size_t bytes, std::uint64_t layoutHash,
               std::uint32_t slotCount, std::uint64_t generation, std::string name, bool created) noexcept;
   void release() noexcept;
-  void notify(detail::Plane& plane) noexcept;
+  /// Moves the table's epoch; and the epochs of the plane's watches when `changed`.
+  void notify(detail::Plane& plane, bool changed) noexcept;
 
   int m_lockFd{-1};  ///< holds LOCK_SH on the lock file for as long as we are attached
   int m_segmentFd{-1};  ///< the segment, read-write: restores its size after a truncation
