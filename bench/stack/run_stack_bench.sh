@@ -40,7 +40,7 @@ names=(roudi can-rx can-tx fsm gpio ecu-sim)
 declare -A pid
 for n in "${names[@]}"; do pid[$n]=$(supervisorctl -c "$run/openvcu.conf" pid "$n"); done
 # CPU ns of all threads of a process (threads that ended are lost: the services keep theirs)
-cpuns() { cat /proc/"$1"/task/*/schedstat 2>/dev/null | awk '{s += $1} END {printf "%d", s}'; }
+cpuns() { cat /proc/"$1"/task/*/schedstat 2>/dev/null | awk '{s += $1} END {printf "%.0f", s}'; }
 ticks() { awk '{print $14 + $15}' "/proc/$1/stat"; }
 hz=$(getconf CLK_TCK)
 median() { sort -n | awk '{v[NR] = $1} END {if (NR % 2) print v[(NR + 1) / 2]; else printf "%.2f\n", (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
@@ -66,6 +66,8 @@ for w in $(seq 1 "$windows"); do
   done
   totals+=("$total")
   echo "$line; services without roudi $total % of one core; load $(cut -d' ' -f1-3 /proc/loadavg)"
+  now=$("$bin/vcu" top --once --config "$config" | grep '^FSM')
+  if [[ "$now" != *Driving* ]]; then echo "error: the FSM left Driving during window $w: $now" >&2; exit 1; fi
 done
 printf '%-9s %12s %9s %9s %9s %9s\n' process "CPU % median" "VmRSS MB" "anon MB" "file MB" "shmem MB"
 result=""
