@@ -253,7 +253,11 @@ DecodeSummary MessageCodec::decode(std::span<const std::uint8_t> payload, Visito
     // Classic frames: one 64-bit word, a shift and a mask per signal (no padded copy).
     static_assert(std::endian::native == std::endian::little, "the word fast path assumes a little-endian host");
     std::uint64_t word = 0;
-    if (length != 0) std::memcpy(&word, payload.data(), length);
+    if (length == 8) {
+      std::memcpy(&word, payload.data(), 8);  // fixed size: one load, not a memcpy call
+    } else {
+      for (std::size_t k = 0; k < length; ++k) word |= static_cast<std::uint64_t>(payload[k]) << (8 * k);
+    }
     if (m_plain && length >= m_plainBytes) {
       // Plain message, every signal present: no selection, no length test, no kind switch;
       // the byte order picks one of two words by index instead of a branch.
