@@ -2,7 +2,8 @@
 // The per-frame codec: each signal precompiled to a byte window, a shift and a mask
 // (dbcppp's "prestored masks and fixed offsets"), so decoding a frame is a handful of
 // loads and shifts per signal. Compiled once at load; decode and encode are noexcept
-// and allocate nothing.
+// and allocate nothing. A classic frame of a "plain" message (no multiplexing, integer
+// signals, all in bytes 0..7) decodes from one 64-bit word with two shifts per signal.
 //
 //   MessageCodec codec = MessageCodec::compile(db, *db.findMessage(0x0CEFF321, true));
 //   codec.decode(payload, [&](std::uint32_t signalIndex, const DecodedValue& value) {
