@@ -304,6 +304,13 @@ std::string rates(std::vector<double> seconds, std::size_t frames) {
   return text;
 }
 
+/// CPU ns/frame of the best (min) or the median pass.
+double cpuNsPerFrame(std::vector<double> seconds, std::size_t frames, bool median) {
+  std::sort(seconds.begin(), seconds.end());
+  const double pass = median ? seconds[seconds.size() / 2] : seconds.front();
+  return pass / static_cast<double>(frames) * 1e9;
+}
+
 void report(const char* label, const Timing& timing, std::size_t frames) {
   std::printf("%s\n  cpu  %s\n  wall %s\n  %" PRIu64 " signals decoded, %" PRIu64 " frames unmatched, sink %.9e\n",
               label, rates(timing.cpuSeconds, frames).c_str(), rates(timing.seconds, frames).c_str(), timing.signals,
@@ -458,7 +465,11 @@ int main(int argc, char** argv) {
   });
 
   report("openvcu match(J1939) + decode", fast, frames.size());
-  if (onlyOpenvcu) return 0;
+  if (onlyOpenvcu) {
+    std::printf("RESULT ns_per_frame=%.2f ns_per_frame_median=%.2f\n", cpuNsPerFrame(fast.cpuSeconds, frames.size(), false),
+                cpuNsPerFrame(fast.cpuSeconds, frames.size(), true));
+    return 0;
+  }
 
   // 2. and 3. the two halves on their own, to see where the time goes.
   const Timing matchOnly = measure(repeat, [&](Timing& t) {
@@ -534,5 +545,13 @@ int main(int argc, char** argv) {
     printAgreement("naive", theirs);
     truthAgrees = ours.differ == 0 && theirs.differ == 0 && ours.frames > 0;
   }
+  // One machine-readable line, CPU time of the thread (best and median pass).
+  std::printf("RESULT ns_per_frame=%.2f ns_per_frame_median=%.2f match_ns=%.2f decode_ns=%.2f naive_ns=%.2f "
+              "same_as_naive=%d truth_agree=%d\n",
+              cpuNsPerFrame(fast.cpuSeconds, frames.size(), false), cpuNsPerFrame(fast.cpuSeconds, frames.size(), true),
+              cpuNsPerFrame(matchOnly.cpuSeconds, frames.size(), false),
+              cpuNsPerFrame(decodeOnly.cpuSeconds, frames.size(), false),
+              cpuNsPerFrame(reference.cpuSeconds, frames.size(), false), sameWork ? 1 : 0,
+              truthAgrees && !truthPath.empty() ? 1 : 0);
   return sameWork && truthAgrees ? 0 : 2;
 }

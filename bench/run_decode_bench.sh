@@ -52,12 +52,30 @@ compiler="$(sed -n 's/^CMAKE_CXX_COMPILER:FILEPATH=//p' "$build/CMakeCache.txt" 
 [[ -n "$compiler" ]] && "$compiler" --version | head -n 1
 
 echo "== bench_dbc_decode"
-"$bench" --dbc "$dbc" --log "$log" --truth "$truthFile" "$@"
+benchOut="$(mktemp)"
+trap 'rm -f "$benchOut"' EXIT
+status=0
+"$bench" --dbc "$dbc" --log "$log" --truth "$truthFile" "$@" >"$benchOut" || status=$?
+grep -v '^RESULT ' "$benchOut" || true
+result="$(grep '^RESULT ' "$benchOut" | tail -n 1 || true)"
 
 echo "== vcu dbc decode (whole CLI: read log, match, decode, write JSON lines to /dev/null)"
+vcuTimes=""
 if [[ -x "$vcu" ]]; then
   TIMEFORMAT="real %3R s, user %3U s, sys %3S s"
   time "$vcu" dbc decode --stats "$dbc" "$log" >/dev/null
+  TIMEFORMAT="%3R %3U"
+  read -r vcuReal vcuUser < <({ time "$vcu" dbc decode --stats "$dbc" "$log" >/dev/null 2>&1; } 2>&1)
+  echo "second run: real $vcuReal s, user $vcuUser s"
+  vcuTimes=" vcu_real_s=$vcuReal vcu_user_s=$vcuUser"
 else
   echo "skipped: $vcu not built yet"
 fi
+
+# The bench's RESULT line (CPU time; see the bench's header) is the last line of the script.
+if [[ -z "$result" ]]; then
+  echo "RESULT ns_per_frame=none bench_exit=$status"
+else
+  echo "$result bench_exit=$status$vcuTimes"
+fi
+exit "$status"

@@ -38,6 +38,33 @@ CompiledSignal layout(const Signal& sig, std::uint32_t index) {
   return out;
 }
 
+/// The word form of a compiled signal whose bits lie in bytes 0..7 (lastByte < 8, not wide).
+WordSignal wordForm(const CompiledSignal& sig) {
+  WordSignal out;
+  out.factor = sig.factor;
+  out.offset = sig.offset;
+  out.index = sig.index;
+  out.kind = sig.kind;
+  out.signBit = sig.kind == RawKind::Signed ? std::uint64_t{1} << (sig.size - 1) : 0;
+  out.rightShift = static_cast<std::uint8_t>(64 - sig.size);
+  const std::uint32_t byteShift = sig.firstByte * 8;
+  if (sig.byteOrder == ByteOrder::LittleEndian) {
+    const std::uint32_t msb = byteShift + sig.shift + sig.size - 1;  // bit of the LSB-first word
+    out.leftShift = static_cast<std::uint8_t>(63 - msb);
+  } else {
+    // extractFromWord: the signal sits at bits shift..shift+size-1 of (swapped << byteShift).
+    out.leftShift = static_cast<std::uint8_t>(byteShift + 64 - sig.shift - sig.size);
+    out.bigEndian = 1;
+  }
+  return out;
+}
+
+/// Whether a compiled signal can take the plain fast path.
+bool wordDecodable(const CompiledSignal& sig) {
+  const bool integer = sig.kind == RawKind::Signed || (sig.kind == RawKind::Unsigned && sig.size < 64);
+  return integer && !sig.wide && sig.lastByte < 8 && sig.switchSlot < 0 && sig.ownSlot < 0;
+}
+
 /// (byte, bit) of bit k (0 = LSB) of a compiled signal.
 std::pair<std::uint32_t, std::uint32_t> bitPosition(const CompiledSignal& sig, std::uint32_t k) {
   if (sig.byteOrder == ByteOrder::LittleEndian) {
@@ -126,6 +153,14 @@ MessageCodec MessageCodec::compile(const Database& database, const Message& mess
     codec.m_limits.emplace_back(sig.minimum, sig.maximum);
   }
   std::sort(codec.m_skipped.begin(), codec.m_skipped.end());
+
+  codec.m_plain = std::all_of(codec.m_signals.begin(), codec.m_signals.end(), wordDecodable);
+  if (codec.m_plain) {
+    for (const CompiledSignal& compiled : codec.m_signals) {
+      codec.m_word.push_back(wordForm(compiled));
+      codec.m_plainBytes = std::max(codec.m_plainBytes, compiled.lastByte + 1);
+    }
+  }
 
   // Initial payload: J1939 "not available" ones or zeros, then the start values.
   codec.m_initial.assign(message.length, message.isJ1939() ? 0xFF : 0x00);

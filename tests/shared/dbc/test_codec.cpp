@@ -7,7 +7,10 @@
 #include <doctest/doctest.h>
 
 #include <array>
+#include <climits>
+#include <cstdint>
 #include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -310,4 +313,149 @@ TEST_CASE("codec leaves signals over 64 bits and mismatched floats out of the co
   REQUIRE(sut.find(2) != nullptr);
   CHECK(sut.signals().size() == 1);
   CHECK(sut.encode(0, 1.0, buffer) == EncodeStatus::NotEncodable);
+}
+
+// ------------------------------------------------------------------ plain-message word path (issue 27)
+
+namespace {
+
+/// Intel and Motorola, signed and unsigned, byte-aligned and not, all inside bytes 0..7.
+const std::string PLAIN_SIGNALS =
+    " SG_ IntelU12 : 4|12@1+ (0.5,-10) [0|0] \"\" Vcu\n"
+    " SG_ IntelS7 : 17|7@1- (1,0) [0|0] \"\" Vcu\n"
+    " SG_ MotorolaU16 : 31|16@0+ (0.1,0) [0|0] \"\" Vcu\n"
+    " SG_ MotorolaS12 : 43|12@0- (0.25,1) [0|0] \"\" Vcu\n"
+    " SG_ IntelS7End : 57|7@1- (1,0) [0|0] \"\" Vcu\n";
+
+/// The same bytes through the plain word path (8 bytes) and the padded path (the 8 bytes
+/// plus one more, which no signal covers): every visited signal must agree bit for bit.
+void checkWordPathEqualsPaddedPath(const MessageCodec& sut, const std::vector<std::uint8_t>& classic) {
+  std::vector<std::uint8_t> longer = classic;
+  longer.push_back(0xA5);
+  DecodeSummary wordSummary;
+  DecodeSummary paddedSummary;
+
+  const auto word = decodeAll(sut, classic, &wordSummary);
+  const auto padded = decodeAll(sut, longer, &paddedSummary);
+
+  REQUIRE(word.size() == padded.size());
+  CHECK(wordSummary.decoded == paddedSummary.decoded);
+  CHECK(wordSummary.missing == paddedSummary.missing);
+  for (std::size_t i = 0; i < word.size(); ++i) {
+    CAPTURE(i);
+    CHECK(word[i].index == padded[i].index);
+    CHECK(word[i].value.kind == padded[i].value.kind);
+    CHECK(word[i].value.rawUnsigned == padded[i].value.rawUnsigned);
+    CHECK(word[i].value.physical == padded[i].value.physical);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("codec marks a message without multiplexing and with integer signals plain") {
+  const ParseOutput parsed = oneMessage(PLAIN_SIGNALS);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+
+  CHECK(sut.isPlain());
+  CHECK(sut.wordSignals().size() == sut.signals().size());
+}
+
+TEST_CASE("codec does not mark multiplexed, float, 64-bit unsigned or long-frame messages plain") {
+  const ParseOutput mux = oneMessage(" SG_ Sel M : 0|8@1+ (1,0) [0|0] \"\" Vcu\n SG_ A m1 : 8|8@1+ (1,0) [0|0] \"\" Vcu\n");
+  const ParseOutput floats = oneMessage(" SG_ F : 0|32@1+ (1,0) [0|0] \"\" Vcu\n", CLASSIC_LENGTH, "SIG_VALTYPE_ 1 F : 1;\n");
+  const ParseOutput wideUnsigned = oneMessage(" SG_ U64 : 0|64@1+ (1,0) [0|0] \"\" Vcu\n");
+  const ParseOutput pastByte7 = oneMessage(" SG_ A : 0|8@1+ (1,0) [0|0] \"\" Vcu\n SG_ B : 64|8@1+ (1,0) [0|0] \"\" Vcu\n", 16);
+
+  CHECK_FALSE(MessageCodec::compile(mux.database, onlyMessage(mux)).isPlain());
+  CHECK_FALSE(MessageCodec::compile(floats.database, onlyMessage(floats)).isPlain());
+  CHECK_FALSE(MessageCodec::compile(wideUnsigned.database, onlyMessage(wideUnsigned)).isPlain());
+  CHECK_FALSE(MessageCodec::compile(pastByte7.database, onlyMessage(pastByte7)).isPlain());
+}
+
+TEST_CASE("codec word path decodes signed and Motorola signals as the padded path does") {
+  const ParseOutput parsed = oneMessage(PLAIN_SIGNALS);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+  REQUIRE(sut.isPlain());
+  std::mt19937_64 random(27);
+
+  for (const char* fixed : {"00 00 00 00 00 00 00 00", "FF FF FF FF FF FF FF FF", "80 00 80 00 80 00 80 00"}) {
+    CAPTURE(fixed);
+    checkWordPathEqualsPaddedPath(sut, hexBytes(fixed));
+  }
+  constexpr int RANDOM_PAYLOADS = 200;
+  for (int round = 0; round < RANDOM_PAYLOADS; ++round) {
+    const std::uint64_t bits = random();
+    std::vector<std::uint8_t> payload(CLASSIC_LENGTH);
+    std::memcpy(payload.data(), &bits, payload.size());
+    checkWordPathEqualsPaddedPath(sut, payload);
+  }
+}
+
+TEST_CASE("codec word path gives known values for signed Intel and Motorola signals") {
+  const ParseOutput parsed = oneMessage(PLAIN_SIGNALS);
+  const Message& message = onlyMessage(parsed);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, message);
+  REQUIRE(sut.isPlain());
+  // IntelU12 = 0xABC (bits 4..15), IntelS7 = -1 (bits 17..23), MotorolaU16 = 0x1234 (bytes 3..4),
+  // MotorolaS12 = -2048 (byte 5 bits 3..0 = 0x8, byte 6 = 0x00), IntelS7End = -64 (byte 7 bits 1..7).
+  const auto visited = decodeAll(sut, hexBytes("C0 AB FE 12 34 08 00 80"));
+
+  REQUIRE(visited.size() == 5);
+  CHECK(visitedValue(visited, signalIndex(message, "IntelU12")).rawUnsigned == 0xABCu);
+  CHECK(visitedValue(visited, signalIndex(message, "IntelU12")).physical == 0xABC * 0.5 - 10);
+  CHECK(visitedValue(visited, signalIndex(message, "IntelS7")).rawSigned == -1);
+  CHECK(visitedValue(visited, signalIndex(message, "MotorolaU16")).rawUnsigned == 0x1234u);
+  CHECK(visitedValue(visited, signalIndex(message, "MotorolaS12")).rawSigned == -2048);
+  CHECK(visitedValue(visited, signalIndex(message, "MotorolaS12")).physical == -2048 * 0.25 + 1);
+  CHECK(visitedValue(visited, signalIndex(message, "IntelS7End")).rawSigned == -64);
+}
+
+TEST_CASE("codec word path decodes a signed 64-bit signal and a 63-bit unsigned maximum") {
+  const ParseOutput signed64 = oneMessage(" SG_ S : 7|64@0- (1,0) [0|0] \"\" Vcu\n");
+  const ParseOutput unsigned63 = oneMessage(" SG_ U : 0|63@1+ (1,0) [0|0] \"\" Vcu\n");
+  const MessageCodec signedCodec = MessageCodec::compile(signed64.database, onlyMessage(signed64));
+  const MessageCodec unsignedCodec = MessageCodec::compile(unsigned63.database, onlyMessage(unsigned63));
+  REQUIRE(signedCodec.isPlain());
+  REQUIRE(unsignedCodec.isPlain());
+  const std::vector<std::uint8_t> ones = hexBytes("FF FF FF FF FF FF FF FF");
+
+  CHECK(decodeOne(signedCodec, hexBytes("80 00 00 00 00 00 00 00"), 0).rawSigned == INT64_MIN);
+  CHECK(decodeOne(signedCodec, ones, 0).rawSigned == -1);
+  CHECK(decodeOne(unsignedCodec, ones, 0).rawUnsigned == 0x7FFFFFFFFFFFFFFFull);
+  CHECK(decodeOne(unsignedCodec, ones, 0).physical == 9223372036854775807.0);
+}
+
+TEST_CASE("codec decodes a 64-bit unsigned maximum outside the word path without losing the top bit") {
+  const ParseOutput parsed = oneMessage(" SG_ U64 : 0|64@1+ (2,0) [0|0] \"\" Vcu\n");
+  const MessageCodec sut = MessageCodec::compile(parsed.database, onlyMessage(parsed));
+  REQUIRE_FALSE(sut.isPlain());
+
+  const DecodedValue value = decodeOne(sut, hexBytes("FF FF FF FF FF FF FF FF"), 0);
+
+  CHECK(value.rawUnsigned == 0xFFFFFFFFFFFFFFFFull);
+  CHECK(value.physical == 2.0 * 18446744073709551615.0);
+}
+
+TEST_CASE("codec decodes a plain message from a short frame signal by signal and counts the rest as missing") {
+  const ParseOutput parsed = oneMessage(PLAIN_SIGNALS);
+  const Message& message = onlyMessage(parsed);
+  const MessageCodec sut = MessageCodec::compile(parsed.database, message);
+  REQUIRE(sut.isPlain());
+  constexpr std::size_t SIGNALS_IN_FIVE_BYTES = 3;  // IntelU12, IntelS7, MotorolaU16 (bytes 3..4)
+  DecodeSummary summary;
+
+  const auto visited = decodeAll(sut, hexBytes("C0 AB FE 12 34"), &summary);
+
+  CHECK(summary.decoded == SIGNALS_IN_FIVE_BYTES);
+  CHECK(summary.missing == sut.signals().size() - SIGNALS_IN_FIVE_BYTES);
+  REQUIRE(visited.size() == SIGNALS_IN_FIVE_BYTES);
+  CHECK(visitedValue(visited, signalIndex(message, "IntelU12")).rawUnsigned == 0xABCu);
+  CHECK(visitedValue(visited, signalIndex(message, "MotorolaU16")).rawUnsigned == 0x1234u);
+  for (std::size_t length = 0; length < CLASSIC_LENGTH; ++length) {
+    CAPTURE(length);
+    const std::vector<std::uint8_t> prefix(length, 0xFF);
+    DecodeSummary partial;
+    (void)decodeAll(sut, prefix, &partial);
+    CHECK(partial.decoded + partial.missing == sut.signals().size());
+  }
 }

@@ -5,7 +5,9 @@
 
 #include <doctest/doctest.h>
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 using namespace openvcu;
 using namespace openvcu::dbc;
@@ -173,4 +175,51 @@ TEST_CASE("matcher matches the J1939 fixture's PropA_C3 to the VCU from any prio
   CHECK(sut.match(0x0CEF21F3u, EXTENDED) == indexOf(parsed.database, "PropA_C3_PGN61184"));
   CHECK(sut.match(0x0CEF22F3u, EXTENDED) == MessageMatcher::NO_MATCH);
   CHECK(sut.match(1809, STANDARD) == indexOf(parsed.database, "VcuHeartbeat"));
+}
+
+TEST_CASE("a default-constructed matcher matches nothing") {
+  const MessageMatcher sut;
+
+  CHECK(sut.match(1809, STANDARD) == MessageMatcher::NO_MATCH);
+  CHECK(sut.match(EEC1_FE, EXTENDED) == MessageMatcher::NO_MATCH);
+}
+
+TEST_CASE("matcher finds each of hundreds of messages by exact ID and by PGN, and no unknown PGN (issue 27)") {
+  // 256 PDU2 PGNs 0xFF00..0xFFFF and 64 PDU1 PGNs to the global address, all from SA 0xFE,
+  // plus 64 standard IDs: enough keys for collisions and probe chains in the flat tables.
+  constexpr std::uint32_t PDU2_COUNT = 256;
+  constexpr std::uint32_t PDU1_COUNT = 64;
+  constexpr std::uint32_t STANDARD_COUNT = 64;
+  constexpr std::uint32_t OTHER_SOURCE = 0x17;
+  std::string text;
+  std::vector<std::uint32_t> extendedIds;
+  for (std::uint32_t ps = 0; ps < PDU2_COUNT; ++ps) extendedIds.push_back(0x18FF00FEu | (ps << 8));
+  for (std::uint32_t pf = 0; pf < PDU1_COUNT; ++pf) extendedIds.push_back(0x1800FFFEu | (pf << 16));
+  for (std::size_t i = 0; i < extendedIds.size(); ++i) {
+    text += "BO_ " + flagged(extendedIds[i]) + " Ext" + std::to_string(i) + ": 8 Vcu\n";
+  }
+  for (std::uint32_t id = 0; id < STANDARD_COUNT; ++id) {
+    text += "BO_ " + std::to_string(0x100 + id) + " Std" + std::to_string(id) + ": 8 Vcu\n";
+  }
+  const ParseOutput parsed = parseText(text);
+  INFO(describe(parsed));
+  REQUIRE_FALSE(parsed.hasErrors());
+  const MessageMatcher sut(parsed.database, MatchMode::J1939);
+
+  for (std::size_t i = 0; i < extendedIds.size(); ++i) {
+    CAPTURE(i);
+    const auto expected = indexOf(parsed.database, "Ext" + std::to_string(i));
+    CHECK(sut.match(extendedIds[i], EXTENDED) == expected);
+    CHECK(sut.match((extendedIds[i] & ~0xFFu) | OTHER_SOURCE, EXTENDED) == expected);
+  }
+  for (std::uint32_t id = 0; id < STANDARD_COUNT; ++id) {
+    CHECK(sut.match(0x100 + id, STANDARD) == indexOf(parsed.database, "Std" + std::to_string(id)));
+  }
+  // PDU1 to a specific destination falls back to the global definition.
+  CHECK(sut.match(0x18052133u, EXTENDED) == indexOf(parsed.database, "Ext" + std::to_string(PDU2_COUNT + 5)));
+  // PGNs not in the file: PF 0xFE (PDU2), PF 0x40 (PDU1), the other data page.
+  CHECK(sut.match(0x18FE0017u, EXTENDED) == MessageMatcher::NO_MATCH);
+  CHECK(sut.match(0x1840FF17u, EXTENDED) == MessageMatcher::NO_MATCH);
+  CHECK(sut.match(0x19FF0017u, EXTENDED) == MessageMatcher::NO_MATCH);
+  CHECK(sut.match(0x100 + STANDARD_COUNT, STANDARD) == MessageMatcher::NO_MATCH);
 }
