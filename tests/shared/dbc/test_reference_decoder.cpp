@@ -98,7 +98,8 @@ Database layoutDatabase(std::uint32_t size, std::uint32_t frameBytes, ByteOrder 
   message.length = frameBytes;
   for (const std::uint32_t start : startPositions(size, frameBytes, order)) {
     Signal signal;
-    signal.name = "S" + std::to_string(start);
+    signal.name = std::to_string(start);
+    signal.name.insert(0, 1, 'S');
     signal.startBit = start;
     signal.size = size;
     signal.byteOrder = order;
