@@ -352,6 +352,13 @@ struct Scheduler::Impl {
     releaseHeld();
   }
 
+  /// Sends every pending SDM due at `nowNs`.
+  void sendDueData(std::int64_t nowNs) noexcept {
+    for (ScheduledEntry* pair : pairs) {
+      if (pair->sdmPending && pair->sdmDueNs <= nowNs) sendData(*pair);
+    }
+  }
+
   void cyclic(ScheduledEntry& entry, std::int64_t nowNs) noexcept {
     const std::int64_t cycle = entry.config.cycleNs;
     const std::int64_t late = nowNs - entry.nextNs;
@@ -445,12 +452,15 @@ Scheduler::~Scheduler() = default;
 void Scheduler::run(std::int64_t nowNs) noexcept {
   Impl& impl = *m_impl;
   // SDMs first: their deltas are the tightest deadlines.
+  impl.sendDueData(nowNs);
   for (auto& entry : impl.entries) {
-    if (entry->sdmPending && entry->sdmDueNs <= nowNs) impl.sendData(*entry);
-  }
-  for (auto& entry : impl.entries) {
-    if (entry->config.cycleNs > 0 && entry->nextNs <= nowNs) impl.cyclic(*entry, nowNs);
-    if (entry->config.onChange && entry->nextCheckNs <= nowNs) impl.changeCheck(*entry, nowNs);
+    const bool cyclicDue = entry->config.cycleNs > 0 && entry->nextNs <= nowNs;
+    const bool checkDue = entry->config.onChange && entry->nextCheckNs <= nowNs;
+    if (!cyclicDue && !checkDue) continue;
+    // an SDM that fell due while a burst of frames goes out leaves between two of them
+    impl.sendDueData(impl.clock.monotonicNs());
+    if (cyclicDue) impl.cyclic(*entry, nowNs);
+    if (checkDue) impl.changeCheck(*entry, nowNs);
   }
 }
 

@@ -175,9 +175,14 @@ void TxThread::run() noexcept {
     while (m_inbox.pop(command)) apply(command, now);
     m_scheduler.run(now);
     now = clock::monotonicNs();
-    if (now >= m_nextServiceNs) service(now);
-    const WaitPlan plan = planWait(clock::monotonicNs(), std::min(m_scheduler.nextDeadlineNs(), m_nextServiceNs),
-                                   m_scheduler.nextDataDeadlineNs(), m_sdmSpinNs);
+    const std::int64_t sdmNs = m_scheduler.nextDataDeadlineNs();
+    // the link housekeeping (draining a receive queue: up to ~100 us) waits while an SDM is
+    // due within the spin time, so that it cannot delay that SDM; it runs right after it
+    const bool sdmSoon = sdmNs != INT64_MAX && sdmNs - now <= m_sdmSpinNs;
+    if (now >= m_nextServiceNs && !sdmSoon) service(now);
+    const std::int64_t serviceNs = sdmSoon ? INT64_MAX : m_nextServiceNs;
+    const WaitPlan plan =
+        planWait(clock::monotonicNs(), std::min(m_scheduler.nextDeadlineNs(), serviceNs), sdmNs, m_sdmSpinNs);
     if (plan.kind == WaitPlan::Kind::Sleep) {
       m_sleeping.store(true, std::memory_order_seq_cst);
       // a post between the load of `seen` and here changed the word: the wait returns at once
