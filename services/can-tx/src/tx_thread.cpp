@@ -176,8 +176,8 @@ void TxThread::run() noexcept {
     m_scheduler.run(now);
     now = clock::monotonicNs();
     const std::int64_t sdmNs = m_scheduler.nextDataDeadlineNs();
-    // the link housekeeping (draining a receive queue: up to ~100 us) waits while an SDM is
-    // due within the spin time, so that it cannot delay that SDM; it runs right after it
+    // the link housekeeping (draining the links' receive queues, their events) waits while an
+    // SDM is due within the spin time, so that it cannot delay that SDM; it runs right after it
     const bool sdmSoon = sdmNs != INT64_MAX && sdmNs - now <= m_sdmSpinNs;
     if (now >= m_nextServiceNs && !sdmSoon) service(now);
     const std::int64_t serviceNs = sdmSoon ? INT64_MAX : m_nextServiceNs;
