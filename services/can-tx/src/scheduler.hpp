@@ -139,7 +139,7 @@ class Scheduler {
   [[nodiscard]] std::int64_t nextDeadlineNs() const noexcept;
   /// The earliest deadline of a pending SDM (its SHM went out, deltaNs not yet passed), or
   /// INT64_MAX. The transmit thread stays on the CPU for an SDM due soon instead of sleeping
-  /// again (tx_thread.hpp, planWait); never later than nextDeadlineNs() when set.
+  /// again (tx_thread.hpp, planWait). nextDeadlineNs() is never later than it.
   [[nodiscard]] std::int64_t nextDataDeadlineNs() const noexcept;
 
   // ---- changes (by index into Schedule::messages; checked by the caller) ----------------
