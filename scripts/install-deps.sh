@@ -29,6 +29,8 @@ PACKAGES=(
   qemu-system-x86 busybox-static cpio kmod make gcc-12 bc xz-utils can-utils
   # ./run.sh runs the stack under supervisord
   supervisor
+  # cyclictest: the platform's wake-up latency beside vcu-can-tx (bench/can-tx, issue 27)
+  rt-tests
   # setfacl/getfacl: iox-roudi's shared memory without ACL (config/iceoryx/iox-roudi.sh) and its test
   acl
   # the Qt 6 HMI (services/hmi) and its offscreen / Xvfb tests and screenshots

@@ -28,12 +28,26 @@
 #      busy each CPU was (all processes, /proc/stat) over the window, and the scheduling
 #      class of each of its threads;
 #   7. can-tx's own statistics (`vcu status --stats`): tx.<Msg>.period_err_* and
-#      delta_err_* (since can-tx started, so they include the time before the window).
+#      delta_err_* (since can-tx started, so they include the time before the window);
+#   8. the platform beside it (issue 27): `cyclictest` on TX_CPU at the transmit thread's
+#      priority (SCHED_FIFO RT_PRIORITY, else normal), one thread waking every 1 ms
+#      (-i1000), started with the listener for the same SECONDS; its histogram (1 us
+#      buckets up to 30 ms) gives the platform's wake-up latency p99 and max. CYCLICTEST=0:
+#      not run (platform_* = none).
+# Last line: RESULT tx_p99_us tx_max_us (the worst stream's p99 and max period error, by the
+# listener) platform_p99_us platform_max_us (cyclictest) delta_p99_us delta_max_us (the
+# worst safety pair's) pair_faults tx_cpu_pct (schedstat, all threads) spin_cpu_pct (the
+# transmit thread's on-CPU waits for SDMs, heartbeat sdm_spin_us; 0 for a build without it).
 # LISTENER_ARGS: more options for bench_tx_listener, e.g. "--late-events 100" or
 # "--dump /work/tx.csv" (a path outside /tmp: the sandbox's /tmp is private).
 # Set TX_CPU= (empty) to run vcu-can-tx unpinned, LISTENER_CPU= for an unpinned listener.
-# RT_PRIORITY=N (1..99): run with a copy of the configuration in the sandbox's /tmp whose
-# schedule has "realtimePriority": N (the transmit thread SCHED_FIFO; needs CAP_SYS_NICE).
+# RT_PRIORITY=N (1..99, default 50; 0 normal scheduling): run with a copy of the
+# configuration in the sandbox's /tmp whose schedule has "realtimePriority": N (the transmit
+# thread SCHED_FIFO; needs CAP_SYS_NICE); RT_PRIORITY= (empty): the configuration as it is.
+# SDM_SPIN_US=N: the copy also has "sdmSpinUs": N (unset: the schedule's, default 500).
+# CAN_TX_BIN=FILE: run this vcu-can-tx instead of BUILD/bin/vcu-can-tx (e.g. a copy of a
+# baseline build); a file under /tmp is copied to BUILD/can-tx-bench/ first (the sandbox's
+# /tmp is private).
 # Only processes this script started are ended, by PID (the sandbox's PID namespace ends
 # anything left when the script exits).
 # exit: 0 every target met (the listener's, and vcu-can-tx CPU <= CPU_TARGET % of one core,
@@ -45,6 +59,16 @@ build="$(cd "${1:-$repo/build}" && pwd)"
 seconds="${2:-60}"
 
 source "$repo/bench/bench_lib.sh"
+if [[ -n "${CAN_TX_BIN:-}" && "${OPENVCU_ISOLATED:-}" != 1 ]]; then
+  [[ -x "$CAN_TX_BIN" ]] || { echo "error: CAN_TX_BIN=$CAN_TX_BIN is not an executable" >&2; exit 1; }
+  case "$CAN_TX_BIN" in
+    "$build"/*) ;;
+    /tmp/*)
+      mkdir -p "$build/can-tx-bench"
+      cp "$CAN_TX_BIN" "$build/can-tx-bench/$(basename "$CAN_TX_BIN")"
+      export CAN_TX_BIN="$build/can-tx-bench/$(basename "$CAN_TX_BIN")" ;;
+  esac
+fi
 bench_isolate "$build" "vcu vcu-can-tx bench_tx_listener" bin/vcu bin/vcu-can-tx bench/bench_tx_listener -- "$0" "$build" "$seconds"
 
 # ---- inside the sandbox ---------------------------------------------------------------
@@ -54,6 +78,8 @@ hogCpu="${HOG_CPU:-1}"
 txCpu="${TX_CPU-0}"
 listenerCpu="${LISTENER_CPU-$hogCpu}"
 cpuTarget="${CPU_TARGET:-2}"
+canTxBin="${CAN_TX_BIN:-$build/bin/vcu-can-tx}"
+rtPriority="${RT_PRIORITY-50}"
 work=/tmp/can-tx-bench
 mkdir -p "$work"
 tick="$(getconf CLK_TCK)"
@@ -90,25 +116,28 @@ counter() {
 }
 writer_lost() { (( $(counter "$(heartbeat_counters)" writers_lost) >= 1 )); }
 
-if [[ -n "${RT_PRIORITY:-}" ]]; then
+if [[ -n "$rtPriority" ]]; then
   # A copy of the configuration with the schedule's realtimePriority set; relative paths of
   # vehicle.json made absolute so that they still point into the repository.
   configDir="$(cd "$(dirname "$config")" && pwd)"
   scheduleFile="$(jq -r '.schedule // empty' "$config")"
   [[ -n "$scheduleFile" ]] || { echo "error: $config names no schedule file" >&2; exit 1; }
   [[ "$scheduleFile" == /* ]] || scheduleFile="$configDir/$scheduleFile"
-  jq --argjson priority "$RT_PRIORITY" '.realtimePriority = $priority' "$scheduleFile" >"$work/schedule.json"
+  jq --argjson priority "$rtPriority" --arg spin "${SDM_SPIN_US:-}" '
+    .realtimePriority = $priority | if $spin == "" then . else .sdmSpinUs = ($spin | tonumber) end' \
+    "$scheduleFile" >"$work/schedule.json"
   jq --arg dir "$configDir" --arg schedule "$work/schedule.json" '
     def absolute: if startswith("/") then . else $dir + "/" + . end;
     .dbc |= map(absolute) | .schedule = $schedule |
     with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive")) then .value |= absolute else . end)' \
     "$config" >"$work/vehicle.json"
   config="$work/vehicle.json"
-  echo "RT_PRIORITY=$RT_PRIORITY: configuration copied to $config with \"realtimePriority\": $RT_PRIORITY"
+  echo "RT_PRIORITY=$rtPriority${SDM_SPIN_US:+ SDM_SPIN_US=$SDM_SPIN_US}: configuration copied to $config" \
+    "(\"realtimePriority\": $rtPriority${SDM_SPIN_US:+, \"sdmSpinUs\": $SDM_SPIN_US})"
 fi
 
 machine
-echo "sandbox: build $build, config $config, window $seconds s"
+echo "sandbox: build $build, vcu-can-tx $canTxBin, config $config, window $seconds s"
 overlay="$(dirname "$config")/schedule.overlay.json"
 [[ -e "$overlay" ]] && echo "note: $overlay exists and is applied by vcu-can-tx: $(tr -d '\n' <"$overlay")"
 
@@ -116,7 +145,7 @@ iox-roudi -c "$repo/config/iceoryx/roudi.toml" >"$work/roudi.log" 2>&1 &
 started+=("$!")
 wait_until 10 test -S /tmp/roudi || { echo "error: iox-roudi did not start: $(cat "$work/roudi.log")" >&2; exit 1; }
 
-(pinned "$txCpu" "$build/bin/vcu-can-tx" --config "$config") >"$work/can-tx.log" 2>&1 &
+(pinned "$txCpu" "$canTxBin" --config "$config") >"$work/can-tx.log" 2>&1 &
 canTxPid=$!
 started+=("$canTxPid")
 if ! wait_until 30 grep -q ']: ready (' "$work/can-tx.log"; then
@@ -150,6 +179,16 @@ listenerLog="$work/listener.log"
 listenerPid=$!
 started+=("$listenerPid")
 wait_until 30 grep -q '^listening on' "$listenerLog" || { echo "error: listener did not start: $(cat "$listenerLog")" >&2; exit 1; }
+cyclictestLog="$work/cyclictest.log"
+if [[ "${CYCLICTEST:-1}" == 1 ]]; then
+  command -v cyclictest >/dev/null || { echo "error: cyclictest not installed (apt-get install rt-tests; CYCLICTEST=0 skips it)" >&2; exit 1; }
+  policy=(--policy=normal)
+  (( ${rtPriority:-0} > 0 )) && policy=(-p "$rtPriority")
+  (pinned "$txCpu" cyclictest -m -q -t1 ${txCpu:+-a "$txCpu"} "${policy[@]}" -i1000 -D "$seconds" -h 30000) \
+    >"$cyclictestLog" 2>&1 &
+  cyclictestPid=$!
+  started+=("$cyclictestPid")
+fi
 load0="$(cut -d' ' -f1 /proc/loadavg)"
 f0="$(faults_sample "$canTxPid")"; s0="$(steal_sample 0) $(steal_sample 1)"; b0="$(busy_sample 0) $(busy_sample 1)"
 c0="$(cpu_sample "$canTxPid")"; t0="$(date +%s%N)"
@@ -161,6 +200,11 @@ load1="$(cut -d' ' -f1 /proc/loadavg)"
 listenerStatus=0
 wait "$listenerPid" || listenerStatus=$?
 forget "$listenerPid"
+if [[ -n "${cyclictestPid:-}" ]]; then
+  wait_until 20 grep -q '^# Max Latencies' "$cyclictestLog" || echo "warning: cyclictest did not finish: $(tail -n 3 "$cyclictestLog")"
+  wait "$cyclictestPid" 2>/dev/null || true
+  forget "$cyclictestPid"
+fi
 if [[ "$hog" == 1 ]]; then
   kill -TERM "$hogPid" 2>/dev/null || true
   wait "$hogPid" 2>/dev/null || true
@@ -208,6 +252,46 @@ echo "== summary ($( [[ "$hog" == 1 ]] && echo "busy loop on CPU $hogCpu" || ech
 grep '^bench_tx_listener:' "$listenerLog" | sed 's/^/   /'
 echo "   listener targets (p99 <= 200 us, max <= 1000 us, no pair fault): $( ((listenerStatus == 0)) && echo met || echo "NOT met (exit $listenerStatus)")"
 echo "   vcu-can-tx CPU $tickCpu % (ticks) / $schedCpu % (schedstat) of one core, target <= $cpuTarget %: $cpuMet"
+spins=$(( $(counter "$after" sdm_spins) - $(counter "$before" sdm_spins) ))
+spinUs=$(( $(counter "$after" sdm_spin_us) - $(counter "$before" sdm_spin_us) ))
+spinCpu="$(percent $(( spinUs * 1000 )) "$(( tAfter - tBefore ))")"
+echo "   on-CPU waits for SDMs (heartbeat sdm_spins, sdm_spin_us): $spins, $spinUs us = $spinCpu % of one core" \
+  "(between two heartbeats $(awk -v w="$(( tAfter - tBefore ))" 'BEGIN { printf "%.1f", w / 1e9 }') s apart)"
+
+# The platform: cyclictest's histogram (1 us buckets; "# Histogram Overflows" above 30 ms,
+# not in "# Total"), nearest-rank p99.
+platformP99=none; platformMax=none
+if [[ -s "$cyclictestLog" ]] && grep -q '^# Max Latencies' "$cyclictestLog"; then
+  read -r platformP99 platformMax platformCount platformP999 platformOver1ms < <(awk '
+    /^[0-9]+ [0-9]+$/ { count[$1 + 0] = $2 + 0; total += $2; if ($1 + 0 > top) top = $1 + 0 }
+    /^# Max Latencies:/ { max = $4 + 0 }
+    /^# Histogram Overflows:/ { over = $4 + 0 }
+    END {
+      all = total + over
+      r99 = int(0.99 * all); if (r99 < 0.99 * all) r99++
+      r999 = int(0.999 * all); if (r999 < 0.999 * all) r999++
+      p99 = "30000"; p999 = "30000"; seen = 0; over1 = over
+      for (b = 0; b <= top; ++b) {
+        seen += count[b]
+        if (b > 1000) over1 += count[b]
+        if (seen >= r99 && p99 == "30000") p99 = b
+        if (seen >= r999 && p999 == "30000") p999 = b
+      }
+      print p99, max, all, p999, over1
+    }' "$cyclictestLog")
+  echo "== platform: cyclictest on CPU ${txCpu:-any}, $( (( ${rtPriority:-0} > 0 )) && echo "SCHED_FIFO $rtPriority" || echo normal)," \
+    "-i1000, same window: $platformCount wake-ups, latency p99 $platformP99 us, p99.9 $platformP999 us," \
+    "max $platformMax us, $platformOver1ms over 1 ms"
+fi
 echo "== vcu-can-tx log (last lines)"
 tail -n 5 "$work/can-tx.log"
+# the worst stream's and the worst pair's p99 and max, from the listener's target lines
+txP99="$(sed -n 's/^bench_tx_listener:.* worst_stream_p99_us=\([0-9.]*\).*/\1/p' "$listenerLog")"
+txMax="$(sed -n 's/^bench_tx_listener:.* worst_stream_max_us=\([0-9.]*\).*/\1/p' "$listenerLog")"
+deltaP99="$(sed -n 's/^   p99 <= .*pair delta \([0-9.]*\) us)$/\1/p' "$listenerLog")"
+deltaMax="$(sed -n 's/^   max <= .*pair delta \([0-9.]*\) us)$/\1/p' "$listenerLog")"
+pairFaults="$(sed -n 's/^bench_tx_listener:.* pair_faults=\([0-9]*\).*/\1/p' "$listenerLog")"
+echo "RESULT tx_p99_us=${txP99:-none} tx_max_us=${txMax:-none} platform_p99_us=$platformP99" \
+  "platform_max_us=$platformMax delta_p99_us=${deltaP99:-none} delta_max_us=${deltaMax:-none}" \
+  "pair_faults=${pairFaults:-none} tx_cpu_pct=$schedCpu spin_cpu_pct=$spinCpu"
 exit "$status"

@@ -182,7 +182,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       }
     });
     registerCounters();
-    if (const std::string warning = thread->start(schedule.realtimePriority); !warning.empty()) {
+    if (const std::string warning = thread->start(schedule.realtimePriority, schedule.sdmSpinNs); !warning.empty()) {
       runtime.log().warning(warning);
     }
     runtime.log().info(std::to_string(schedule.messages.size()) + " messages scheduled" +
@@ -319,6 +319,8 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   void registerCounters() {
     service::HeartbeatPublisher& heartbeat = runtime.heartbeat();
     heartbeat.addCounterSource("wakeups", [this] { return static_cast<std::int64_t>(thread->wakeups()); });
+    heartbeat.addCounterSource("sdm_spins", [this] { return static_cast<std::int64_t>(thread->spins()); });
+    heartbeat.addCounterSource("sdm_spin_us", [this] { return thread->spinNs() / 1000; });
     heartbeat.addCounterSource("inbox_refused", [this] { return static_cast<std::int64_t>(thread->refusedPosts()); });
     heartbeat.addCounterSource("one_shots", [this] {
       return static_cast<std::int64_t>(scheduler->counters().oneShots.load(std::memory_order_relaxed));

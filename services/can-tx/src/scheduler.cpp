@@ -19,8 +19,6 @@ using Payload = std::array<std::uint8_t, can::MAX_DATA_LENGTH>;
 
 constexpr std::int64_t NEVER = INT64_MAX;
 
-std::int64_t absolute(std::int64_t value) noexcept { return value < 0 ? -value : value; }
-
 /// Frames held back at once at most (Impl::emit); HHEA holds one (PropA_C4) per S1_ES pair.
 constexpr std::size_t HELD_CAPACITY = 64;
 
@@ -37,41 +35,6 @@ struct HeldFrame {
 enum class Emitted : std::uint8_t { Sent, Held, Failed };
 
 }  // namespace
-
-// ---- ErrorHistogram -------------------------------------------------------------------------
-
-void ErrorHistogram::record(std::int64_t errorNs) noexcept {
-  const std::int64_t error = absolute(errorNs);
-  const auto bucket = static_cast<std::size_t>(std::min<std::int64_t>(error / 1000, BUCKETS));
-  m_buckets[bucket].store(m_buckets[bucket].load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  m_count.store(m_count.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  if (error > m_maxNs.load(std::memory_order_relaxed)) m_maxNs.store(error, std::memory_order_relaxed);
-}
-
-ErrorHistogram::Summary ErrorHistogram::summary() const noexcept {
-  Summary summary;
-  std::array<std::uint32_t, BUCKETS + 1> copy{};
-  std::uint64_t total = 0;
-  for (std::size_t b = 0; b <= BUCKETS; ++b) {
-    copy[b] = m_buckets[b].load(std::memory_order_relaxed);
-    total += copy[b];
-  }
-  summary.count = total;
-  summary.maxUs = m_maxNs.load(std::memory_order_relaxed) / 1000;
-  if (total == 0) return summary;
-  auto percentile = [&](double fraction) {
-    const auto rank = static_cast<std::uint64_t>(std::ceil(fraction * static_cast<double>(total)));
-    std::uint64_t seen = 0;
-    for (std::size_t b = 0; b <= BUCKETS; ++b) {
-      seen += copy[b];
-      if (seen >= rank) return b == BUCKETS ? summary.maxUs : static_cast<std::int64_t>(b);
-    }
-    return summary.maxUs;
-  };
-  summary.p50Us = percentile(0.50);
-  summary.p99Us = percentile(0.99);
-  return summary;
-}
 
 // ---- Scheduler ------------------------------------------------------------------------------
 
@@ -389,6 +352,13 @@ struct Scheduler::Impl {
     releaseHeld();
   }
 
+  /// Sends every pending SDM due at `nowNs`.
+  void sendDueData(std::int64_t nowNs) noexcept {
+    for (ScheduledEntry* pair : pairs) {
+      if (pair->sdmPending && pair->sdmDueNs <= nowNs) sendData(*pair);
+    }
+  }
+
   void cyclic(ScheduledEntry& entry, std::int64_t nowNs) noexcept {
     const std::int64_t cycle = entry.config.cycleNs;
     const std::int64_t late = nowNs - entry.nextNs;
@@ -482,12 +452,15 @@ Scheduler::~Scheduler() = default;
 void Scheduler::run(std::int64_t nowNs) noexcept {
   Impl& impl = *m_impl;
   // SDMs first: their deltas are the tightest deadlines.
+  impl.sendDueData(nowNs);
   for (auto& entry : impl.entries) {
-    if (entry->sdmPending && entry->sdmDueNs <= nowNs) impl.sendData(*entry);
-  }
-  for (auto& entry : impl.entries) {
-    if (entry->config.cycleNs > 0 && entry->nextNs <= nowNs) impl.cyclic(*entry, nowNs);
-    if (entry->config.onChange && entry->nextCheckNs <= nowNs) impl.changeCheck(*entry, nowNs);
+    const bool cyclicDue = entry->config.cycleNs > 0 && entry->nextNs <= nowNs;
+    const bool checkDue = entry->config.onChange && entry->nextCheckNs <= nowNs;
+    if (!cyclicDue && !checkDue) continue;
+    // an SDM that fell due while a burst of frames goes out leaves between two of them
+    impl.sendDueData(impl.clock.monotonicNs());
+    if (cyclicDue) impl.cyclic(*entry, nowNs);
+    if (checkDue) impl.changeCheck(*entry, nowNs);
   }
 }
 
@@ -497,6 +470,14 @@ std::int64_t Scheduler::nextDeadlineNs() const noexcept {
     if (entry->sdmPending) next = std::min(next, entry->sdmDueNs);
     if (entry->config.cycleNs > 0) next = std::min(next, entry->nextNs);
     if (entry->config.onChange) next = std::min(next, entry->nextCheckNs);
+  }
+  return next;
+}
+
+std::int64_t Scheduler::nextDataDeadlineNs() const noexcept {
+  std::int64_t next = NEVER;
+  for (const ScheduledEntry* pair : m_impl->pairs) {
+    if (pair->sdmPending) next = std::min(next, pair->sdmDueNs);
   }
   return next;
 }

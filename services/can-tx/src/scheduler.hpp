@@ -43,6 +43,7 @@
 #include "openvcu/schedule/schedule_config.hpp"
 #include "openvcu/signals/catalog.hpp"
 #include "openvcu/signals/table.hpp"
+#include "error_histogram.hpp"
 
 namespace openvcu::cantx {
 
@@ -93,26 +94,6 @@ class Clock {
   [[nodiscard]] virtual std::int64_t realtimeNs() noexcept = 0;
 };
 
-/// |error| histogram: 1 us buckets up to 2 ms, then one overflow bucket; the maximum is exact.
-/// Written by one thread, read by another (relaxed atomics: a reader sees each counter whole).
-class ErrorHistogram {
- public:
-  static constexpr std::size_t BUCKETS = 2000;
-  void record(std::int64_t errorNs) noexcept;
-  struct Summary {
-    std::uint64_t count{};
-    std::int64_t p50Us{};
-    std::int64_t p99Us{};
-    std::int64_t maxUs{};
-  };
-  [[nodiscard]] Summary summary() const noexcept;
-
- private:
-  std::array<std::atomic<std::uint32_t>, BUCKETS + 1> m_buckets{};
-  std::atomic<std::uint64_t> m_count{};
-  std::atomic<std::int64_t> m_maxNs{};
-};
-
 /// Per scheduled message; written by the scheduler's thread, readable from any thread.
 struct MessageStats {
   std::atomic<std::uint64_t> frames{};        ///< frames of this message sent (SDMs, not their SHMs)
@@ -156,6 +137,10 @@ class Scheduler {
   void run(std::int64_t nowNs) noexcept;
   /// The earliest time run() has something to do (INT64_MAX: nothing scheduled).
   [[nodiscard]] std::int64_t nextDeadlineNs() const noexcept;
+  /// The earliest deadline of a pending SDM (its SHM went out, deltaNs not yet passed), or
+  /// INT64_MAX. The transmit thread stays on the CPU for an SDM due soon instead of sleeping
+  /// again (tx_thread.hpp, planWait). nextDeadlineNs() is never later than it.
+  [[nodiscard]] std::int64_t nextDataDeadlineNs() const noexcept;
 
   // ---- changes (by index into Schedule::messages; checked by the caller) ----------------
   void setCycle(std::size_t scheduled, std::int64_t cycleNs, std::int64_t nowNs) noexcept;

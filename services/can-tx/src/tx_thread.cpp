@@ -34,7 +34,23 @@ void futexWake(std::atomic<std::uint32_t>& word) noexcept {
   ::syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAKE_PRIVATE, 1, nullptr, nullptr, 0);
 }
 
+/// The CPU's spin-wait hint between two clock reads (less power, no memory-order stall).
+inline void cpuRelax() noexcept {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__) || defined(__arm__)
+  asm volatile("yield" ::: "memory");
+#endif
+}
+
 }  // namespace
+
+WaitPlan planWait(std::int64_t nowNs, std::int64_t nextNs, std::int64_t sdmNs, std::int64_t spinNs) noexcept {
+  if (nextNs <= nowNs) return {WaitPlan::Kind::None, nowNs};
+  if (sdmNs == INT64_MAX || spinNs <= 0) return {WaitPlan::Kind::Sleep, nextNs};
+  if (sdmNs - nowNs <= spinNs) return {WaitPlan::Kind::Spin, std::min(nextNs, sdmNs)};
+  return {WaitPlan::Kind::Sleep, std::min(nextNs, sdmNs - spinNs)};
+}
 
 bool TxInbox::push(TxCommand&& command) noexcept {
   const std::uint64_t tail = m_tail.load(std::memory_order_relaxed);
@@ -58,13 +74,17 @@ TxThread::TxThread(Scheduler& scheduler, std::vector<can::Link*> links,
 
 TxThread::~TxThread() { stop(); }
 
-std::string TxThread::start(int realtimePriority) {
+std::string TxThread::start(int realtimePriority, std::int64_t sdmSpinNs) {
+  m_sdmSpinNs = std::max<std::int64_t>(sdmSpinNs, 0);
   m_thread = std::thread([this] { run(); });
   if (realtimePriority <= 0) return {};
   sched_param parameters{};
   parameters.sched_priority = realtimePriority;
   const int error = ::pthread_setschedparam(m_thread.native_handle(), SCHED_FIFO, &parameters);
-  if (error == 0) return {};
+  if (error == 0) {
+    m_realtime.store(true, std::memory_order_relaxed);
+    return {};
+  }
   return "realtimePriority " + std::to_string(realtimePriority) + ": SCHED_FIFO refused (" + std::strerror(error) +
          "); the transmit thread runs with normal scheduling";
 }
@@ -125,6 +145,25 @@ void TxThread::service(std::int64_t nowNs) noexcept {
   }
 }
 
+void TxThread::spinUntil(std::int64_t deadlineNs) noexcept {
+  // Bounded by planWait: at most sdmSpinNs and at most the pair's delta. Under SCHED_FIFO a
+  // sched_yield() between clock reads lets a thread of the same priority on this core run
+  // (it would otherwise wait for the whole spin); else the CPU's pause hint.
+  const std::int64_t beginNs = clock::monotonicNs();
+  std::int64_t now = beginNs;
+  const bool yield = m_realtime.load(std::memory_order_relaxed);
+  while (now < deadlineNs && !m_stopping.load(std::memory_order_relaxed)) {
+    if (yield) {
+      ::sched_yield();
+    } else {
+      cpuRelax();
+    }
+    now = clock::monotonicNs();
+  }
+  m_spins.fetch_add(1, std::memory_order_relaxed);
+  m_spinTotalNs.fetch_add(now - beginNs, std::memory_order_relaxed);
+}
+
 void TxThread::run() noexcept {
   // The timer slack of a normal thread (50 us) would land in every period: ask for 1 ns.
   ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
@@ -136,15 +175,23 @@ void TxThread::run() noexcept {
     while (m_inbox.pop(command)) apply(command, now);
     m_scheduler.run(now);
     now = clock::monotonicNs();
-    if (now >= m_nextServiceNs) service(now);
-    const std::int64_t deadline = std::min(m_scheduler.nextDeadlineNs(), m_nextServiceNs);
-    if (deadline > clock::monotonicNs()) {
+    const std::int64_t sdmNs = m_scheduler.nextDataDeadlineNs();
+    // the link housekeeping (draining the links' receive queues, their events) waits while an
+    // SDM is due within the spin time, so that it cannot delay that SDM; it runs right after it
+    const bool sdmSoon = sdmNs != INT64_MAX && sdmNs - now <= m_sdmSpinNs;
+    if (now >= m_nextServiceNs && !sdmSoon) service(now);
+    const std::int64_t serviceNs = sdmSoon ? INT64_MAX : m_nextServiceNs;
+    const WaitPlan plan =
+        planWait(clock::monotonicNs(), std::min(m_scheduler.nextDeadlineNs(), serviceNs), sdmNs, m_sdmSpinNs);
+    if (plan.kind == WaitPlan::Kind::Sleep) {
       m_sleeping.store(true, std::memory_order_seq_cst);
       // a post between the load of `seen` and here changed the word: the wait returns at once
-      futexWaitUntil(m_wake, seen, deadline);
+      futexWaitUntil(m_wake, seen, plan.untilNs);
       m_sleeping.store(false, std::memory_order_relaxed);
+      m_wakeups.fetch_add(1, std::memory_order_relaxed);
+    } else if (plan.kind == WaitPlan::Kind::Spin) {
+      spinUntil(plan.untilNs);
     }
-    m_wakeups.fetch_add(1, std::memory_order_relaxed);
   }
 }
 

@@ -3,9 +3,12 @@
 // links. It sleeps on a futex with an absolute CLOCK_MONOTONIC deadline (the scheduler's
 // next one), so it wakes exactly when a frame is due, or at once when the service's loop
 // thread posts something (a one-shot frame, a request to answer, a schedule change).
+// The one exception (issue 27): when a J1939-76 SDM is due within `sdmSpinNs` it does not
+// sleep again but stays on the CPU until that deadline (planWait below), so a short
+// SHM -> SDM delta does not pay a second wake-up latency.
 //
 //   cantx::TxThread thread(scheduler, links, onBusEvent);
-//   thread.start(priority);                             // SCHED_FIFO when priority > 0
+//   thread.start(priority, sdmSpinNs);                  // SCHED_FIFO when priority > 0
 //   thread.post(cantx::SendOnce{bus, frame});           // from the loop thread
 //   thread.stop();
 //
@@ -65,6 +68,29 @@ struct AddMessage {
 using TxCommand = std::variant<SendOnce, AnswerRequest, SetCycle, SetEnabled, SetDefault, AddMessage>;
 static_assert(std::is_nothrow_move_assignable_v<TxCommand>);
 
+/// How the transmit thread waits for its next deadline (planWait).
+struct WaitPlan {
+  enum class Kind : std::uint8_t {
+    None,   ///< something is due now: run at once
+    Sleep,  ///< futex sleep until untilNs (or a post)
+    Spin,   ///< stay on the CPU, reading CLOCK_MONOTONIC, until untilNs
+  };
+  Kind kind{Kind::None};
+  std::int64_t untilNs{};
+};
+
+/// The transmit thread's choice, free of clocks for tests. `nextNs`: the earliest deadline
+/// (Scheduler::nextDeadlineNs, link service); `sdmNs`: the earliest pending SDM's
+/// (Scheduler::nextDataDeadlineNs; INT64_MAX none); `spinNs`: the schedule's sdmSpinUs.
+///   - nextNs <= nowNs: None;
+///   - an SDM due within spinNs of nowNs: Spin until nextNs (which is <= sdmNs), so the
+///     spin never lasts longer than spinNs nor than the pair's delta;
+///   - else Sleep until nextNs, or until spinNs before the SDM when that is earlier (a pair
+///     whose delta is longer than spinNs sleeps once, then spins the last spinNs).
+/// @note noexcept, pure.
+[[nodiscard]] WaitPlan planWait(std::int64_t nowNs, std::int64_t nextNs, std::int64_t sdmNs,
+                                std::int64_t spinNs) noexcept;
+
 /// Single-producer single-consumer ring of TxCommands.
 class TxInbox {
  public:
@@ -92,9 +118,10 @@ class TxThread {
   TxThread(const TxThread&) = delete;
   TxThread& operator=(const TxThread&) = delete;
 
-  /// Starts the thread; `realtimePriority` > 0 asks for SCHED_FIFO. Returns a warning text
-  /// when that was refused (the thread then runs with normal scheduling), else empty.
-  std::string start(int realtimePriority);
+  /// Starts the thread; `realtimePriority` > 0 asks for SCHED_FIFO. `sdmSpinNs` (>= 0): an
+  /// SDM due within this is waited for on the CPU (planWait). Returns a warning text when
+  /// SCHED_FIFO was refused (the thread then runs with normal scheduling), else empty.
+  std::string start(int realtimePriority, std::int64_t sdmSpinNs = 0);
   /// Stops and joins the thread (idempotent).
   void stop() noexcept;
 
@@ -102,13 +129,17 @@ class TxThread {
   /// (counted; `command` is left with the caller).
   bool post(TxCommand&& command) noexcept;
   [[nodiscard]] std::uint64_t refusedPosts() const noexcept { return m_refused.load(std::memory_order_relaxed); }
-  /// Wake-ups of the thread (deadlines and posts), for the heartbeat.
+  /// Wake-ups of the thread from its futex sleep (deadlines and posts), for the heartbeat.
   [[nodiscard]] std::uint64_t wakeups() const noexcept { return m_wakeups.load(std::memory_order_relaxed); }
+  /// Waits on the CPU for an SDM (planWait's Spin) and their total time, for the heartbeat.
+  [[nodiscard]] std::uint64_t spins() const noexcept { return m_spins.load(std::memory_order_relaxed); }
+  [[nodiscard]] std::int64_t spinNs() const noexcept { return m_spinTotalNs.load(std::memory_order_relaxed); }
 
  private:
   void run() noexcept;
   void apply(TxCommand& command, std::int64_t nowNs) noexcept;
   void service(std::int64_t nowNs) noexcept;
+  void spinUntil(std::int64_t deadlineNs) noexcept;
 
   Scheduler& m_scheduler;
   std::vector<can::Link*> m_links;
@@ -119,6 +150,10 @@ class TxThread {
   std::atomic<bool> m_stopping{};
   std::atomic<std::uint64_t> m_refused{};
   std::atomic<std::uint64_t> m_wakeups{};
+  std::atomic<std::uint64_t> m_spins{};
+  std::atomic<std::int64_t> m_spinTotalNs{};
+  std::int64_t m_sdmSpinNs{};            ///< set before the thread starts
+  std::atomic<bool> m_realtime{};        ///< SCHED_FIFO granted: the spin yields to its peers
   std::int64_t m_nextServiceNs{};
   std::array<can::ReceivedFrame, 16> m_scratch{};
   std::thread m_thread;

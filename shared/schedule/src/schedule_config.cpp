@@ -91,7 +91,7 @@ class Loader {
     if (root != nullptr) {
       if (!m_check.isObject(*root, "")) return schedule;
       m_check.onlyKeys(*root, "", {"include", "exclude", "messages", "groups", "writers", "safeValues", "timeDate",
-                                   "realtimePriority", "overlay", "comment"});
+                                   "realtimePriority", "sdmSpinUs", "overlay", "comment"});
     }
     groups(root, schedule);
     selectMessages(root, schedule);
@@ -105,6 +105,14 @@ class Loader {
           m_check.error("/realtimePriority", "must be a whole number from 0 (normal scheduling) to 99");
         } else {
           schedule.realtimePriority = static_cast<int>(*priority);
+        }
+      }
+      if (auto spin = m_check.number(*root, "", "sdmSpinUs", false)) {
+        if (!(*spin >= 0 && *spin <= static_cast<double>(MAX_SDM_SPIN_US)) || *spin != std::floor(*spin)) {
+          m_check.error("/sdmSpinUs", "must be a whole number of microseconds from 0 (the transmit thread always "
+                                      "sleeps) to " + std::to_string(MAX_SDM_SPIN_US));
+        } else {
+          schedule.sdmSpinNs = static_cast<std::int64_t>(*spin) * 1000;
         }
       }
       if (auto overlay = m_check.string(*root, "", "overlay", false)) {

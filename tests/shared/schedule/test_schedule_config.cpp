@@ -133,6 +133,25 @@ TEST_CASE("refusals name the JSON path and the reason") {
   CHECK(f.error("{\"messages\": {\n}").find("schedule.json") != std::string::npos);  // syntax: file, line
 }
 
+TEST_CASE("issue 27: sdmSpinUs defaults to 500 us, takes 0..10000 whole microseconds, refuses anything else") {
+  Fixture f;
+  auto defaults = f.load("{}");
+  REQUIRE(defaults);
+  CHECK(defaults->sdmSpinNs == schedule::DEFAULT_SDM_SPIN_US * 1000);
+  auto off = f.load(R"({"sdmSpinUs": 0})");
+  REQUIRE(off);
+  CHECK(off->sdmSpinNs == 0);
+  auto longest = f.load(R"({"sdmSpinUs": 10000})");
+  REQUIRE(longest);
+  CHECK(longest->sdmSpinNs == 10'000'000);
+  const std::string expected =
+      "/sdmSpinUs: must be a whole number of microseconds from 0 (the transmit thread always sleeps) to 10000";
+  CHECK(f.error(R"({"sdmSpinUs": 10001})").find(expected) != std::string::npos);
+  CHECK(f.error(R"({"sdmSpinUs": -1})").find(expected) != std::string::npos);
+  CHECK(f.error(R"({"sdmSpinUs": 2.5})").find(expected) != std::string::npos);
+  CHECK(f.error(R"({"sdmSpinUs": "500"})").find("/sdmSpinUs") != std::string::npos);
+}
+
 TEST_CASE("the overlay: applied over the schedule all or nothing, saved atomically, read back") {
   Fixture f;
   auto schedule = f.load(R"({"overlay": "runtime.json"})");

@@ -26,6 +26,18 @@
 namespace openvcu::cli {
 namespace {
 
+/// A percentile of vcu-can-tx's error histograms (tx.<Msg>.period_err_p99_us) as text, with
+/// the resolution it has: 1 us up to 2,048 us, then 32 buckets per doubling (the middle of
+/// its bucket, within 1.6 %) up to 2^24 us; a percentile beyond that reads as 2^24 us and
+/// means "at least 16.8 s" (services/can-tx/src/error_histogram.hpp, issue 27).
+std::string txPercentileText(std::int64_t micros) {
+  constexpr std::int64_t LINEAR_US = 2048;
+  constexpr std::int64_t RANGE_US = std::int64_t{1} << 24;
+  if (micros >= RANGE_US) return "beyond the histogram's 16.8 s range (see the max)";
+  if (micros >= LINEAR_US) return std::to_string(micros) + " us (+-1.6 %)";
+  return std::to_string(micros) + " us";
+}
+
 constexpr const char* TOP_DESCRIPTION = "Live view of a running stack: services, FSM state, key signals, faults";
 constexpr const char* TOP_FOOTER =
     "Refreshes once a second until Ctrl-C (or --for SECONDS): the services heard on the\n"
@@ -223,7 +235,7 @@ class Top {
           which = name.substr(3, name.size() - 3 - std::string(".period_err_p99_us").size());
         }
       }
-      if (worst >= 0) out += "TX TIMING   worst period error p99 " + std::to_string(worst) + " us (" + which + ")\n";
+      if (worst >= 0) out += "TX TIMING   worst period error p99 " + txPercentileText(worst) + " (" + which + ")\n";
     }
   }
 

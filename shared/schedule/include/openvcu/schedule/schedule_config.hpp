@@ -68,6 +68,12 @@ struct SafeValue {
   double value{};
 };
 
+/// Default of "sdmSpinUs": about this VM's SCHED_FIFO wake-up latency p99.9 (190-503 us by
+/// cyclictest, docs/benchmarks.md "can-tx"); covers HHEA's shortest delta, S1_ES's 292 us.
+inline constexpr std::int64_t DEFAULT_SDM_SPIN_US = 500;
+/// The largest "sdmSpinUs" accepted (10 ms): a spin is CPU time.
+inline constexpr std::int64_t MAX_SDM_SPIN_US = 10'000;
+
 struct Schedule {
   std::string file;     ///< the schedule file ("" = defaults only)
   std::string overlay;  ///< the overlay file path
@@ -78,6 +84,9 @@ struct Schedule {
   std::int8_t localHourOffset{};
   std::int8_t localMinuteOffset{};
   int realtimePriority{};
+  /// "sdmSpinUs": an SDM due within this of now is waited for on the CPU, not by a second
+  /// sleep (vcu-can-tx's transmit thread, issue 27); 0: always sleep.
+  std::int64_t sdmSpinNs{DEFAULT_SDM_SPIN_US * 1000};
 
   /// The scheduled entry of a DBC message, or nullptr.
   [[nodiscard]] const ScheduledMessage* find(std::size_t messageIndex) const noexcept;
