@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
@@ -64,6 +65,8 @@ struct WaiterImpl {
   std::mutex mutex;            // guards fds and stopRequested (shared with the watcher)
   std::vector<WatchedFd> fds;  // capacity reserved at create(): no allocation in wait
   bool stopRequested{false};
+  std::atomic<bool> anyFired{false};  // set by the watcher: a wait need not lock otherwise
+  std::size_t reportedCount{0};       // caller's thread only: fds to re-arm
   int epollFd{-1};    // the watched fds; attach, detach and re-arm are epoll_ctl calls
                       // from the caller's thread: the watcher is never woken for them
   int controlFd{-1};  // eventfd in the epoll set: wakes the watcher only to stop it
@@ -117,7 +120,7 @@ void WaiterImpl::watch() noexcept {
       if (errno == EINTR) continue;
       return;  // cannot happen with valid arguments; the waits then simply time out
     }
-    bool anyFired = false;
+    bool firedNow = false;
     {
       std::lock_guard<std::mutex> lock(mutex);
       if (stopRequested) return;
@@ -127,12 +130,15 @@ void WaiterImpl::watch() noexcept {
         for (WatchedFd& watched : fds) {
           if (static_cast<std::uint64_t>(watched.fd) == key && !watched.reported) {
             watched.fired = true;
-            anyFired = true;
+            firedNow = true;
           }
         }
       }
     }
-    if (anyFired) trigger.trigger();
+    if (firedNow) {
+      anyFired = true;
+      trigger.trigger();
+    }
   }
 }
 
@@ -224,7 +230,7 @@ std::span<const std::uint64_t> Waiter::waitFor(std::chrono::nanoseconds timeout)
 
   // Fds reported by the previous wait have been handled by now: watch them again (one
   // epoll_ctl each, only for fds that fired; the watcher is not woken).
-  if (impl.watcher.joinable()) {
+  if (impl.reportedCount > 0) {
     std::lock_guard<std::mutex> lock(impl.mutex);
     for (WatchedFd& watched : impl.fds) {
       if (watched.reported) {
@@ -232,6 +238,7 @@ std::span<const std::uint64_t> Waiter::waitFor(std::chrono::nanoseconds timeout)
         impl.arm(watched.fd, EPOLL_CTL_MOD);
       }
     }
+    impl.reportedCount = 0;
   }
 
   const auto nanoseconds = std::max<std::int64_t>(0, timeout.count());
@@ -246,13 +253,18 @@ std::span<const std::uint64_t> Waiter::waitFor(std::chrono::nanoseconds timeout)
   }
   // Collect fired fds whether or not the trigger was seen yet: the watcher may fire between
   // the WaitSet returning and here; a trigger left over then only causes one empty wake.
-  if (impl.watcher.joinable()) {
+  // A fd fired after the exchange below is collected by the next wait (its trigger ends it).
+  if (impl.anyFired.exchange(false)) {
     std::lock_guard<std::mutex> lock(impl.mutex);
     for (WatchedFd& watched : impl.fds) {
       if (watched.fired && count < impl.ready.size()) {
         watched.fired = false;
         watched.reported = true;
+        ++impl.reportedCount;
         impl.ready[count++] = watched.id;
+      } else if (watched.fired) {
+        impl.anyFired = true;  // no room in this wait: the next one reports it
+        impl.trigger.trigger();
       }
     }
   }

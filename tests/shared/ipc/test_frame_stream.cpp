@@ -315,7 +315,7 @@ std::size_t threadCount() {
 
 }  // namespace
 
-TEST_CASE("a waiter without fds starts no watcher thread; the first attachFd starts one") {
+TEST_CASE("a waiter without fds starts no watcher thread, and the first attachFd starts one") {
   if (!startRoudiAndRuntime()) return;
   auto rx = ipc::FrameSubscriber::create({"test", "threads", ipc::FrameStream::Received});
   REQUIRE(rx.ok());
