@@ -22,10 +22,10 @@ constexpr std::size_t BATCH = 64;
 /// batchWindowUs up to this many times it (1 ms -> 4 ms by default): fewer wake-ups, at
 /// most this window of added latency (services/can-rx/README.md).
 constexpr std::int64_t MAX_WINDOW_FACTOR = 4;
-/// A drain that read more frames than this (a quarter of the sim link's 256-sample queue,
-/// a fifth of a SocketCAN receive buffer's worth) skips the next window: the queue must
-/// never fill while the loop sleeps.
-constexpr std::size_t QUEUE_HIGH = 64;
+/// A drain that read more frames than this (an eighth of the sim link's 256-sample queue)
+/// skips the next window and resets it: the queue must keep room for a sender's burst
+/// while the loop sleeps (at 32,000 frames/s the window then stays at 1-2 ms).
+constexpr std::size_t QUEUE_HIGH = 32;
 
 can::LinkOptions linkOptions(const config::BusConfig& bus, std::vector<can::IdFilter> filters) {
   can::LinkOptions options = bus.linkOptions();
