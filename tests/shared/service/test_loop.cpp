@@ -1,9 +1,10 @@
-// The loop's poll back end (no iceoryx): fds, timers, stop, removal. The iceoryx back end
+// The loop's poll back end (no iceoryx): fds, timers, deadlines, batch windows, stop, removal. The iceoryx back end
 // (frame subscribers through ipc::Waiter) is tested in test_service_runtime with a real RouDi.
 
 #include <doctest/doctest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <thread>
 #include <vector>
 
@@ -330,4 +331,43 @@ TEST_CASE("a batch window never delays a timer past its deadline") {
 
   CHECK(tickedAt >= first);
   CHECK(tickedAt < first + 5s);
+}
+
+TEST_CASE("the batch window doubles up to its maximum while work keeps coming and falls back after a wait that blocked") {
+  service::Loop sut = makeLoop();
+  constexpr auto FIRST = 1ms;
+  constexpr auto MAX = 4ms;
+  constexpr int BUSY_CALLS = 10;  // each finds the next byte already waiting
+  sut.setBatchWindow(FIRST, MAX);
+  Pipe pipe;
+  std::vector<std::chrono::nanoseconds> windows;  // the window chosen before each call
+  std::thread writer;
+  REQUIRE(sut.addFd(pipe.readEnd(),
+                    [&] {
+                      pipe.take();
+                      windows.push_back(sut.currentBatchWindow());
+                      const auto calls = static_cast<int>(windows.size());
+                      if (calls < BUSY_CALLS) {
+                        pipe.put();
+                      } else if (calls == BUSY_CALLS) {
+                        writer = std::thread([&pipe] {
+                          std::this_thread::sleep_for(20ms);  // the loop's next wait blocks
+                          pipe.put();
+                        });
+                      } else if (calls == BUSY_CALLS + 1) {
+                        pipe.put();
+                      } else {
+                        sut.stop(0);
+                      }
+                    })
+              .ok());
+
+  pipe.put();
+  CHECK(sut.run() == 0);
+  writer.join();
+
+  REQUIRE(windows.size() == BUSY_CALLS + 2);
+  CHECK(windows.front() == FIRST);
+  CHECK(*std::max_element(windows.begin(), windows.end()) == MAX);  // never more than the maximum
+  CHECK(windows.back() == FIRST);  // the wait before the previous call blocked for ~20 ms
 }

@@ -104,7 +104,8 @@ class Loop {
   /// From a callback: no batch sleep after this dispatch, and the window falls back to the
   /// first one (e.g. a receive queue is filling up faster than the window allows).
   void skipNextBatchWindow() noexcept;
-  /// The window run() sleeps after the next fd or subscriber dispatch (for tests and stats).
+  /// The window of run()'s latest batch sleep (the first window before any), for tests and
+  /// stats.
   [[nodiscard]] std::chrono::nanoseconds currentBatchWindow() const noexcept;
   /// true when the iceoryx back end (ipc::Waiter) is in use.
   [[nodiscard]] bool usesWaiter() const noexcept;
