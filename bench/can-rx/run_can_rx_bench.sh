@@ -20,9 +20,14 @@
 # /proc/<pid>/task/*/schedstat run times (ns), in % of one core. After each window the
 # heartbeat counters (`vcu status`) must show frames = frames sent and dropped = 0 per bus.
 # environment: IDLE_SECONDS (10), TWO_BUS_RATE (4000), TWO_BUS_SECONDS (30),
-#              STEP_RATES ("8000 16000 32000 64000"), STEP_SECONDS (10), SKIP_INPROCESS (unset),
+#              STEP_RATES ("8000 16000 32000 64000"; empty: no steps), STEP_SECONDS (10), SKIP_INPROCESS (unset),
 #              PERF_SECONDS (unset: no profile; N: an extra two-bus window under `perf record`),
-#              BATCH_WINDOW_US (1000: vcu-can-rx's receive-file batch window)
+#              BATCH_WINDOW_US (1000: vcu-can-rx's receive-file batch window),
+#              CAN_RX_BIN (BUILD_DIR/bin/vcu-can-rx: another vcu-can-rx to measure, e.g. a copy of
+#              an older build kept under BUILD_DIR for a before/after comparison)
+# The last line is `RESULT cpu_pct_per_bus=... cpu_pct_two_bus=... wakeups_per_s=... frames_ok=1|0 ...`
+# (the two-bus window: CPU % of one core (schedstat) / 2, wake-ups = voluntary context
+# switches of all its threads per second).
 # exit: 0; 1 when the two-bus run lost or miscounted a frame or something failed to start
 # (a step that loses frames is reported and does not count toward the highest rate).
 set -euo pipefail
@@ -37,28 +42,32 @@ bench_isolate "$build" "vcu vcu-can-rx bench_receiver bench_sim_sender" bin/vcu 
 idleSeconds="${IDLE_SECONDS:-10}"
 twoBusRate="${TWO_BUS_RATE:-4000}"
 twoBusSeconds="${TWO_BUS_SECONDS:-30}"
-stepRates="${STEP_RATES:-8000 16000 32000 64000}"
+stepRates="${STEP_RATES-8000 16000 32000 64000}"
 stepSeconds="${STEP_SECONDS:-10}"
+canRxBin="${CAN_RX_BIN:-$build/bin/vcu-can-rx}"
 work=/tmp/can-rx-bench
 mkdir -p "$work"
 config="$work/vehicle.json"
 tick="$(getconf CLK_TCK)"
 vcu="$build/bin/vcu"
 summary=()
+twoBusCpu=0 twoBusTicks=0 twoBusWakeups=0 twoBusSwitches=0 twoBusUsPerFrame=0 twoBusOk=0 twoBusLoad=0
 
 
 # CPU of process $1: "<ticks> <schedstat ns> <switches>" (ticks: utime+stime of every thread
 # that lived; schedstat ns and context switches, voluntary + not, summed over live threads).
 cpu_sample() {
-  local pid="$1" ticks ns switches
+  local pid="$1" ticks ns switches voluntary
   ticks="$(awk '{print $14 + $15}' "/proc/$pid/stat")"
   ns="$(cat /proc/"$pid"/task/*/schedstat 2>/dev/null | awk '{ sum += $1 } END { printf "%.0f", sum }')"
   switches="$(cat /proc/"$pid"/task/*/status 2>/dev/null | awk '/ctxt_switches:/ { sum += $2 } END { printf "%.0f", sum }')"
-  echo "$ticks $ns $switches"
+  voluntary="$(cat /proc/"$pid"/task/*/status 2>/dev/null | awk '/^voluntary_ctxt_switches:/ { sum += $2 } END { printf "%.0f", sum }')"
+  echo "$ticks $ns $switches $voluntary"
 }
-ticks_of() { echo "${1%% *}"; }
-ns_of() { local rest="${1#* }"; echo "${rest%% *}"; }
-switches_of() { echo "${1##* }"; }
+ticks_of() { echo "$1" | cut -d' ' -f1; }
+ns_of() { echo "$1" | cut -d' ' -f2; }
+switches_of() { echo "$1" | cut -d' ' -f3; }
+voluntary_of() { echo "$1" | cut -d' ' -f4; }
 
 # The latest heartbeat counters of vcu-can-rx as "name=value" words (one per line).
 heartbeat_counters() {
@@ -88,6 +97,13 @@ settled_counters() {
     fi
     previous="$current"
   done
+}
+
+# An error before the windows ran: still one RESULT line, with frames_ok=0.
+fail() {
+  echo "error: $1" >&2
+  echo "RESULT cpu_pct_per_bus=0 cpu_pct_two_bus=0 wakeups_per_s=0 frames_ok=0 error=$2"
+  exit 1
 }
 
 percent() { awk -v n="$1" -v d="$2" 'BEGIN { printf "%.3f", (d > 0 ? 100 * n / d : 0) }'; }
@@ -122,6 +138,7 @@ run_load() {
   local tickCpu tickNs=$(( ($(ticks_of "$c1") - $(ticks_of "$c0")) * 1000000000 / tick ))
   local schedNs=$(( $(ns_of "$c1") - $(ns_of "$c0") ))
   local switches=$(( $(switches_of "$c1") - $(switches_of "$c0") ))
+  local voluntary=$(( $(voluntary_of "$c1") - $(voluntary_of "$c0") ))
   tickCpu="$(percent "$tickNs" "$wallNs")"
   local schedCpu
   schedCpu="$(percent "$schedNs" "$wallNs")"
@@ -153,6 +170,15 @@ run_load() {
     if (( frames != sent || dropped != 0 || busy != 0 )); then ok=0; line+="  <- MISMATCH"; fi
     echo "$line"
   done
+  if [[ "$label" == two-bus ]]; then
+    twoBusCpu="$schedCpu"
+    twoBusTicks="$tickCpu"
+    twoBusWakeups="$(awk -v s="$voluntary" -v w="$wallNs" 'BEGIN { printf "%.0f", s * 1e9 / w }')"
+    twoBusSwitches="$(awk -v s="$switches" -v w="$wallNs" 'BEGIN { printf "%.0f", s * 1e9 / w }')"
+    twoBusUsPerFrame="$(awk -v ns="$schedNs" -v n="$sentTotal" 'BEGIN { printf "%.2f", (n > 0 ? ns / n / 1000 : 0) }')"
+    twoBusOk="$ok"
+    twoBusLoad="$load0"
+  fi
   summary+=("$(printf '%-10s %-16s %6s fr/s x %3s s  CPU %7s %% (ticks) %7s %% (schedstat)  %s' "$label" "${buses[*]}" "$rate" "$seconds" "$tickCpu" "$schedCpu" "$( ((ok)) && echo 'all frames counted, 0 dropped' || echo 'FRAMES LOST or not sent')")")
   return $(( ok ? 0 : 2 ))
 }
@@ -190,16 +216,15 @@ EOF
 
 iox-roudi -c "$repo/config/iceoryx/roudi.toml" >"$work/roudi.log" 2>&1 &
 roudiPid=$!
-wait_until 10 test -S /tmp/roudi || { echo "error: iox-roudi did not start: $(cat "$work/roudi.log")" >&2; exit 1; }
+wait_until 10 test -S /tmp/roudi || fail "iox-roudi did not start: $(cat "$work/roudi.log")" roudi_not_started
 
-"$build/bin/vcu-can-rx" --config "$config" >"$work/can-rx.log" 2>&1 &
+"$canRxBin" --config "$config" >"$work/can-rx.log" 2>&1 &
 canRxPid=$!
 if ! wait_until 30 grep -q ']: ready (' "$work/can-rx.log"; then
-  echo "error: vcu-can-rx not ready: $(cat "$work/can-rx.log")" >&2
-  exit 1
+  fail "vcu-can-rx not ready: $(cat "$work/can-rx.log")" can_rx_not_ready
 fi
 echo "== vcu-can-rx ready (pid $canRxPid, $(ls /proc/$canRxPid/task | wc -l) threads)"
-wait_until 10 test -n "$(heartbeat_counters)" || { echo "error: no heartbeat from vcu-can-rx" >&2; exit 1; }
+wait_until 10 test -n "$(heartbeat_counters)" || fail "no heartbeat from vcu-can-rx" no_heartbeat
 
 c0="$(cpu_sample "$canRxPid")"; t0="$(date +%s%N)"
 sleep "$idleSeconds"  # a measurement window, not a readiness wait
@@ -207,7 +232,8 @@ c1="$(cpu_sample "$canRxPid")"; t1="$(date +%s%N)"
 idleTicks="$(percent $(( ($(ticks_of "$c1") - $(ticks_of "$c0")) * 1000000000 / tick )) $(( t1 - t0 )))"
 idleSched="$(percent $(( $(ns_of "$c1") - $(ns_of "$c0") )) $(( t1 - t0 )))"
 idleSwitches="$(awk -v s=$(( $(switches_of "$c1") - $(switches_of "$c0") )) -v w=$(( t1 - t0 )) 'BEGIN { printf "%.0f", s * 1e9 / w }')"
-echo "== idle: vcu-can-rx CPU $idleTicks % (ticks) / $idleSched % (schedstat) over $idleSeconds s without traffic; $idleSwitches context switches/s"
+idleWakeups="$(awk -v s=$(( $(voluntary_of "$c1") - $(voluntary_of "$c0") )) -v w=$(( t1 - t0 )) 'BEGIN { printf "%.0f", s * 1e9 / w }')"
+echo "== idle: vcu-can-rx CPU $idleTicks % (ticks) / $idleSched % (schedstat) over $idleSeconds s without traffic; $idleSwitches context switches/s ($idleWakeups voluntary)"
 summary+=("$(printf '%-10s %-16s %6s fr/s x %3s s  CPU %7s %% (ticks) %7s %% (schedstat)' idle - 0 "$idleSeconds" "$idleTicks" "$idleSched")")
 
 status=0
@@ -242,4 +268,8 @@ kill -TERM "$canRxPid" 2>/dev/null || true
 wait "$canRxPid" 2>/dev/null || true
 kill -TERM "$roudiPid" 2>/dev/null || true
 wait "$roudiPid" 2>/dev/null || true
+echo "RESULT cpu_pct_per_bus=$(awk -v c="$twoBusCpu" 'BEGIN { printf "%.3f", c / 2 }') cpu_pct_two_bus=$twoBusCpu" \
+  "cpu_pct_two_bus_ticks=$twoBusTicks wakeups_per_s=$twoBusWakeups context_switches_per_s=$twoBusSwitches" \
+  "us_per_frame=$twoBusUsPerFrame frames_ok=$twoBusOk idle_cpu_pct=$idleSched idle_wakeups_per_s=$idleWakeups" \
+  "rate_per_bus=$twoBusRate seconds=$twoBusSeconds batch_window_us=${BATCH_WINDOW_US:-1000} load_average=$twoBusLoad"
 exit "$status"

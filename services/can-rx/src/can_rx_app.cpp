@@ -6,12 +6,7 @@
 #include <deque>
 #include <optional>
 
-#include <sys/timerfd.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <climits>
-#include <cstring>
 
 #include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
@@ -23,6 +18,14 @@ namespace openvcu::canrx {
 namespace {
 
 constexpr std::size_t BATCH = 64;
+/// Under sustained traffic the loop's batch window grows from the receive file's
+/// batchWindowUs up to this many times it (1 ms -> 4 ms by default): fewer wake-ups, at
+/// most this window of added latency (services/can-rx/README.md).
+constexpr std::int64_t MAX_WINDOW_FACTOR = 4;
+/// A drain that read more frames than this (an eighth of the sim link's 256-sample queue)
+/// skips the next window and resets it: the queue must keep room for a sender's burst
+/// while the loop sleeps (at 32,000 frames/s the window then stays at 1-2 ms).
+constexpr std::size_t QUEUE_HIGH = 32;
 
 can::LinkOptions linkOptions(const config::BusConfig& bus, std::vector<can::IdFilter> filters) {
   can::LinkOptions options = bus.linkOptions();
@@ -50,29 +53,24 @@ struct CanRxAppImpl final : ReceiverOutputs {
   service::Service& runtime;
   std::deque<BusIo> buses;  // deque: stable addresses for the loop's callbacks
   std::optional<Receiver> receiver;
-  int deadlineFd{-1};           ///< timerfd, one shot at the receiver's next deadline
+  std::optional<service::Loop::DeadlineId> deadline;  ///< the loop's one-shot at the receiver's next deadline
   std::int64_t armedNs{INT64_MAX};
   std::int64_t nextWindowNs{};
   std::array<can::ReceivedFrame, BATCH> batch{};
 
   explicit CanRxAppImpl(service::Service& service) : runtime(service) {}
   ~CanRxAppImpl() override {
-    if (deadlineFd >= 0) {
-      runtime.loop().removeFd(deadlineFd);
-      ::close(deadlineFd);
-    }
+    if (deadline) runtime.loop().removeDeadline(*deadline);
   }
 
-  /// Arms the deadline timer when the receiver's next deadline is earlier than the armed
-  /// one (frames only move deadlines later, so the timer is re-armed on each tick).
+  /// Moves the loop's deadline to the receiver's next deadline when that is earlier than
+  /// the armed one (frames only move deadlines later, so it is re-armed on each tick). A
+  /// loop deadline is a value, not a timer: setting it makes no system call.
   void arm(bool force) noexcept {
     const std::int64_t next = receiver->nextDeadlineNs();
     if (!force && next >= armedNs) return;
-    itimerspec spec{};
-    spec.it_value.tv_sec = static_cast<time_t>(next / 1'000'000'000);
-    spec.it_value.tv_nsec = static_cast<long>(next % 1'000'000'000);
-    if (spec.it_value.tv_sec == 0 && spec.it_value.tv_nsec == 0) spec.it_value.tv_nsec = 1;
-    if (::timerfd_settime(deadlineFd, TFD_TIMER_ABSTIME, &spec, nullptr) == 0) armedNs = next;
+    runtime.loop().setDeadline(*deadline, service::MonotonicTime{std::chrono::nanoseconds{next}});
+    armedNs = next;
   }
 
   // ---- ReceiverOutputs --------------------------------------------------------------------
@@ -129,11 +127,14 @@ struct CanRxAppImpl final : ReceiverOutputs {
 
   void drain(std::size_t bus) noexcept {
     can::Link& link = *buses[bus].link;
+    std::size_t total = 0;
     for (;;) {
       const std::size_t count = link.receive(batch);
       for (std::size_t i = 0; i < count; ++i) receiver->onFrame(bus, batch[i]);
+      total += count;
       if (count < batch.size()) break;
     }
+    if (total > QUEUE_HIGH) runtime.loop().skipNextBatchWindow();
     arm(false);
     while (const std::optional<can::BusEvent> maybeEvent = link.nextEvent()) {
       receiver->onBusEvent(bus, *maybeEvent);
@@ -160,8 +161,6 @@ struct CanRxAppImpl final : ReceiverOutputs {
   }
 
   void onTick() noexcept {
-    std::uint64_t expirations = 0;
-    [[maybe_unused]] const auto got = ::read(deadlineFd, &expirations, sizeof expirations);
     const std::int64_t now = clock::monotonicNs();
     receiver->onTick(now);
     if (now >= nextWindowNs) {
@@ -192,11 +191,12 @@ struct CanRxAppImpl final : ReceiverOutputs {
     for (std::size_t b = 0; b < buses.size(); ++b) {
       if (Status added = runtime.loop().addLink(*buses[b].link, [this, b] { drain(b); }); !added) return added.error();
     }
-    deadlineFd = ::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
-    if (deadlineFd < 0) return Error{std::string("timerfd_create: ") + std::strerror(errno)};
-    if (Status added = runtime.loop().addFd(deadlineFd, [this] { onTick(); }); !added) return added.error();
+    auto deadlineResult = runtime.loop().addDeadline([this] { onTick(); });
+    if (!deadlineResult) return deadlineResult.error();
+    deadline = *deadlineResult;
     arm(true);
-    runtime.loop().setBatchWindow(std::chrono::microseconds{receiver->batchWindowUs()});
+    const std::chrono::microseconds window{receiver->batchWindowUs()};
+    runtime.loop().setBatchWindow(window, window * MAX_WINDOW_FACTOR);
     registerCounters();
     return {};
   }

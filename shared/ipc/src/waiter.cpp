@@ -2,12 +2,13 @@
 
 #include "openvcu/ipc/frame_stream.hpp"
 
-#include <poll.h>
+#include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
@@ -23,15 +24,16 @@ namespace openvcu::ipc {
 
 namespace {
 
-/// One watched fd. armed: the watcher polls it; reported: it fired, the caller was told,
-/// and it is armed again at the start of the next wait.
+/// One watched fd. fired: the watcher saw it readable and has not told the caller yet;
+/// reported: the caller was told, and it is re-armed at the start of the next wait.
 struct WatchedFd {
   int fd{-1};
   std::uint64_t id{};
-  bool armed{true};
   bool fired{false};
   bool reported{false};
 };
+
+constexpr std::uint64_t CONTROL_KEY = ~std::uint64_t{0};  // epoll key of the stop eventfd
 
 }  // namespace
 
@@ -39,14 +41,21 @@ struct WaiterImpl {
   WaiterImpl() = default;
   WaiterImpl(const WaiterImpl&) = delete;
   WaiterImpl& operator=(const WaiterImpl&) = delete;
-  ~WaiterImpl() { stopWatcher(); }
+  ~WaiterImpl() {
+    stopWatcher();
+    if (epollFd >= 0) ::close(epollFd);
+  }
 
   Status startWatcher();
   void stopWatcher() noexcept;
   void watch() noexcept;
-  void nudgeWatcher() noexcept {
-    const std::uint64_t one = 1;
-    [[maybe_unused]] const auto written = ::write(controlFd, &one, sizeof(one));
+  /// Watches `fd` for one readiness report (EPOLLONESHOT): after the watcher saw it once it
+  /// is quiet until re-armed, so a readable fd the caller has not handled yet never spins.
+  bool arm(int fd, int op) const noexcept {
+    epoll_event event{};
+    event.events = EPOLLIN | EPOLLONESHOT;
+    event.data.u64 = static_cast<std::uint64_t>(fd);
+    return ::epoll_ctl(epollFd, op, fd, &event) == 0;
   }
 
   iox::popo::WaitSet<Waiter::CAPACITY + 1> waitSet;  // +1: the user trigger
@@ -56,7 +65,11 @@ struct WaiterImpl {
   std::mutex mutex;            // guards fds and stopRequested (shared with the watcher)
   std::vector<WatchedFd> fds;  // capacity reserved at create(): no allocation in wait
   bool stopRequested{false};
-  int controlFd{-1};  // eventfd: wakes the watcher (re-arm, attach, stop)
+  std::atomic<bool> anyFired{false};  // set by the watcher: a wait need not lock otherwise
+  std::size_t reportedCount{0};       // caller's thread only: fds to re-arm
+  int epollFd{-1};    // the watched fds; attach, detach and re-arm are epoll_ctl calls
+                      // from the caller's thread: the watcher is never woken for them
+  int controlFd{-1};  // eventfd in the epoll set: wakes the watcher only to stop it
   std::thread watcher;
 
   std::array<std::uint64_t, Waiter::CAPACITY> ready{};
@@ -64,70 +77,68 @@ struct WaiterImpl {
 
 Status WaiterImpl::startWatcher() {
   if (watcher.joinable()) return {};
+  epollFd = ::epoll_create1(EPOLL_CLOEXEC);
+  if (epollFd < 0) return Error{std::string("Waiter: epoll_create1 failed: ") + std::strerror(errno)};
   controlFd = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
   if (controlFd < 0) return Error{std::string("Waiter: eventfd failed: ") + std::strerror(errno)};
+  epoll_event control{};
+  control.events = EPOLLIN;
+  control.data.u64 = CONTROL_KEY;
+  if (::epoll_ctl(epollFd, EPOLL_CTL_ADD, controlFd, &control) != 0) {
+    return Error{std::string("Waiter: epoll_ctl failed: ") + std::strerror(errno)};
+  }
   try {
     watcher = std::thread([this] { watch(); });
   } catch (const std::exception& e) {
-    ::close(controlFd);
-    controlFd = -1;
     return Error{std::string("Waiter: cannot start the fd watcher thread: ") + e.what()};
   }
   return {};
 }
 
 void WaiterImpl::stopWatcher() noexcept {
-  if (!watcher.joinable()) return;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    stopRequested = true;
+  if (watcher.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stopRequested = true;
+    }
+    const std::uint64_t one = 1;
+    [[maybe_unused]] const auto written = ::write(controlFd, &one, sizeof(one));
+    watcher.join();
   }
-  nudgeWatcher();
-  watcher.join();
-  ::close(controlFd);
+  if (controlFd >= 0) ::close(controlFd);
   controlFd = -1;
 }
 
-// The watcher thread: poll the armed fds; when one is readable, disarm it, mark it fired
-// and trigger the WaitSet. It blocks in poll() otherwise (never spins: a fired fd stays
-// disarmed until the caller has had a chance to handle it).
+// The watcher thread: blocks in epoll_wait; when a watched fd becomes readable (reported
+// once, EPOLLONESHOT) it marks it fired and triggers the WaitSet. It never spins and is
+// never woken for bookkeeping: re-arming happens in the caller's wait.
 void WaiterImpl::watch() noexcept {
-  std::array<pollfd, Waiter::CAPACITY + 1> pollFds{};
+  std::array<epoll_event, Waiter::CAPACITY + 1> events{};
   while (true) {
-    std::size_t count = 0;
-    pollFds[count++] = pollfd{controlFd, POLLIN, 0};
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (stopRequested) return;
-      for (const WatchedFd& watched : fds) {
-        if (watched.armed) pollFds[count++] = pollfd{watched.fd, POLLIN, 0};
-      }
-    }
-    const int rc = ::poll(pollFds.data(), static_cast<nfds_t>(count), -1);
-    if (rc < 0) {
+    const int count = ::epoll_wait(epollFd, events.data(), static_cast<int>(events.size()), -1);
+    if (count < 0) {
       if (errno == EINTR) continue;
       return;  // cannot happen with valid arguments; the waits then simply time out
     }
-    if ((pollFds[0].revents & POLLIN) != 0) {
-      std::uint64_t counter = 0;
-      [[maybe_unused]] const auto readBytes = ::read(controlFd, &counter, sizeof(counter));
-    }
-    bool anyFired = false;
+    bool firedNow = false;
     {
       std::lock_guard<std::mutex> lock(mutex);
       if (stopRequested) return;
-      for (std::size_t i = 1; i < count; ++i) {
-        if (pollFds[i].revents == 0) continue;
+      for (int i = 0; i < count; ++i) {
+        const std::uint64_t key = events[static_cast<std::size_t>(i)].data.u64;
+        if (key == CONTROL_KEY) continue;
         for (WatchedFd& watched : fds) {
-          if (watched.fd == pollFds[i].fd && watched.armed) {
-            watched.armed = false;
+          if (static_cast<std::uint64_t>(watched.fd) == key && !watched.reported) {
             watched.fired = true;
-            anyFired = true;
+            firedNow = true;
           }
         }
       }
     }
-    if (anyFired) trigger.trigger();
+    if (firedNow) {
+      anyFired = true;
+      trigger.trigger();
+    }
   }
 }
 
@@ -199,34 +210,36 @@ Status Waiter::attachFd(int fd, std::uint64_t id) {
     std::lock_guard<std::mutex> lock(m_impl->mutex);
     m_impl->fds.push_back(WatchedFd{fd, id});
   }
-  m_impl->nudgeWatcher();
+  if (!m_impl->arm(fd, EPOLL_CTL_ADD)) {
+    const int error = errno;
+    std::lock_guard<std::mutex> lock(m_impl->mutex);
+    m_impl->fds.pop_back();
+    return Error{"Waiter: cannot watch fd " + std::to_string(fd) + ": " + std::strerror(error)};
+  }
   return {};
 }
 
 void Waiter::detachFd(int fd) noexcept {
-  {
-    std::lock_guard<std::mutex> lock(m_impl->mutex);
-    std::erase_if(m_impl->fds, [fd](const WatchedFd& watched) { return watched.fd == fd; });
-  }
-  if (m_impl->watcher.joinable()) m_impl->nudgeWatcher();
+  std::lock_guard<std::mutex> lock(m_impl->mutex);
+  const auto erased = std::erase_if(m_impl->fds, [fd](const WatchedFd& watched) { return watched.fd == fd; });
+  if (erased > 0) ::epoll_ctl(m_impl->epollFd, EPOLL_CTL_DEL, fd, nullptr);
 }
 
 std::span<const std::uint64_t> Waiter::waitFor(std::chrono::nanoseconds timeout) noexcept {
   WaiterImpl& impl = *m_impl;
 
-  // Fds reported by the previous wait have been handled by now: watch them again.
-  bool rearmed = false;
-  if (impl.watcher.joinable()) {
+  // Fds reported by the previous wait have been handled by now: watch them again (one
+  // epoll_ctl each, only for fds that fired; the watcher is not woken).
+  if (impl.reportedCount > 0) {
     std::lock_guard<std::mutex> lock(impl.mutex);
     for (WatchedFd& watched : impl.fds) {
       if (watched.reported) {
         watched.reported = false;
-        watched.armed = true;
-        rearmed = true;
+        impl.arm(watched.fd, EPOLL_CTL_MOD);
       }
     }
+    impl.reportedCount = 0;
   }
-  if (rearmed) impl.nudgeWatcher();
 
   const auto nanoseconds = std::max<std::int64_t>(0, timeout.count());
   const auto notifications = impl.waitSet.timedWait(iox::units::Duration::fromNanoseconds(nanoseconds));
@@ -240,13 +253,18 @@ std::span<const std::uint64_t> Waiter::waitFor(std::chrono::nanoseconds timeout)
   }
   // Collect fired fds whether or not the trigger was seen yet: the watcher may fire between
   // the WaitSet returning and here; a trigger left over then only causes one empty wake.
-  if (impl.watcher.joinable()) {
+  // A fd fired after the exchange below is collected by the next wait (its trigger ends it).
+  if (impl.anyFired.exchange(false)) {
     std::lock_guard<std::mutex> lock(impl.mutex);
     for (WatchedFd& watched : impl.fds) {
       if (watched.fired && count < impl.ready.size()) {
         watched.fired = false;
         watched.reported = true;
+        ++impl.reportedCount;
         impl.ready[count++] = watched.id;
+      } else if (watched.fired) {
+        impl.anyFired = true;  // no room in this wait: the next one reports it
+        impl.trigger.trigger();
       }
     }
   }

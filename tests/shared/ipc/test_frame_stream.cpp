@@ -6,6 +6,7 @@
 #include "skip.hpp"
 #include <unistd.h>
 
+#include <filesystem>
 #include <map>
 #include <thread>
 
@@ -301,6 +302,71 @@ TEST_CASE("one wait covers frame subscribers and the event bus fd together") {
   CHECK(events->handle(0ms) == ipc::HandleResult::Handled);
   CHECK(logs == 2);
   sut.detachFd(events->fileno());
+}
+
+namespace {
+
+/// Threads of this process (each is a /proc/self/task entry).
+std::size_t threadCount() {
+  std::size_t count = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) ++count;
+  return count;
+}
+
+}  // namespace
+
+TEST_CASE("a waiter without fds starts no watcher thread, and the first attachFd starts one") {
+  if (!startRoudiAndRuntime()) return;
+  auto rx = ipc::FrameSubscriber::create({"test", "threads", ipc::FrameStream::Received});
+  REQUIRE(rx.ok());
+  int pipeFds[2] = {-1, -1};
+  REQUIRE(::pipe(pipeFds) == 0);
+  const std::size_t before = threadCount();
+  auto waiterResult = ipc::Waiter::create();
+  REQUIRE(waiterResult.ok());
+  ipc::Waiter& sut = *waiterResult;
+
+  REQUIRE(sut.attach(*rx, RX_ID).ok());
+  CHECK(sut.waitFor(1ms).empty());
+  const std::size_t withSubscriber = threadCount();
+  REQUIRE(sut.attachFd(pipeFds[0], EVENTS_ID).ok());
+  const std::size_t withFd = threadCount();
+
+  CHECK(withSubscriber == before);
+  CHECK(withFd == before + 1);
+  sut.detachFd(pipeFds[0]);
+  ::close(pipeFds[0]);
+  ::close(pipeFds[1]);
+}
+
+TEST_CASE("an fd left readable is reported again by the next wait, and a handled one is not (#27)") {
+  if (!startRoudiAndRuntime()) return;
+  int pipeFds[2] = {-1, -1};
+  REQUIRE(::pipe(pipeFds) == 0);
+  auto waiterResult = ipc::Waiter::create();
+  REQUIRE(waiterResult.ok());
+  ipc::Waiter& sut = *waiterResult;
+  REQUIRE(sut.attachFd(pipeFds[0], EVENTS_ID).ok());
+  const char byte = 'x';
+  REQUIRE(::write(pipeFds[1], &byte, 1) == 1);
+
+  const auto first = sut.waitFor(5s);
+  REQUIRE(first.size() == 1);
+  CHECK(first[0] == EVENTS_ID);
+  const auto unhandled = sut.waitFor(5s);  // nothing read: re-armed, reported again
+  REQUIRE(unhandled.size() == 1);
+  CHECK(unhandled[0] == EVENTS_ID);
+  char got = 0;
+  REQUIRE(::read(pipeFds[0], &got, 1) == 1);
+  const auto start = std::chrono::steady_clock::now();
+  CHECK(sut.waitFor(30ms).empty());  // handled: quiet
+  CHECK(std::chrono::steady_clock::now() - start >= 25ms);
+
+  sut.detachFd(pipeFds[0]);
+  REQUIRE(::write(pipeFds[1], &byte, 1) == 1);
+  CHECK(sut.waitFor(20ms).empty());  // detached: never reported
+  ::close(pipeFds[0]);
+  ::close(pipeFds[1]);
 }
 
 // ---- the "req" topic: typed J1939 requests (issue 20) ------------------------------------

@@ -12,6 +12,9 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
+#include <thread>
+#include <vector>
 #include <cstring>
 #include <optional>
 
@@ -426,4 +429,65 @@ TEST_CASE("the loop waits on a frame subscriber, an fd and a timer together thro
   sut.removeFd(pipeFds[0]);
   ::close(pipeFds[0]);
   ::close(pipeFds[1]);
+}
+
+TEST_CASE("a loop with a subscriber and a timer only runs no fd-watcher thread, ticks on time and stops from another thread (#27)") {
+  SKIP_UNLESS_ISOLATED();
+  harness::Harness roudi;
+  REQUIRE_STATUS(roudi.startRoudi());
+  REQUIRE_STATUS(ipc::Runtime::init("test_service_runtime", 5s));
+  const ipc::FrameTopic topic{"svc", "timers", ipc::FrameStream::Received};
+  auto subscriber = ipc::FrameSubscriber::create(topic);
+  auto publisher = ipc::FramePublisher::create(topic);
+  REQUIRE_STATUS(subscriber);
+  REQUIRE_STATUS(publisher);
+  auto threadCount = [] {
+    std::size_t count = 0;
+    for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) ++count;
+    return count;
+  };
+  const std::size_t threadsBefore = threadCount();
+  auto loopResult = service::Loop::create();
+  REQUIRE_STATUS(loopResult);
+  service::Loop& sut = *loopResult;
+  std::uint64_t framesSeen = 0;
+  REQUIRE_STATUS(sut.addSubscriber(*subscriber, [&] {
+    while (subscriber->take()) ++framesSeen;
+  }));
+  constexpr auto PERIOD = 10ms;
+  const auto first = std::chrono::steady_clock::now() + PERIOD;
+  auto timer = service::PeriodicTimer::create(PERIOD, first);
+  REQUIRE_STATUS(timer);
+  std::vector<service::TimerTick> ticks;
+  std::vector<std::chrono::steady_clock::time_point> tickedAt;
+  REQUIRE_STATUS(sut.addTimer(*timer, [&](const service::TimerTick& tick) {
+    ticks.push_back(tick);
+    tickedAt.push_back(std::chrono::steady_clock::now());
+  }));
+  REQUIRE(publisher->waitForSubscribers(5s));
+  REQUIRE(publisher->publish(ipc::FrameSample{}));
+
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while ((framesSeen == 0 || ticks.size() < 3) && std::chrono::steady_clock::now() < deadline) sut.runOnce(1s);
+  const std::size_t threadsRunning = threadCount();
+
+  CHECK(sut.usesWaiter());
+  CHECK(threadsRunning == threadsBefore);  // the timer needs no watcher thread
+  CHECK(framesSeen == 1);
+  REQUIRE(ticks.size() >= 3);
+  for (std::size_t i = 0; i < ticks.size(); ++i) {
+    CHECK(ticks[i].deadline == first + PERIOD * static_cast<std::int64_t>(ticks[i].cycle - 1));
+    CHECK(tickedAt[i] >= ticks[i].deadline);  // never early
+  }
+
+  sut.removeFd(timer->fd());  // nothing left to end the wait but stop()
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(20ms);
+    sut.stop(5);
+  });
+  const auto stopStart = std::chrono::steady_clock::now();
+  const int exitCode = sut.run();
+  stopper.join();
+  CHECK(exitCode == 5);
+  CHECK(std::chrono::steady_clock::now() - stopStart < 5s);
 }

@@ -79,3 +79,29 @@ TEST_CASE("a period of zero is refused") {
   REQUIRE_FALSE(timerResult.ok());
   CHECK(timerResult.error().message == "periodic timer: the period must be positive");
 }
+
+TEST_CASE("takeDue counts the deadlines at or before the given time, each once, without reading the fd") {
+  constexpr auto PERIOD = 10ms;
+  const auto first = std::chrono::steady_clock::now() + 1h;  // the kernel never fires during the test
+  auto timerResult = service::PeriodicTimer::create(PERIOD, first);
+  REQUIRE(timerResult.ok());
+  service::PeriodicTimer& sut = *timerResult;
+
+  const auto beforeFirst = sut.takeDue(first - 1ns);
+  const auto atFirst = sut.takeDue(first);
+  const auto again = sut.takeDue(first + PERIOD - 1ns);
+  const auto late = sut.takeDue(first + PERIOD * 4);  // deadlines 2, 3, 4 and 5 passed
+
+  CHECK_FALSE(beforeFirst.has_value());
+  REQUIRE(atFirst);
+  CHECK(atFirst->cycle == 1);
+  CHECK(atFirst->deadline == first);
+  CHECK(atFirst->missed == 0);
+  CHECK_FALSE(again.has_value());
+  REQUIRE(late);
+  CHECK(late->cycle == 5);
+  CHECK(late->missed == 3);
+  CHECK(late->deadline == first + PERIOD * 4);
+  CHECK(sut.missedCycles() == 3);
+  CHECK(sut.nextDeadline() == first + PERIOD * 5);
+}

@@ -13,9 +13,13 @@
 //   }
 //
 // Why a helper thread for fds: iceoryx 2.0's WaitSet waits on a semaphore in shared
-// memory and has no fd, so poll() cannot wait on it. attachFd() starts
-// one thread per Waiter that poll()s the fds and wakes the WaitSet; everything else (the
-// callbacks, take()) stays on the caller's thread. Added latency ~one thread wake-up.
+// memory and has no fd, so poll() cannot wait on it. The first attachFd() starts one
+// thread per Waiter that waits in epoll_wait on the fds (each armed for one report,
+// EPOLLONESHOT) and wakes the WaitSet; everything else (the callbacks, take()) stays on
+// the caller's thread. Attach, detach and re-arming after a report are epoll_ctl calls on
+// the caller's thread: the watcher wakes only for a readable fd (and to stop). A Waiter
+// without fds has no thread; timers belong in the wait's timeout (service::Loop does
+// that), not here. Added latency of an fd: ~one thread wake-up.
 
 #include <chrono>
 #include <cstdint>

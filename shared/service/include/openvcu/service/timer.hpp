@@ -11,7 +11,9 @@
 //   });
 //
 // std::chrono::steady_clock is CLOCK_MONOTONIC in libstdc++ and libc++ on Linux; its time
-// points are the deadlines.
+// points are the deadlines. The ticks are counted from the clock (which deadlines lie at or
+// before now), so take(), takeDue() and the loop, which waits for nextDeadline() without
+// the fd (service::Loop), agree on every cycle; the timerfd only makes the timer pollable.
 
 #include <chrono>
 #include <cstdint>
@@ -49,8 +51,12 @@ class PeriodicTimer {
   [[nodiscard]] int fd() const noexcept { return m_fd; }
 
   /// The tick when at least one deadline passed since the last take(); empty otherwise
-  /// (never blocks).
+  /// (never blocks). Clears the fd's readiness (one read() system call).
   std::optional<TimerTick> take() noexcept;
+  /// The tick when at least one deadline lies at or before `now` and was not taken yet;
+  /// empty otherwise. No system call: for a caller that waits for nextDeadline() itself
+  /// (service::Loop). The fd may stay readable; a later take() clears it without a tick.
+  std::optional<TimerTick> takeDue(MonotonicTime now) noexcept;
 
   /// Blocks until the next tick or `timeout` (for simple loops and tests; services use Loop).
   std::optional<TimerTick> waitFor(std::chrono::nanoseconds timeout) noexcept;
