@@ -9,6 +9,7 @@
 # from /proc/PID/stat as a cross-check with 10 ms ticks). After the last window the memory
 # (/proc/PID/status: VmRSS = RssAnon + RssFile + RssShmem; the shared segments of iceoryx
 # and the signal table count in RssShmem) and `vcu top --once` as the operator sees it.
+# SDM_SPIN_US=N runs it with a copy of the configuration whose schedule says "sdmSpinUs": N.
 # Ends with one line
 #   RESULT services_cpu_pct=<median window> services_cpu_min=.. services_cpu_max=.. windows=N seconds=S <service>_pct=<median>..
 # where "services" is every process but iox-roudi (and the HMI, which this bench does not start).
@@ -19,6 +20,19 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 bin=${OPENVCU_BIN:-$root/build/bin}
 config=$root/config/hhea/vehicle.json
 run=$(mktemp -d)
+if [ -n "${SDM_SPIN_US:-}" ]; then
+  # SDM_SPIN_US=N: a copy of the configuration whose schedule has "sdmSpinUs": N (vcu-can-tx's
+  # on-CPU wait for short SHM -> SDM deltas; 0 turns it off), relative paths made absolute
+  dir=$(dirname "$config")
+  jq --argjson spin "$SDM_SPIN_US" '.sdmSpinUs = $spin' "$dir/$(jq -r .schedule "$config")" > "$run/schedule.json"
+  jq --arg dir "$dir" --arg schedule "$run/schedule.json" '
+    def absolute: if startswith("/") then . else $dir + "/" + . end;
+    .dbc |= map(absolute) | .schedule = $schedule |
+    with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive", "dashboard")) then .value |= absolute else . end)' \
+    "$config" > "$run/vehicle.json"
+  config=$run/vehicle.json
+  echo "SDM_SPIN_US=$SDM_SPIN_US: configuration copied to $config"
+fi
 export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run OPENVCU_ROUDI=$root/config/iceoryx/iox-roudi.sh
 sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
 supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
