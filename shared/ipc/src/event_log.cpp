@@ -26,8 +26,10 @@ Result<LoggedEvents> readEventLog(const std::string& path, std::size_t maxEvents
                                                                   lcm_eventlog_destroy);
   if (!log) return Error{std::string("cannot open: ") + std::generic_category().message(errno), where};
   LoggedEvents events;
-  const std::string fsmSuffix = "_" + std::string(channelSuffix(EventKind::Fsm));
-  const std::string faultSuffix = "_" + std::string(channelSuffix(EventKind::Fault));
+  std::string fsmSuffix(1, '_');
+  fsmSuffix += channelSuffix(EventKind::Fsm);
+  std::string faultSuffix(1, '_');
+  faultSuffix += channelSuffix(EventKind::Fault);
   while (lcm_eventlog_event_t* raw = lcm_eventlog_read_next_event(log.get())) {
     std::unique_ptr<lcm_eventlog_event_t, void (*)(lcm_eventlog_event_t*)> event(raw, lcm_eventlog_free_event);
     ++events.events;
