@@ -68,6 +68,6 @@ ok=$(value vic_pairs_ok); refused=$(value vic_pairs_refused)
 worst() { grep -oE "tx\.[A-Za-z0-9_]+\.$1=[0-9]+" <<<"$stats" | sort -t= -k2 -n | tail -n1; }
 deltaMax=$(worst delta_err_max_us); periodP99=$(worst period_err_p99_us)
 echo "$NAME: simulated VIC: $ok pairs accepted, $refused refused; can-tx worst delta error max: $deltaMax; worst period error p99: $periodP99"
-grep -h "VIC refuses\|VIC accepts" "$run"/*.log 2>/dev/null | tail -n 20
+grep -h "VIC refuse\|VIC accepts" "$run"/*.log 2>/dev/null | tail -n 20
 echo "RESULT pair_refusals=$refused pairs_ok=$ok minutes=$minutes drive_cycles=$cycles drive_failures=$failures" \
   "hmi_starts=$hmiStarts tx_delta_max_us=${deltaMax##*=} tx_period_p99_us=${periodP99##*=}"

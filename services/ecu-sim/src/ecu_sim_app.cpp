@@ -43,6 +43,7 @@ struct EcuSimAppImpl {
   // heartbeat mirrors
   std::atomic<std::int64_t> sent{}, received{}, sendFailures{}, awake{}, connection{}, socTenths{}, pairsOk{},
       pairsRefused{}, timeRequests{}, timeAnswers{}, timeErrors{}, sohAnswers{}, faultsActive{};
+  std::uint64_t refusedLogged{};  ///< VIC refusals already logged (simulation thread)
 
   explicit EcuSimAppImpl(service::Service& service) : runtime(service) {}
   ~EcuSimAppImpl() {
@@ -160,6 +161,16 @@ struct EcuSimAppImpl {
 
   void reportSafety() {
     const auto change = model->takeSafetyChange();
+    // A refusal followed by a good pair within one tick is no change any more by the time it
+    // is looked at: the count says it happened, and why.
+    if (const std::uint64_t refused = model->safety().refused; refused != refusedLogged) {
+      if (!change || *change == j1939::SafetyResult::Ok) {
+        runtime.log().error("the simulated VIC refused " + std::to_string(refused - refusedLogged) +
+                            " J1939-76 pair(s) since its last report, the last for " +
+                            std::string(j1939::safetyResultName(model->safety().lastRefusal)));
+      }
+      refusedLogged = refused;
+    }
     if (!change) return;
     const bool ok = *change == j1939::SafetyResult::Ok;
     ipc::FaultEvent event;

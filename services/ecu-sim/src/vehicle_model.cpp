@@ -191,6 +191,7 @@ void VehicleModel::receive(const can::Frame& frame, std::int64_t atNs) noexcept 
       m_lastGoodPairNs = atNs;
     } else if (result != j1939::SafetyResult::Synchronising) {
       ++m_safetyStats.refused;
+      m_safetyStats.lastRefusal = result;
     }
     if (result != j1939::SafetyResult::Synchronising && m_reportedSafety != result) {
       m_reportedSafety = result;

@@ -57,6 +57,7 @@ struct SafetyStats {
   std::uint64_t ok{};
   std::uint64_t refused{};
   j1939::SafetyResult last{j1939::SafetyResult::Ok};
+  j1939::SafetyResult lastRefusal{j1939::SafetyResult::Ok};  ///< the verdict of the last refused pair
 };
 
 class VehicleModel {

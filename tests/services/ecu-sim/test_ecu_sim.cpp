@@ -148,6 +148,7 @@ TEST_CASE("pairs with a bad CRC are refused and the VIC does not connect, and sa
   CHECK(f.model->connection() == 0);
   CHECK(f.model->safety().ok == 0);
   CHECK(f.model->safety().refused > 40);
+  CHECK(f.model->safety().lastRefusal == j1939::SafetyResult::CrcMismatch);
   const auto change = f.model->takeSafetyChange();
   REQUIRE(change);
   CHECK(*change == j1939::SafetyResult::CrcMismatch);
