@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <thread>
 #include <vector>
 
@@ -297,15 +298,22 @@ TEST_CASE("stop from another thread wakes a run that waits for a far timer") {
   REQUIRE(timerResult.ok());
   REQUIRE(sut.addTimer(*timerResult, [](const service::TimerTick&) {}).ok());
   constexpr int EXIT_CODE = 4;
+  // run() has started when a deadline due at once has run; then only the far timer is left
+  std::atomic<bool> running{false};
+  auto started = sut.addDeadline([&] { running.store(true); });
+  REQUIRE(started.ok());
+  sut.setDeadline(*started, std::chrono::steady_clock::now());
 
   std::thread stopper([&] {
-    std::this_thread::sleep_for(10ms);
+    const auto giveUp = std::chrono::steady_clock::now() + 5s;
+    while (!running.load() && std::chrono::steady_clock::now() < giveUp) std::this_thread::yield();
     sut.stop(EXIT_CODE);
   });
   const auto start = std::chrono::steady_clock::now();
   const int exitCode = sut.run();
   stopper.join();
 
+  CHECK(running.load());
   CHECK(exitCode == EXIT_CODE);
   CHECK(std::chrono::steady_clock::now() - start < 5s);
 }

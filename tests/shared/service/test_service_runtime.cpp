@@ -11,6 +11,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
@@ -481,13 +482,20 @@ TEST_CASE("a loop with a subscriber and a timer only runs no fd-watcher thread, 
   }
 
   sut.removeFd(timer->fd());  // nothing left to end the wait but stop()
+  // run() has started when a deadline due at once has run
+  std::atomic<bool> running{false};
+  auto started = sut.addDeadline([&] { running.store(true); });
+  REQUIRE(started.ok());
+  sut.setDeadline(*started, std::chrono::steady_clock::now());
   std::thread stopper([&] {
-    std::this_thread::sleep_for(20ms);
+    const auto giveUp = std::chrono::steady_clock::now() + 5s;
+    while (!running.load() && std::chrono::steady_clock::now() < giveUp) std::this_thread::yield();
     sut.stop(5);
   });
   const auto stopStart = std::chrono::steady_clock::now();
   const int exitCode = sut.run();
   stopper.join();
+  CHECK(running.load());
   CHECK(exitCode == 5);
   CHECK(std::chrono::steady_clock::now() - stopStart < 5s);
 }
