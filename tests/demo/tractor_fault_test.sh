@@ -1,0 +1,22 @@
+#!/bin/bash
+# Tractor scenario "fault" (config/tractor/README.md), inside run_isolated.sh: in Ready the
+# simulated BMS reports an isolation fault (`vcu sim fault bms_isolation on`) -> Fault; the
+# VCU asks to disconnect and the contactors open; a reset while the fault is active is
+# refused; with the fault gone the reset leads back through Standby to Ready.
+NAME=tractor_fault
+. "$(dirname "$0")/tractor_lib.sh"
+key_on
+sim_fault bms_isolation on
+wait_state Fault 3 || fail "not in Fault after the isolation fault: '$(state)'"
+wait_bus VCU.HVESSC1.HS_HiUBusCnctCmd == 0 2 || fail "HVESSC1 does not ask to disconnect in Fault"
+wait_bus BMS.HVESSS1.HS_HiUBusPosCntctrSts == 0 3 || fail "the positive contactor did not open"
+wait_bus BMS.HVESSS1.HS_HiUBusNegCntctrSts == 0 3 || fail "the negative contactor did not open"
+wait_bus BMS.HVESSS1.HS_HiUBusCnctnSts == 0 3 || fail "the BMS still reports the bus connected"
+vset internal.operator.FaultReset 1
+wait_eff internal.operator.FaultReset == 0 3 || fail "the FSM did not consume the reset"
+[ "$(state)" = Fault ] || fail "a reset with the isolation fault still active left Fault: '$(state)'"
+sim_fault bms_isolation off
+vset internal.operator.FaultReset 1
+wait_state Ready 10 || fail "not back in Ready after the fault cleared and the reset: '$(state)'"
+[ "$(bus BMS.HVESSS1.HS_HiUBusCnctnSts)" = 1 ] || fail "Ready again but the BMS is not connected"
+pass
