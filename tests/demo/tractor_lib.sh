@@ -41,7 +41,10 @@ trap 'ctl shutdown >/dev/null 2>&1; wait $supervisor 2>/dev/null' EXIT
 get() { "$vcu" signal get "$1" --config "$config" 2>/dev/null; }
 bus() { get "$1" | awk '$1 == "bus" && $2 != "never" { print $2; exit }'; }
 eff() { get "$1" | awk '$1 == "effective" && $2 != "none" { print $2; exit }'; }
-state() { get internal.fsm.state | sed -n 's/^ *bus  *[0-9]*  *"\([^"]*\)".*/\1/p'; }
+# internal.fsm.state is the index of the state in fsm.json's "states" (docs/fsm.md)
+mapfile -t states < <(python3 -c 'import json, sys; [print(s["name"]) for s in json.load(open(sys.argv[1]))["states"]]' \
+  "$root/config/tractor/fsm.json")
+state() { local index; index=$(bus internal.fsm.state); [ -n "$index" ] && echo "${states[$index]}"; }
 wait_state() {
   local deadline=$(( $(date +%s%N) + ${2:-10} * 1000000000 ))
   while [ "$(date +%s%N)" -lt $deadline ]; do
