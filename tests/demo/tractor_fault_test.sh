@@ -16,6 +16,7 @@ vset internal.operator.FaultReset 1
 wait_eff internal.operator.FaultReset == 0 3 || fail "the FSM did not consume the reset"
 [ "$(state)" = Fault ] || fail "a reset with the isolation fault still active left Fault: '$(state)'"
 sim_fault bms_isolation off
+wait_bus BMS.HVESSS1.HS_HiUBusPasIslnTestSts == 1 3 || fail "the BMS still reports the isolation fault after it was cleared"
 vset internal.operator.FaultReset 1
 wait_state Ready 10 || fail "not back in Ready after the fault cleared and the reset: '$(state)'"
 [ "$(bus BMS.HVESSS1.HS_HiUBusCnctnSts)" = 1 ] || fail "Ready again but the BMS is not connected"
