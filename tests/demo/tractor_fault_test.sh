@@ -4,7 +4,8 @@
 # VCU asks to disconnect and the contactors open; a reset while the fault is active is
 # refused; with the fault gone the reset leads back through Standby to Ready. Then the
 # traction inverter faults (state 15 and a DM1 with the red stop lamp) and the BMS falls
-# silent (receive timeout): each -> Fault, each cleared and reset -> Ready.
+# silent (receive timeout), then the e-stop line goes low: each -> Fault, each cleared and
+# reset -> Ready (a reset with the e-stop still pressed is refused).
 NAME=tractor_fault
 . "$(dirname "$0")/tractor_lib.sh"
 key_on
@@ -38,4 +39,15 @@ sim_fault silent.BMS off
 wait_bus BMS.HVESSS1.HS_HiUBusCnctnSts == 0 3 || fail "the BMS did not come back after its silence"
 vset internal.operator.FaultReset 1
 wait_state Ready 10 || fail "not back in Ready after the BMS timeout and the reset: '$(state)'"
+
+vset internal.gpio.sim.EStop 0
+wait_state Fault 3 || fail "not in Fault after the e-stop line went low: '$(state)'"
+wait_bus internal.input.EStop == 1 1 || fail "the e-stop input does not read pressed"
+vset internal.operator.FaultReset 1
+wait_eff internal.operator.FaultReset == 0 3 || fail "the FSM did not consume the reset"
+[ "$(state)" = Fault ] || fail "a reset with the e-stop pressed left Fault: '$(state)'"
+vset internal.gpio.sim.EStop 1
+wait_bus internal.input.EStop == 0 1 || fail "the e-stop input does not read released"
+vset internal.operator.FaultReset 1
+wait_state Ready 10 || fail "not back in Ready after the e-stop was released and reset: '$(state)'"
 pass
