@@ -88,6 +88,12 @@ struct EcuSimAppImpl {
     std::string what = "simulating " + std::to_string(bus->nodes().size()) + " nodes on " +
                        std::to_string(links.size()) + " bus(es), model " + std::string(config::simModelName(config.model));
     if (model) what += "; SOC " + std::to_string(static_cast<int>(config.initialSoc)) + " %";
+    if (generic) {
+      const config::SimRules& rules = config.rules;
+      what += " (" + std::to_string(rules.rules.size()) + " rules, " + std::to_string(rules.follow.size()) +
+              " follow, " + std::to_string(rules.integrate.size()) + " integrate, " +
+              std::to_string(rules.faults.size()) + " faults, " + std::to_string(config.safety.size()) + " pairs)";
+    }
     runtime.log().info(what);
     thread = std::thread([this] { run(); });
     return {};
@@ -167,7 +173,7 @@ struct EcuSimAppImpl {
           reportSafety(model->takeSafetyChange(), model->safety(), "sim.vic_safety", "the simulated VIC");
         } else {
           generic->step(now);
-          reportSafety(generic->takeSafetyChange(), generic->safety(), "sim.safety", "the simulator");
+          reportSafety(generic->takeSafetyChange(), generic->safety(), "sim.safety_pairs", "the simulator");
         }
         nextTick += ((now - nextTick) / config.tickNs + 1) * config.tickNs;
       }

@@ -1,6 +1,7 @@
 // Issue 22: vcu-ecu-sim's generic model with a fake clock on tests/data/ecu-sim (a small
 // non-HHEA vehicle): a rule with `after` and `otherwise`, follow, integrate with clamping,
-// a fault overriding a rule, and the values on the frames the bus sends.
+// a fault overriding a rule, the values on the frames the bus sends, and (on HHEA's DBC)
+// the J1939-76 pairs judged with a safety list and read back as sim.safety.ok.
 
 #include <doctest/doctest.h>
 #include <unistd.h>
@@ -14,6 +15,7 @@
 #include "generic_model.hpp"
 #include "openvcu/config/simulation.hpp"
 #include "openvcu/dbc/codec.hpp"
+#include "openvcu/j1939/safety.hpp"
 
 using namespace openvcu;
 namespace fs = std::filesystem;
@@ -21,6 +23,7 @@ namespace fs = std::filesystem;
 namespace {
 
 const std::string GENERIC = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/ecu-sim/vehicle.json";
+const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
 constexpr std::int64_t MS = 1'000'000;
 constexpr std::int64_t T0 = 1000 * 1'000'000'000LL;
 constexpr std::int64_t TICK = 10 * MS;
@@ -33,9 +36,9 @@ struct Fixture {
   dbc::DatabaseCodec codecs;
   std::int64_t now{T0};
 
-  /// `simulationText` empty: the test vehicle's own simulation.json.
-  explicit Fixture(const std::string& simulationText = "") {
-    auto loaded = config::loadVehicleConfig(GENERIC);
+  /// `simulationText` empty: the vehicle's own simulation.json.
+  explicit Fixture(const std::string& simulationText = "", const std::string& vehiclePath = GENERIC) {
+    auto loaded = config::loadVehicleConfig(vehiclePath);
     REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
     vehicle = std::move(*loaded);
     std::string file = vehicle.simulationFile;
@@ -58,22 +61,28 @@ struct Fixture {
     bus->start(T0);
   }
 
-  /// A VCU frame of `name` with `values` encoded (the rest zero).
-  void receive(const std::string& name, const std::map<std::string, double>& values) {
+  /// A VCU frame of `name` from the DBC's initial payload with `values` encoded.
+  can::Frame frame(const std::string& name, const std::map<std::string, double>& values) {
     const dbc::Message* message = vehicle.database.findMessage(name);
     REQUIRE_MESSAGE(message, name);
     const auto index = static_cast<std::size_t>(message - vehicle.database.messages.data());
-    can::Frame frame;
-    frame.id = message->id;
-    frame.length = static_cast<std::uint8_t>(message->length);
+    can::Frame out;
+    out.id = message->id;
+    out.flags = message->extended ? can::FLAG_EXTENDED : 0;
+    const auto initial = codecs[index].initialPayload();
+    out.length = static_cast<std::uint8_t>(initial.size());
+    std::copy(initial.begin(), initial.end(), out.data.begin());
     for (const auto& [signal, value] : values) {
       const auto* found = message->findSignal(signal);
       REQUIRE_MESSAGE(found, signal);
       const auto signalIndex = static_cast<std::uint32_t>(found - message->signals.data());
-      REQUIRE(codecs[index].encode(signalIndex, value, std::span<std::uint8_t>(frame.data.data(), frame.length)) ==
+      REQUIRE(codecs[index].encode(signalIndex, value, std::span<std::uint8_t>(out.data.data(), out.length)) ==
               dbc::EncodeStatus::Ok);
     }
-    sut->receive(frame, now);
+    return out;
+  }
+  void receive(const std::string& name, const std::map<std::string, double>& values) {
+    sut->receive(frame(name, values), now);
   }
 
   /// Steps every tick after `now` up to `until` (inclusive).
@@ -195,4 +204,49 @@ TEST_CASE("#22 a condition on a VCU signal not received yet is false, ne include
   f.receive("BMS_Command", {{"ContactorRequest", 0}});
   f.tick();
   CHECK(f.value("INV_Status", "State") == 7);
+}
+
+TEST_CASE("#22 with a safety list the generic model judges the VCU's J1939-76 pairs and exposes the verdict as sim.safety.ok") {
+  // the generic model on HHEA's DBC: nothing of the HHEA models, only this file's rules
+  Fixture f(R"({"safety": [{"message": "S1_ES_PGN61427"}],
+    "rules": [{"when": {"sim.safety.ok": 1}, "set": {"VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts": 1},
+               "otherwise": {"VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts": 0}}]})",
+            HHEA);
+  REQUIRE(f.sut->checksPairs());
+  j1939::SafetyPairBuilder builder(f.vehicle.database.findMessage("S1_ES_PGN61427")->id);
+  const auto pairs = [&](double relayValue, bool corrupt, std::int64_t until) {
+    while (f.now + 20 * MS <= until) {  // S1_ES's 20 ms cycle: SHM, SDM 0.3 ms later, then two ticks
+      can::Frame data = f.frame("S1_ES_PGN61427", {{"Control_Es_Relay", relayValue}});
+      const auto header = builder.nextHeader(j1939::SafetyDataView(data.data.data(), 8));
+      can::Frame shm;
+      shm.id = builder.headerCanId();
+      shm.flags = can::FLAG_EXTENDED;
+      shm.length = 8;
+      std::copy(header.begin(), header.end(), shm.data.begin());
+      if (corrupt) data.data[7] ^= 0x01;
+      f.sut->receive(shm, f.now);
+      f.sut->receive(data, f.now + 300'000);
+      f.runUntil(f.now + 20 * MS);
+    }
+  };
+  f.sut->step(f.now);
+  CHECK(std::isnan(f.sut->sampled("sim.safety.ok")));  // no verdict yet
+  CHECK(f.value("HVESSS1_PGN61590", "HS_HiUBusCnctnSts") == 0);
+  pairs(3, false, T0 + 300 * MS);
+  CHECK(f.sut->sampled("sim.safety.ok") == 1);
+  CHECK(f.value("HVESSS1_PGN61590", "HS_HiUBusCnctnSts") == 1);
+  CHECK(f.sut->safety().ok > 10);
+  CHECK(f.sut->safety().refused == 0);
+  // pairs with a bad CRC: refused, their data (relay 5) not taken, the verdict 0
+  const auto change = f.sut->takeSafetyChange();
+  pairs(5, true, T0 + 600 * MS);
+  CHECK(f.sut->sampled("sim.safety.ok") == 0);
+  CHECK(f.value("HVESSS1_PGN61590", "HS_HiUBusCnctnSts") == 0);
+  CHECK(f.sut->safety().refused > 10);
+  CHECK(f.sut->safety().lastRefusal == j1939::SafetyResult::CrcMismatch);
+  const auto relayRef = f.bus->input("S1_ES_PGN61427", "Control_Es_Relay");
+  REQUIRE(relayRef);
+  CHECK(f.bus->get(*relayRef) == 3);  // the last good pair's value
+  CHECK(change == j1939::SafetyResult::Ok);
+  CHECK(f.sut->takeSafetyChange() == j1939::SafetyResult::CrcMismatch);
 }
