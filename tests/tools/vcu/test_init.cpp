@@ -189,7 +189,7 @@ TEST_CASE("vcu init names an unknown node with a did-you-mean and the node list,
 TEST_CASE("vcu init reports a DBC syntax error with its file and line and writes nothing (#22)") {
   const std::string broken = writeScratchFile("init_broken.dbc",
                                               "VERSION \"\"\n\nBU_: VCU\n\nBO_ 100 Status: 8 VCU\n"
-                                              " SG_ Speed : 0|16@1+ (1,0) [0|100] \"\" VCU oops\n");
+                                              " SG_ Speed : 0|16@1+ (1,0 [0|100] \"\" VCU\n");
   const fs::path folder = freshFolder("broken");
   const RunResult sut = runVcu({"init", folder.string(), "--dbc", broken, "--node", "VCU"});
   CHECK(sut.exitCode == EXIT_INPUT_ERROR);

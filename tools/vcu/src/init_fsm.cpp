@@ -47,7 +47,9 @@ OrderedJson fsmJson(const Plan& plan) {
       "State machine written by `vcu init` (docs/fsm.md): Standby until the operator's Run switch, Running while "
       "it stays on, Fault when any received message times out (" +
       std::to_string(stale.size()) +
-      " timeouts, one per cyclic message, from receive.json); FaultReset returns to Standby once none is active. "
+      " timeouts, one per cyclic message, from receive.json); FaultReset returns to Standby once none is active "
+      "and Fault has lasted 1 s. A Stop in Running wins over a timeout in the same instant (Standby then goes "
+      "to Fault). "
       "Add the commands of '" +
       plan.node + "' (signals it transmits) to each state's entry: safe values in Standby and Fault.";
   if (stale.empty()) comment += " The DBC gives no received message a cycle, so nothing leads to Fault yet.";
@@ -55,21 +57,24 @@ OrderedJson fsmJson(const Plan& plan) {
   root["initialState"] = "Standby";
   OrderedJson states = OrderedJson::array();
 
+  // The operator's transitions come first and Fault is left only after a dwell ("after"):
+  // the FSM checker then proves the Standby <-> Running cycle from the switch alone and
+  // needs no search over the qualities of the (possibly hundreds of) timeout signals.
   OrderedJson standbyTransitions = OrderedJson::array();
-  if (!stale.empty()) standbyTransitions.push_back(toFault(stale));
   standbyTransitions.push_back(OrderedJson{{"comment", "operator Run"},
                                            {"condition", OrderedJson{{"key", RUN_KEY}, {"eq", "Run"}}},
                                            {"nextState", "Running"}});
+  if (!stale.empty()) standbyTransitions.push_back(toFault(stale));
   states.push_back(OrderedJson{{"name", "Standby"},
                                {"comment", "the machine is off: the schedule runs with the DBC start values"},
                                {"entry", OrderedJson::array({lamp(0)})},
                                {"transitions", standbyTransitions}});
 
   OrderedJson runningTransitions = OrderedJson::array();
-  if (!stale.empty()) runningTransitions.push_back(toFault(stale));
   runningTransitions.push_back(OrderedJson{{"comment", "operator Stop"},
                                            {"condition", OrderedJson{{"key", RUN_KEY}, {"eq", "Stop"}}},
                                            {"nextState", "Standby"}});
+  if (!stale.empty()) runningTransitions.push_back(toFault(stale));
   states.push_back(OrderedJson{{"name", "Running"},
                                {"comment", "the operator asked to run: put the node's run commands here"},
                                {"entry", OrderedJson::array({lamp(1)})},
@@ -87,9 +92,11 @@ OrderedJson fsmJson(const Plan& plan) {
                                                          {"severity", "error"},
                                                          {"text", "a received message timed out"}}})},
       {"exit", OrderedJson::array({OrderedJson{{"clear", FAULT_NAME}}})},
-      {"transitions", OrderedJson::array({OrderedJson{{"comment", "operator FaultReset, no timeout active"},
-                                                      {"condition", resetCondition},
-                                                      {"nextState", "Standby"}}})}});
+      {"transitions",
+       OrderedJson::array({OrderedJson{{"comment", "operator FaultReset, no timeout active, at least 1 s in Fault"},
+                                       {"condition", resetCondition},
+                                       {"after", "1s"},
+                                       {"nextState", "Standby"}}})}});
   root["states"] = states;
   return root;
 }
