@@ -32,12 +32,13 @@ mkdir -p "$OPENVCU_LOG_DIR"
 "$root/run.sh" --headless --for 10 --config "$config" --record "$work/rec" > "$work/run.out" 2>&1 &
 runner=$!
 state() { "$vcu" top --once --config "$config" 2>/dev/null | sed -n 's/^FSM *\([A-Za-z]*\).*/\1/p'; }
-wait_state() { for _ in $(seq 1 40); do [ "$(state)" = "$1" ] && return 0; sleep 0.25; done; return 1; }
+# each look takes vcu top's ~1.5 s: 6 looks, well inside the 10 s run
+wait_state() { for _ in $(seq 1 6); do [ "$(state)" = "$1" ] && return 0; done; return 1; }
 # run.sh records once every service beats: wait for the recording to start
 for _ in $(seq 1 80); do [ -d "$work/rec" ] && ls "$work/rec"/*.log >/dev/null 2>&1 && break; sleep 0.25; done
-wait_state Standby || { wait $runner; cat "$work/run.out"; fail "the FSM is not in Standby: '$(state)'"; }
+wait_state Standby || { seen=$(state); wait $runner; cat "$work/run.out"; fail "the FSM is not in Standby: '$seen'"; }
 "$vcu" signal set internal.operator.Run Run --config "$config" >/dev/null || fail "vcu signal set failed"
-wait_state Running || { wait $runner; cat "$work/run.out"; fail "the FSM is not Running after operator.Run: '$(state)'"; }
+wait_state Running || { seen=$(state); wait $runner; cat "$work/run.out"; fail "the FSM is not Running after operator.Run: '$seen'"; }
 wait $runner
 status=$?
 cat "$work/run.out"

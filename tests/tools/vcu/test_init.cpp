@@ -115,8 +115,9 @@ TEST_CASE("vcu init on hhea.dbc writes a folder that vcu check passes, with ever
   const nlohmann::json fsm = readJson(folder / "fsm.json");
   REQUIRE(fsm["states"].size() == 3);
   const nlohmann::json receive = readJson(folder / "receive.json");
-  const auto* bms = database->findMessage("BMS_Status");
-  if (bms != nullptr && bms->cycleTimeMs) CHECK(receive["messages"]["BMS_Status"]["timeoutMs"] == 3 * *bms->cycleTimeMs);
+  // 3 x GenMsgCycleTime (HVESSS1 every 100 ms), at least 100 ms (ST_MOT_1 every 10 ms)
+  CHECK(receive["messages"]["HVESSS1_PGN61590"]["timeoutMs"] == 300);
+  CHECK(receive["messages"]["ST_MOT_1"]["timeoutMs"] == 100);
   const nlohmann::json vehicle = readJson(folder / "vehicle.json");
   CHECK(vehicle["buses"][0]["bitrate"] == 500000);  // hhea.dbc: BA_ "Baudrate" 500000
   CHECK(vehicle["buses"][0]["link"] == "sim:vehicle");

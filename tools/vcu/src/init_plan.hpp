@@ -24,6 +24,9 @@ using OrderedJson = nlohmann::ordered_json;
 
 /// Receive timeout = this factor x GenMsgCycleTime (can-rx's own default, written out).
 inline constexpr std::uint32_t TIMEOUT_FACTOR = 3;
+/// ...but at least this long (guessed): 3 x 10 ms = 30 ms faulted the generated machine on a
+/// loaded 2-core host when one frame came late; set the real figure from the node's spec.
+inline constexpr std::uint32_t MIN_TIMEOUT_MS = 100;
 /// The generator keeps each bus' cyclic load under this, a margin below can-tx's 50 %
 /// refusal (config::MAX_CYCLIC_BUS_LOAD) so a later small edit does not tip it over.
 inline constexpr double TARGET_BUS_LOAD = 0.45;

@@ -132,7 +132,8 @@ OrderedJson receiveJson(const Plan& plan) {
       "Receive settings written by `vcu init` (services/can-rx/README.md): every cyclic message the other nodes "
       "send times out after " +
       std::to_string(TIMEOUT_FACTOR) +
-      " x its GenMsgCycleTime (listed below so each can be changed; 0 = never stale); messages without a cycle "
+      " x its GenMsgCycleTime, at least " + std::to_string(MIN_TIMEOUT_MS) +
+      " ms (listed below so each can be changed; 0 = never stale); messages without a cycle "
       "never time out. A timeout makes the message's signals stale, raises rx_timeout.BUS.MESSAGE and sends the "
       "FSM to Fault.";
   root["timeoutFactor"] = TIMEOUT_FACTOR;
@@ -145,11 +146,16 @@ OrderedJson receiveJson(const Plan& plan) {
           {"timeoutMs", 0}, {"comment", "no transmitter in the DBC (Vector__XXX): never stale; name its node to time it"}};
       continue;
     }
-    const std::uint64_t timeout =
-        std::min<std::uint64_t>(std::uint64_t{*message.cycleTimeMs} * TIMEOUT_FACTOR, config::MAX_CYCLE_MS);
-    messages[message.name] = OrderedJson{
-        {"timeoutMs", timeout},
-        {"comment", "from " + message.transmitter + ", every " + std::to_string(*message.cycleTimeMs) + " ms"}};
+    const std::uint64_t factored = std::uint64_t{*message.cycleTimeMs} * TIMEOUT_FACTOR;
+    const std::uint64_t timeout = std::min<std::uint64_t>(std::max<std::uint64_t>(factored, MIN_TIMEOUT_MS),
+                                                          config::MAX_CYCLE_MS);
+    std::string comment = "from " + message.transmitter + ", every " + std::to_string(*message.cycleTimeMs) + " ms";
+    if (timeout > factored) {
+      comment += "; guessed: " + std::to_string(MIN_TIMEOUT_MS) + " ms, the floor vcu init uses (" +
+                 std::to_string(TIMEOUT_FACTOR) + " x cycle would be " + std::to_string(factored) +
+                 " ms): set the node's real timeout";
+    }
+    messages[message.name] = OrderedJson{{"timeoutMs", timeout}, {"comment", comment}};
   }
   root["messages"] = messages;
   return root;
