@@ -182,9 +182,11 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
   // 2. The plan.
   init::Plan plan;
   plan.node = options.node;
+  std::error_code error;
   const fs::path dir = fs::path(options.dir).lexically_normal();
-  plan.instance = options.instance.empty() ? safeName(fs::absolute(dir).lexically_normal().filename().string())
-                                           : options.instance;
+  fs::path absolute = fs::absolute(dir, error).lexically_normal();
+  if (absolute.filename().empty()) absolute = absolute.parent_path();  // "tractor/" or "."
+  plan.instance = options.instance.empty() ? safeName(absolute.filename().string()) : options.instance;
   plan.database = std::move(*database);
   for (std::size_t i = 0; i < files.size(); ++i) plan.buses.push_back(planBus(options.dbcFiles[i], files[i], files.size()));
   for (std::size_t m = 0; m < plan.database.messages.size(); ++m) {
@@ -211,7 +213,6 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
   std::vector<std::string> targets;
   for (const Output& output : OUTPUTS) targets.emplace_back(output.name);
   for (const init::PlannedBus& bus : plan.buses) targets.push_back(bus.dbcName);
-  std::error_code error;
   if (fs::exists(dir, error) && !fs::is_directory(dir, error)) {
     reportError(streams.err, "'" + dir.string() + "' exists and is not a folder");
     return ExitCode::Failure;
