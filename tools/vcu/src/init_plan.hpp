@@ -33,6 +33,10 @@ inline constexpr double TARGET_BUS_LOAD = 0.45;
 /// J1939-76 SHM -> SDM delay written for a marked SDM (guessed; the original HHEA VCU used
 /// 0.292-2 ms). Must stay below the SDM's cycle.
 inline constexpr std::uint32_t SAFETY_DELTA_US = 1000;
+/// The simulated receiver's J1939-76 limits for a marked SDM (guessed): SHM -> SDM within
+/// this safety reaction time (SRVT), ms, and SHMs at most this many cycles apart (SCT).
+inline constexpr std::uint32_t SAFETY_SRVT_MS = 10;
+inline constexpr std::uint32_t SAFETY_SCT_CYCLES = 3;
 /// The dashboard lists at most this many received signals per node.
 inline constexpr std::size_t DASHBOARD_SIGNALS_PER_NODE = 6;
 

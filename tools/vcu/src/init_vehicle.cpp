@@ -133,6 +133,21 @@ OrderedJson simulationJson(const Plan& plan) {
       "' stays quiet. Add \"rules\", \"follow\" and \"integrate\" to make the nodes answer the VCU's commands, "
       "and \"faults\" for `vcu sim fault`.";
   root["model"] = "generic";
+  // The simulator checks the node's J1939-76 pairs as a receiver would (vic_pairs_ok /
+  // vic_pairs_refused in its heartbeat): SHM -> SDM within the SRVT, SHMs at most SCT apart.
+  OrderedJson safety = OrderedJson::array();
+  for (const PlannedTx& tx : plan.transmitted) {
+    if (!tx.safety) continue;
+    const std::uint32_t cycle = tx.lengthenedToMs ? *tx.lengthenedToMs : *tx.cycleMs;
+    safety.push_back(OrderedJson{
+        {"message", plan.database.messages[tx.message].name},
+        {"srvt", std::to_string(SAFETY_SRVT_MS) + "ms"},
+        {"sct", std::to_string(cycle * SAFETY_SCT_CYCLES) + "ms"},
+        {"comment", "guessed: SHM -> SDM within " + std::to_string(SAFETY_SRVT_MS) + " ms (the schedule's delta is " +
+                        std::to_string(SAFETY_DELTA_US) + " us), an SHM at least every " +
+                        std::to_string(SAFETY_SCT_CYCLES) + " cycles; use the receiving node's figures"}});
+  }
+  if (!safety.empty()) root["safety"] = safety;
   return root;
 }
 
