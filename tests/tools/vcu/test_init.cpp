@@ -194,6 +194,15 @@ TEST_CASE("vcu init names an unknown node with a did-you-mean and the node list,
   CHECK_FALSE(fs::exists(folder));
 }
 
+TEST_CASE("vcu init refuses an instance name the stack cannot use and writes nothing (#22)") {
+  const fs::path folder = freshFolder("bad_instance");
+  const RunResult sut = runVcu({"init", folder.string(), "--dbc", HHEA_DBC, "--node", "Vehicle_Control_Unit",
+                                "--instance", "my tractor"});
+  CHECK(sut.exitCode == EXIT_USAGE);
+  CHECK(contains(sut.err, "--instance 'my tractor' must be 1-32 letters, digits, '-' or '_'"));
+  CHECK_FALSE(fs::exists(folder));
+}
+
 TEST_CASE("vcu init reports a DBC syntax error with its file and line and writes nothing (#22)") {
   const std::string broken = writeScratchFile("init_broken.dbc",
                                               "VERSION \"\"\n\nBU_: VCU\n\nBO_ 100 Status: 8 VCU\n"

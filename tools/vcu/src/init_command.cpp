@@ -23,6 +23,7 @@
 #include "diagnostics.hpp"
 #include "init_plan.hpp"
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/text.hpp"
 
 namespace openvcu::cli {
@@ -174,6 +175,10 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
       }
     }
   }
+  if (!options.instance.empty() && !config::validInstanceName(options.instance)) {
+    reportError(streams.err, "--instance '" + options.instance + "' must be 1-32 letters, digits, '-' or '_'");
+    return ExitCode::Usage;
+  }
   if (database->findNode(options.node) == nullptr) {
     report(streams.err, unknownNode(options.node, *database));
     return ExitCode::Failure;
@@ -231,6 +236,7 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
   }
 
   // 4. Stage every file, check the staged folder with `vcu check`'s loaders, then rename.
+  const bool created = !fs::exists(dir, error);
   fs::create_directories(dir, error);
   if (error) {
     reportError(streams.err, "cannot create '" + dir.string() + "': " + error.message());
@@ -239,9 +245,15 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
   const auto staging = makeStaging(dir, error);
   if (!staging) {
     reportError(streams.err, "cannot create a staging folder in '" + dir.string() + "': " + error.message());
+    if (created) fs::remove(dir, error);
     return ExitCode::Failure;
   }
   const auto cleanUp = [&] { fs::remove_all(*staging, error); };
+  // on a failure: the staging folder goes, and DIR too when this run created it (empty then)
+  const auto abandon = [&] {
+    cleanUp();
+    if (created) fs::remove(dir, error);
+  };
   std::vector<Staged> staged;
   bool written = true;
   for (const Output& output : OUTPUTS) {
@@ -257,7 +269,7 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
   }
   if (!written) {
     reportError(streams.err, "cannot write into '" + staging->string() + "'; nothing written");
-    cleanUp();
+    abandon();
     return ExitCode::Failure;
   }
   StringSink checkOut;
@@ -269,7 +281,7 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
     streams.err.write(checkErr.text());
     reportError(streams.err, "the generated folder does not pass `vcu check` (a vcu init bug for this DBC; please "
                              "report it with the DBC); nothing written");
-    cleanUp();
+    abandon();
     return ExitCode::Failure;
   }
   for (const Staged& file : staged) {

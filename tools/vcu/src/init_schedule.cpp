@@ -114,6 +114,11 @@ OrderedJson scheduleJson(const Plan& plan) {
     } else {
       entry["comment"] = "every " + std::to_string(*tx.cycleMs) + " ms (DBC GenMsgCycleTime)";
     }
+    if (!tx.safety && markedAsSdm(message) && tx.cycleMs) {
+      entry["comment"] = entry["comment"].get<std::string>() +
+                         "; the DBC marks it a J1939-76 SDM, but its cycle is not longer than the SHM -> SDM delta (" +
+                         std::to_string(SAFETY_DELTA_US) + " us): sent without its SHM";
+    }
     if (tx.safety) {
       entry["safety"] = OrderedJson{
           {"deltaUs", SAFETY_DELTA_US},
@@ -141,6 +146,14 @@ OrderedJson receiveJson(const Plan& plan) {
   for (const std::size_t index : plan.received) {
     const dbc::Message& message = plan.database.messages[index];
     if (!message.cycleTimeMs) continue;
+    if (timesOut(message) && firstSignalKey(message).empty()) {
+      messages[message.name] = OrderedJson{
+          {"timeoutMs", std::max<std::uint64_t>(std::uint64_t{*message.cycleTimeMs} * TIMEOUT_FACTOR, MIN_TIMEOUT_MS)},
+          {"comment", "from " + message.transmitter +
+                          "; no decodable signal: its timeout raises rx_timeout but the FSM (which reads signals) "
+                          "does not see it"}};
+      continue;
+    }
     if (!timesOut(message)) {
       messages[message.name] = OrderedJson{
           {"timeoutMs", 0}, {"comment", "no transmitter in the DBC (Vector__XXX): never stale; name its node to time it"}};
