@@ -244,3 +244,36 @@ TEST_CASE("vcu init lengthens the heaviest cycles of a DBC over can-tx's bus-loa
   CHECK(readJson(folder / "vehicle.json")["buses"][0]["bitrate"] == 250000);
   CHECK(readJson(folder / "receive.json")["messages"]["Slow"]["timeoutMs"] == 300);
 }
+
+TEST_CASE("vcu init makes one bus per DBC file with its own bit rate and message list (#22)") {
+  const std::string header = "VERSION \"\"\n\nBU_: VCU BMS INV\n\n";
+  const std::string attributes =
+      "BA_DEF_ \"Baudrate\" INT 0 1000000;\nBA_DEF_ \"BusType\" STRING;\n"
+      "BA_DEF_ BO_ \"GenMsgCycleTime\" INT 0 3600000;\nBA_DEF_DEF_ \"Baudrate\" 500000;\n"
+      "BA_DEF_DEF_ \"BusType\" \"CAN\";\nBA_DEF_DEF_ \"GenMsgCycleTime\" 0;\n";
+  const std::string battery = writeScratchFile(
+      "init_battery.dbc", header + "BO_ 2566914849 VcuToBms: 8 VCU\n SG_ Request : 0|8@1+ (1,0) [0|3] \"\" BMS\n\n" +
+                              "BO_ 2566914850 BmsStatus: 8 BMS\n SG_ Soc : 0|8@1+ (0.5,0) [0|100] \"%\" VCU\n\n" +
+                              attributes + "BA_ \"Baudrate\" 250000;\n" +
+                              "BA_ \"GenMsgCycleTime\" BO_ 2566914849 100;\nBA_ \"GenMsgCycleTime\" BO_ 2566914850 50;\n");
+  const std::string drive = writeScratchFile(
+      "init_drive.dbc", header + "BO_ 2566915105 VcuToInv: 8 VCU\n SG_ Torque : 0|16@1+ (0.1,0) [0|500] \"Nm\" INV\n\n" +
+                            "BO_ 2566915107 InvStatus: 8 INV\n SG_ Speed : 0|16@1+ (1,0) [0|8000] \"rpm\" VCU\n\n" +
+                            attributes + "BA_ \"BusType\" \"CAN FD\";\n" +
+                            "BA_ \"GenMsgCycleTime\" BO_ 2566915105 10;\nBA_ \"GenMsgCycleTime\" BO_ 2566915107 10;\n");
+  const fs::path folder = freshFolder("two_buses");
+  initAndCheck(folder, {battery, drive}, "VCU");
+  const nlohmann::json buses = readJson(folder / "vehicle.json")["buses"];
+  REQUIRE(buses.size() == 2);
+  CHECK(buses[0]["name"] == "init_battery");
+  CHECK(buses[0]["bitrate"] == 250000);
+  CHECK(buses[0]["messages"] == nlohmann::json::array({"VcuToBms", "BmsStatus"}));
+  CHECK(buses[1]["name"] == "init_drive");
+  CHECK(buses[1]["link"] == "sim:init_drive");
+  CHECK(buses[1]["fd"] == true);
+  CHECK(buses[1]["messages"] == nlohmann::json::array({"VcuToInv", "InvStatus"}));
+  CHECK(fs::is_regular_file(folder / "init_battery.dbc"));
+  CHECK(fs::is_regular_file(folder / "init_drive.dbc"));
+  const nlohmann::json fsm = readJson(folder / "fsm.json");
+  CHECK(fsm["states"][0]["transitions"][1]["condition"]["any"].size() == 2);  // a timeout per received message
+}
