@@ -24,8 +24,8 @@ namespace {
 
 const std::string HHEA_DBC = OPENVCU_SOURCE_DIR "/config/hhea/hhea.dbc";
 const fs::path CORPUS = OPENVCU_TEAM_KIT "/corpus/dbc";
-const char* const WRITTEN[] = {"vehicle.json", "schedule.json", "receive.json", "fsm.json",
-                               "dashboard.json", "gpio.json", "simulation.json"};
+const char* const WRITTEN[] = {"vehicle.json",   "schedule.json", "receive.json",   "fsm.json",
+                               "dashboard.json", "gpio.json",     "simulation.json"};
 
 /// An empty scratch folder path (not created).
 fs::path freshFolder(const std::string& name) {
@@ -48,7 +48,8 @@ std::string readText(const fs::path& path) {
 /// Every entry of a folder with its content (what "unchanged" means).
 std::map<std::string, std::string> snapshot(const fs::path& folder) {
   std::map<std::string, std::string> files;
-  for (const auto& entry : fs::directory_iterator(folder)) files[entry.path().filename().string()] = readText(entry.path());
+  for (const auto& entry : fs::directory_iterator(folder))
+    files[entry.path().filename().string()] = readText(entry.path());
   return files;
 }
 
@@ -61,7 +62,8 @@ void initAndCheck(const fs::path& folder, const std::vector<std::string>& dbcs, 
   REQUIRE(init.exitCode == EXIT_OK);
   CHECK(contains(init.out, "vcu check --config " + (folder / "vehicle.json").string()));
   for (const char* name : WRITTEN) CHECK(fs::is_regular_file(folder / name));
-  for (const auto& entry : fs::directory_iterator(folder)) CHECK(entry.path().filename().string().rfind(".vcu-init", 0) != 0);
+  for (const auto& entry : fs::directory_iterator(folder))
+    CHECK(entry.path().filename().string().rfind(".vcu-init", 0) != 0);
   const RunResult check = runVcu({"check", "--config", (folder / "vehicle.json").string()});
   INFO("vcu check stdout: " << check.out << "\nstderr: " << check.err);
   CHECK(check.exitCode == EXIT_OK);
@@ -196,8 +198,8 @@ TEST_CASE("vcu init names an unknown node with a did-you-mean and the node list,
 
 TEST_CASE("vcu init refuses an instance name the stack cannot use and writes nothing (#22)") {
   const fs::path folder = freshFolder("bad_instance");
-  const RunResult sut = runVcu({"init", folder.string(), "--dbc", HHEA_DBC, "--node", "Vehicle_Control_Unit",
-                                "--instance", "my tractor"});
+  const RunResult sut = runVcu(
+      {"init", folder.string(), "--dbc", HHEA_DBC, "--node", "Vehicle_Control_Unit", "--instance", "my tractor"});
   CHECK(sut.exitCode == EXIT_USAGE);
   CHECK(contains(sut.err, "--instance 'my tractor' must be 1-32 letters, digits, '-' or '_'"));
   CHECK_FALSE(fs::exists(folder));
@@ -251,16 +253,18 @@ TEST_CASE("vcu init makes one bus per DBC file with its own bit rate and message
       "BA_DEF_ \"Baudrate\" INT 0 1000000;\nBA_DEF_ \"BusType\" STRING;\n"
       "BA_DEF_ BO_ \"GenMsgCycleTime\" INT 0 3600000;\nBA_DEF_DEF_ \"Baudrate\" 500000;\n"
       "BA_DEF_DEF_ \"BusType\" \"CAN\";\nBA_DEF_DEF_ \"GenMsgCycleTime\" 0;\n";
-  const std::string battery = writeScratchFile(
-      "init_battery.dbc", header + "BO_ 2566914849 VcuToBms: 8 VCU\n SG_ Request : 0|8@1+ (1,0) [0|3] \"\" BMS\n\n" +
-                              "BO_ 2566914850 BmsStatus: 8 BMS\n SG_ Soc : 0|8@1+ (0.5,0) [0|100] \"%\" VCU\n\n" +
-                              attributes + "BA_ \"Baudrate\" 250000;\n" +
-                              "BA_ \"GenMsgCycleTime\" BO_ 2566914849 100;\nBA_ \"GenMsgCycleTime\" BO_ 2566914850 50;\n");
-  const std::string drive = writeScratchFile(
-      "init_drive.dbc", header + "BO_ 2566915105 VcuToInv: 8 VCU\n SG_ Torque : 0|16@1+ (0.1,0) [0|500] \"Nm\" INV\n\n" +
-                            "BO_ 2566915107 InvStatus: 8 INV\n SG_ Speed : 0|16@1+ (1,0) [0|8000] \"rpm\" VCU\n\n" +
-                            attributes + "BA_ \"BusType\" \"CAN FD\";\n" +
-                            "BA_ \"GenMsgCycleTime\" BO_ 2566915105 10;\nBA_ \"GenMsgCycleTime\" BO_ 2566915107 10;\n");
+  const std::string battery =
+      writeScratchFile("init_battery.dbc",
+                       header + "BO_ 2566914849 VcuToBms: 8 VCU\n SG_ Request : 0|8@1+ (1,0) [0|3] \"\" BMS\n\n" +
+                           "BO_ 2566914850 BmsStatus: 8 BMS\n SG_ Soc : 0|8@1+ (0.5,0) [0|100] \"%\" VCU\n\n" +
+                           attributes + "BA_ \"Baudrate\" 250000;\n" +
+                           "BA_ \"GenMsgCycleTime\" BO_ 2566914849 100;\nBA_ \"GenMsgCycleTime\" BO_ 2566914850 50;\n");
+  const std::string drive =
+      writeScratchFile("init_drive.dbc",
+                       header + "BO_ 2566915105 VcuToInv: 8 VCU\n SG_ Torque : 0|16@1+ (0.1,0) [0|500] \"Nm\" INV\n\n" +
+                           "BO_ 2566915107 InvStatus: 8 INV\n SG_ Speed : 0|16@1+ (1,0) [0|8000] \"rpm\" VCU\n\n" +
+                           attributes + "BA_ \"BusType\" \"CAN FD\";\n" +
+                           "BA_ \"GenMsgCycleTime\" BO_ 2566915105 10;\nBA_ \"GenMsgCycleTime\" BO_ 2566915107 10;\n");
   const fs::path folder = freshFolder("two_buses");
   initAndCheck(folder, {battery, drive}, "VCU");
   const nlohmann::json buses = readJson(folder / "vehicle.json")["buses"];

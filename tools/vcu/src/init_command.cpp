@@ -51,9 +51,9 @@ struct Output {
   const char* name;
   init::OrderedJson (*write)(const init::Plan&);
 };
-constexpr Output OUTPUTS[] = {{"vehicle.json", init::vehicleJson},       {"schedule.json", init::scheduleJson},
-                              {"receive.json", init::receiveJson},       {"fsm.json", init::fsmJson},
-                              {"dashboard.json", init::dashboardJson},   {"gpio.json", init::gpioJson},
+constexpr Output OUTPUTS[] = {{"vehicle.json", init::vehicleJson},      {"schedule.json", init::scheduleJson},
+                              {"receive.json", init::receiveJson},      {"fsm.json", init::fsmJson},
+                              {"dashboard.json", init::dashboardJson},  {"gpio.json", init::gpioJson},
                               {"simulation.json", init::simulationJson}};
 
 /// `text` reduced to [A-Za-z0-9_-] (others -> '_'), 1-32 characters; "vehicle" when empty.
@@ -114,7 +114,8 @@ init::PlannedBus planBus(const std::string& path, const dbc::Database& file, std
 /// Names the DBC's nodes for an unknown --node.
 Error unknownNode(const std::string& node, const dbc::Database& database) {
   if (database.nodes.empty()) {
-    return Error{"node '" + node + "' is not in the DBC: it declares no nodes (BU_ is empty); add the VCU to BU_ "
+    return Error{"node '" + node +
+                 "' is not in the DBC: it declares no nodes (BU_ is empty); add the VCU to BU_ "
                  "and make it the transmitter (BO_) of the messages it sends"};
   }
   std::vector<std::string> names;
@@ -193,7 +194,8 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
   if (absolute.filename().empty()) absolute = absolute.parent_path();  // "tractor/" or "."
   plan.instance = options.instance.empty() ? safeName(absolute.filename().string()) : options.instance;
   plan.database = std::move(*database);
-  for (std::size_t i = 0; i < files.size(); ++i) plan.buses.push_back(planBus(options.dbcFiles[i], files[i], files.size()));
+  for (std::size_t i = 0; i < files.size(); ++i)
+    plan.buses.push_back(planBus(options.dbcFiles[i], files[i], files.size()));
   for (std::size_t m = 0; m < plan.database.messages.size(); ++m) {
     const dbc::Message& message = plan.database.messages[m];
     if (message.pseudo) continue;
@@ -279,8 +281,9 @@ ExitCode runInit(const InitOptions& options, Streams streams) {
   const ExitCode checked = runCheck(check, Streams{checkOut, checkErr});
   if (checked != ExitCode::Ok) {
     streams.err.write(checkErr.text());
-    reportError(streams.err, "the generated folder does not pass `vcu check` (a vcu init bug for this DBC; please "
-                             "report it with the DBC); nothing written");
+    reportError(streams.err,
+                "the generated folder does not pass `vcu check` (a vcu init bug for this DBC; please "
+                "report it with the DBC); nothing written");
     abandon();
     return ExitCode::Failure;
   }

@@ -23,19 +23,19 @@ OrderedJson staleConditions(const Plan& plan) {
     if (!timesOut(message)) continue;
     const std::string key = firstSignalKey(message);
     if (key.empty()) continue;
-    list.push_back(OrderedJson{{"key", key},
-                               {"quality", "stale"},
-                               {"comment", message.name + " timed out (receive.json)"}});
+    list.push_back(
+        OrderedJson{{"key", key}, {"quality", "stale"}, {"comment", message.name + " timed out (receive.json)"}});
   }
   return list;
 }
 
-OrderedJson lamp(int value) { return OrderedJson{{"signal", LAMP_KEY}, {"value", value}}; }
+OrderedJson lamp(int value) {
+  return OrderedJson{{"signal", LAMP_KEY}, {"value", value}};
+}
 
 OrderedJson toFault(const OrderedJson& stale) {
-  return OrderedJson{{"comment", "a received message timed out"},
-                     {"condition", OrderedJson{{"any", stale}}},
-                     {"nextState", "Fault"}};
+  return OrderedJson{
+      {"comment", "a received message timed out"}, {"condition", OrderedJson{{"any", stale}}}, {"nextState", "Fault"}};
 }
 
 }  // namespace
@@ -82,8 +82,8 @@ OrderedJson fsmJson(const Plan& plan) {
 
   OrderedJson resetCondition = OrderedJson{{"key", RESET_KEY}, {"eq", "Reset"}};
   if (!stale.empty()) {
-    resetCondition = OrderedJson{
-        {"all", OrderedJson::array({resetCondition, OrderedJson{{"not", OrderedJson{{"any", stale}}}}})}};
+    resetCondition =
+        OrderedJson{{"all", OrderedJson::array({resetCondition, OrderedJson{{"not", OrderedJson{{"any", stale}}}}})}};
   }
   states.push_back(OrderedJson{
       {"name", "Fault"},

@@ -9,11 +9,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "openvcu/dbc/model.hpp"
 
@@ -42,22 +41,22 @@ inline constexpr std::size_t DASHBOARD_SIGNALS_PER_NODE = 6;
 
 /// One bus of the generated vehicle: one per DBC file (a DBC describes one network).
 struct PlannedBus {
-  std::string name;           ///< "vehicle" for a single file, else the file's stem
-  std::string dbcName;        ///< the copied file's name in DIR
+  std::string name;     ///< "vehicle" for a single file, else the file's stem
+  std::string dbcName;  ///< the copied file's name in DIR
   std::uint32_t bitrate{500000};
   std::optional<std::uint32_t> dataBitrate;
   bool fd{};
-  bool allMessages{};                ///< one file: "messages": "all"
-  std::vector<std::string> messages; ///< else the file's frame message names
-  std::string comment;               ///< where bitrate and type came from
+  bool allMessages{};                 ///< one file: "messages": "all"
+  std::vector<std::string> messages;  ///< else the file's frame message names
+  std::string comment;                ///< where bitrate and type came from
 };
 
 /// A message the node transmits, as the schedule will carry it.
 struct PlannedTx {
-  std::size_t message{};                 ///< index into the database
-  std::optional<std::uint32_t> cycleMs;  ///< the DBC's GenMsgCycleTime; none: on request
+  std::size_t message{};                        ///< index into the database
+  std::optional<std::uint32_t> cycleMs;         ///< the DBC's GenMsgCycleTime; none: on request
   std::optional<std::uint32_t> lengthenedToMs;  ///< set when the bus-load budget lengthened it
-  bool safety{};                         ///< a J1939-76 SDM (marked in the DBC comment)
+  bool safety{};                                ///< a J1939-76 SDM (marked in the DBC comment)
   std::size_t bus{};
 };
 
@@ -67,9 +66,9 @@ struct Plan {
   std::string instance;
   dbc::Database database;
   std::vector<PlannedBus> buses;
-  std::vector<PlannedTx> transmitted;   ///< the node's messages, DBC order, no SHMs
-  std::vector<std::size_t> shms;        ///< the node's J1939-76 safety headers (never scheduled)
-  std::vector<std::size_t> received;    ///< frame messages other nodes send (with signals)
+  std::vector<PlannedTx> transmitted;     ///< the node's messages, DBC order, no SHMs
+  std::vector<std::size_t> shms;          ///< the node's J1939-76 safety headers (never scheduled)
+  std::vector<std::size_t> received;      ///< frame messages other nodes send (with signals)
   std::vector<std::string> busLoadNotes;  ///< one line per bus: the load before and after
 };
 

@@ -120,10 +120,11 @@ OrderedJson scheduleJson(const Plan& plan) {
                          std::to_string(SAFETY_DELTA_US) + " us): sent without its SHM";
     }
     if (tx.safety) {
-      entry["safety"] = OrderedJson{
-          {"deltaUs", SAFETY_DELTA_US},
-          {"comment", "J1939-76 SDM (the DBC comment says so): its SHM goes first; the delta is guessed, set "
-                      "the receiver's SRVT margin"}};
+      entry["safety"] =
+          OrderedJson{{"deltaUs", SAFETY_DELTA_US},
+                      {"comment",
+                       "J1939-76 SDM (the DBC comment says so): its SHM goes first; the delta is guessed, set "
+                       "the receiver's SRVT margin"}};
     }
     messages[message.name] = entry;
   }
@@ -136,8 +137,7 @@ OrderedJson receiveJson(const Plan& plan) {
   root["comment"] =
       "Receive settings written by `vcu init` (services/can-rx/README.md): every cyclic message the other nodes "
       "send times out after " +
-      std::to_string(TIMEOUT_FACTOR) +
-      " x its GenMsgCycleTime, at least " + std::to_string(MIN_TIMEOUT_MS) +
+      std::to_string(TIMEOUT_FACTOR) + " x its GenMsgCycleTime, at least " + std::to_string(MIN_TIMEOUT_MS) +
       " ms (listed below so each can be changed; 0 = never stale); messages without a cycle "
       "never time out. A timeout makes the message's signals stale, raises rx_timeout.BUS.MESSAGE and sends the "
       "FSM to Fault.";
@@ -155,13 +155,14 @@ OrderedJson receiveJson(const Plan& plan) {
       continue;
     }
     if (!timesOut(message)) {
-      messages[message.name] = OrderedJson{
-          {"timeoutMs", 0}, {"comment", "no transmitter in the DBC (Vector__XXX): never stale; name its node to time it"}};
+      messages[message.name] =
+          OrderedJson{{"timeoutMs", 0},
+                      {"comment", "no transmitter in the DBC (Vector__XXX): never stale; name its node to time it"}};
       continue;
     }
     const std::uint64_t factored = std::uint64_t{*message.cycleTimeMs} * TIMEOUT_FACTOR;
-    const std::uint64_t timeout = std::min<std::uint64_t>(std::max<std::uint64_t>(factored, MIN_TIMEOUT_MS),
-                                                          config::MAX_CYCLE_MS);
+    const std::uint64_t timeout =
+        std::min<std::uint64_t>(std::max<std::uint64_t>(factored, MIN_TIMEOUT_MS), config::MAX_CYCLE_MS);
     std::string comment = "from " + message.transmitter + ", every " + std::to_string(*message.cycleTimeMs) + " ms";
     if (timeout > factored) {
       comment += "; guessed: " + std::to_string(MIN_TIMEOUT_MS) + " ms, the floor vcu init uses (" +

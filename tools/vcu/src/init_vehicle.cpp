@@ -56,10 +56,9 @@ OrderedJson switchSignal(const char* name, const char* off, const char* on, cons
 
 OrderedJson vehicleJson(const Plan& plan) {
   OrderedJson root;
-  root["comment"] =
-      "Written by `vcu init` for node '" + plan.node +
-      "' (docs/config.md, docs/bring-up.md). Every bus runs on the simulated bus (sim:NAME) so "
-      "`./run.sh --config vehicle.json` starts at once; on the vehicle set each link to socketcan:IFACE.";
+  root["comment"] = "Written by `vcu init` for node '" + plan.node +
+                    "' (docs/config.md, docs/bring-up.md). Every bus runs on the simulated bus (sim:NAME) so "
+                    "`./run.sh --config vehicle.json` starts at once; on the vehicle set each link to socketcan:IFACE.";
   root["instance"] = plan.instance;
   root["node"] = plan.node;
   OrderedJson dbcList = OrderedJson::array();
@@ -91,8 +90,9 @@ OrderedJson vehicleJson(const Plan& plan) {
       "`vcu signal set internal.operator.Run Run`, the HMI, or wire it to a GPIO input in gpio.json"));
   internals.push_back(switchSignal("operator.FaultReset", "Idle", "Reset",
                                    "operator request: leaves Fault for Standby once no receive timeout is active"));
-  internals.push_back(switchSignal("lamp.Running", "Off", "On",
-                                   "commanded by the FSM (1 in Running); drives the GPIO output RunningLamp (gpio.json)"));
+  internals.push_back(
+      switchSignal("lamp.Running", "Off", "On",
+                   "commanded by the FSM (1 in Running); drives the GPIO output RunningLamp (gpio.json)"));
   root["internalSignals"] = internals;
   root["schedule"] = "schedule.json";
   root["receive"] = "receive.json";
