@@ -1,7 +1,7 @@
 #pragma once
 // `vcu init`: what the generator reads from the DBC files before it writes anything (the
 // plan), and the writers of each file of the vehicle folder (init_vehicle.cpp,
-// init_schedule.cpp, init_fsm.cpp). Every writer returns JSON text; init_command.cpp stages,
+// init_schedule.cpp, init_fsm.cpp). Every writer returns its file as JSON; init_command.cpp stages,
 // checks and renames them (all or nothing).
 //
 //   vcu init tractor --dbc tractor.dbc --node VCU
