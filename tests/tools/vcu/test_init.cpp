@@ -157,7 +157,7 @@ TEST_CASE("vcu init on every J1939 DBC of the corpus writes a folder that vcu ch
       const std::size_t at = text.find("\nBU_:");
       REQUIRE(at != std::string::npos);
       text.insert(at + 6, " VCU");
-      initAndCheck(freshFolder(name + "_vcu"), {writeScratchFile(entry.path().filename().string(), text)}, "VCU");
+      initAndCheck(freshFolder(name + "_vcu"), {writeScratchFile("init_corpus_" + name + ".dbc", text)}, "VCU");
       ++initialised;
       continue;
     }
