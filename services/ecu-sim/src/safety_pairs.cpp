@@ -20,6 +20,8 @@ SafetyPairs::Outcome SafetyPairs::receive(const can::Frame& frame, std::int64_t 
   // fails the CRC. Without an SHM waiting, only the SDM's own identifier is judged (an SDM
   // without its SHM: MissingHeader), unless another frame just took its SHM: that pair has
   // its verdict already (one per SHM, so a fault is reported as what it is, not flipping).
+  // Before the first SHM since the start or reset() an SDM is not judged: a receiver that
+  // comes up between a pair's SHM and SDM has not missed a header (it was not listening).
   // Other frames of its identity are ordinary frames.
   for (Pair& pair : m_pairs) {
     const std::uint32_t dataId = pair.checker.dataCanId();
@@ -29,10 +31,12 @@ SafetyPairs::Outcome SafetyPairs::receive(const can::Frame& frame, std::int64_t 
       pair.checker.onHeader(frame.payload(), atNs);
       pair.awaitingData = true;
       pair.headerTakenByOther = false;
+      pair.headerSeen = true;
       return Outcome::Header;
     }
     const bool next = pair.awaitingData && frame.extended() && j1939::sameSafetyIdentity(frame.id, dataId);
     if (!next && frame.id != dataId) continue;
+    if (!pair.headerSeen) return Outcome::NotUsed;
     if (!next && pair.headerTakenByOther) {
       pair.headerTakenByOther = false;  // the SDM whose SHM another frame took: not used, judged already
       return Outcome::NotUsed;
@@ -65,6 +69,7 @@ void SafetyPairs::reset() noexcept {
     pair.checker.reset();
     pair.awaitingData = false;
     pair.headerTakenByOther = false;
+    pair.headerSeen = false;
   }
 }
 

@@ -36,7 +36,7 @@ class SafetyPairs {
     NotPaired,  ///< no frame of a configured pair: an ordinary frame
     Header,     ///< an SHM, taken by its receiver
     Used,       ///< the SDM of a good pair: its data may be used
-    NotUsed,    ///< an SDM refused, synchronising, or whose SHM another frame took
+    NotUsed,    ///< an SDM refused, synchronising, before any SHM, or whose SHM another frame took
   };
 
   explicit SafetyPairs(const std::vector<config::SafetyCheckConfig>& pairs);
@@ -44,7 +44,8 @@ class SafetyPairs {
   /// Judges `frame` when it belongs to a pair. `otherCrc`: the receiver expects another CRC
   /// (HHEA's fault shm_expectation), so every pair is refused.
   Outcome receive(const can::Frame& frame, std::int64_t atNs, bool otherCrc) noexcept;
-  /// Forgets every receiver's history (a woken ECU): the next pair synchronises.
+  /// Forgets every receiver's history (a woken ECU): SDMs are not judged until the next SHM,
+  /// and the pair it heads synchronises.
   void reset() noexcept;
 
   [[nodiscard]] bool empty() const noexcept { return m_pairs.empty(); }
@@ -60,6 +61,7 @@ class SafetyPairs {
     std::uint32_t headerId;
     bool awaitingData{};        ///< an SHM came: the next frame with the SDM's PGN, SA and DA is the SDM
     bool headerTakenByOther{};  ///< that frame was not the SDM's identifier: the SDM after it is not judged
+    bool headerSeen{};          ///< an SHM came since the start or reset(): SDMs before it are not judged
   };
 
   std::vector<Pair> m_pairs;

@@ -250,3 +250,29 @@ TEST_CASE("#22 with a safety list the generic model judges the VCU's J1939-76 pa
   CHECK(change == j1939::SafetyResult::Ok);
   CHECK(f.sut->takeSafetyChange() == j1939::SafetyResult::CrcMismatch);
 }
+
+TEST_CASE("#22 a simulator that comes up between an SHM and its SDM judges nothing until the next SHM") {
+  Fixture f(R"({"safety": [{"message": "S1_ES_PGN61427"}]})", HHEA);
+  j1939::SafetyPairBuilder builder(f.vehicle.database.findMessage("S1_ES_PGN61427")->id);
+  const auto pair = [&](std::int64_t atNs, bool withHeader) {
+    can::Frame data = f.frame("S1_ES_PGN61427", {{"Control_Es_Relay", 3}});
+    const auto header = builder.nextHeader(j1939::SafetyDataView(data.data.data(), 8));
+    can::Frame shm;
+    shm.id = builder.headerCanId();
+    shm.flags = can::FLAG_EXTENDED;
+    shm.length = 8;
+    std::copy(header.begin(), header.end(), shm.data.begin());
+    if (withHeader) f.sut->receive(shm, atNs);
+    f.sut->receive(data, atNs + 300'000);
+  };
+  pair(T0, false);  // the SDM of a pair whose SHM went out before the simulator listened
+  CHECK(f.sut->safety().refused == 0);
+  CHECK(f.sut->safety().ok == 0);
+  pair(T0 + 20 * MS, true);  // synchronises
+  pair(T0 + 40 * MS, true);
+  CHECK(f.sut->safety().refused == 0);
+  CHECK(f.sut->safety().ok == 1);
+  pair(T0 + 60 * MS, false);  // listening since: an SDM without its SHM is refused
+  CHECK(f.sut->safety().refused == 1);
+  CHECK(f.sut->safety().lastRefusal == j1939::SafetyResult::MissingHeader);
+}
