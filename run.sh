@@ -220,6 +220,6 @@ while kill -0 "$supervisor" 2>/dev/null; do
     break
   fi
   waitfor "$vcu" top --once --config "$config" >"$run/top.txt" 2>/dev/null || true
-  say "$(date +%T) $(grep -E '^(FSM|BATTERY) ' "$run/top.txt" | tr -s ' ' | paste -sd'|' -)"
+  say "$(date +%T) $(grep -E '^(FSM|BATTERY|STATUS) ' "$run/top.txt" | tr -s ' ' | paste -sd'|' -)"
   waitfor sleep 3 || true
 done

@@ -14,7 +14,7 @@ fail() { echo "run_demo_test: FAIL: $*"; exit 1; }
 for expected in "FSM Driving" "FSM Charging" "FSM Standby" '== stopped'; do
   grep -q "$expected" "$out" || fail "no '$expected' in run.sh's output"
 done
-grep -q 'HV 1 "Connected (Normal)"' "$out" || fail "the battery never reported connected"
+grep -q 'HV connection 1 "Connected (Normal)"' "$out" || fail "the battery never reported connected"
 left=$(ls /dev/shm | grep -E '^(openvcu-|iceoryx_)' || true)
 [ -z "$left" ] || fail "shared memory left behind: $left"
 procs=$(pgrep -a -f 'vcu-(can-rx|can-tx|fsm|gpio|ecu-sim)|iox-roudi|supervisord' || true)
