@@ -132,6 +132,13 @@ std::string hexByte(std::uint32_t value) {
   return "0x" + text.substr(3) + " (" + std::to_string(value) + ")";
 }
 
+/// Where a node's attributes are defined: the DBC file when the vehicle has one (the model
+/// keeps no line for BA_), else vehicle.json's /dbc.
+Location nodeLocation(const config::VehicleConfig& vehicle) {
+  if (vehicle.dbcFiles.size() == 1) return Location{vehicle.dbcFiles.front(), 0, 0, {}};
+  return Location::json(vehicle.path, "/dbc");
+}
+
 /// The explicit NmStationAddress of a node (a default would give every node the same one).
 std::optional<std::uint32_t> explicitAddress(const dbc::Node& node) {
   const auto it = node.attributes.find("NmStationAddress");
@@ -175,7 +182,7 @@ void checkSourceAddresses(const config::VehicleConfig& vehicle, const VehicleFil
   for (const dbc::Node& node : vehicle.database.nodes) {
     if (!nodesOnBus.contains(node.name)) continue;
     if (const auto address = explicitAddress(node)) {
-      use(*address, AddressUse{node.name, "NmStationAddress", Location::json(vehicle.path, "/dbc"), true});
+      use(*address, AddressUse{node.name, "NmStationAddress", nodeLocation(vehicle), true});
     }
   }
   for (const auto& [address, list] : uses) {
