@@ -5,8 +5,9 @@
 // Reference: docs/config.md, "Whole-vehicle checks".
 //
 //   auto diagnostics = check::checkVehicle(vehicle, catalog);
-//   -> {"vehicle.json: /buses/0: warning: bus 'vehicle': the cyclic frames expected on it take 74.0 % ...",
-//       "fsm.json: /states/1/transitions/0/when: warning: internal.mode.Eco is written by nobody ..."}
+//   -> {"vehicle.json: /buses/0: warning: bus 'vehicle': the cyclic frames expected on it take 79.6 % ...",
+//       "fsm.json: /states/1/transitions/0/condition/all/2: warning: the condition reads internal.mode.Eco,
+//        which nobody writes: ..."}
 //
 // What is checked (each diagnostic names the file and the JSON path or DBC line):
 //   - unused signals: per bus one warning counting the received DBC signals no file of the
