@@ -124,7 +124,7 @@ struct AddressUse {
   std::string node;
   std::string how;  ///< "NmStationAddress", "message X (0x18FEF1F3)"
   Location where;
-  bool station{};   ///< the node's NmStationAddress
+  bool station{};  ///< the node's NmStationAddress
 };
 
 std::string hexByte(std::uint32_t value) {
@@ -172,8 +172,9 @@ void checkSourceAddresses(const config::VehicleConfig& vehicle, const VehicleFil
     if (config::sentBy(message, vehicle.node)) {
       const schedule::ScheduledMessage* entry = files.schedule ? files.schedule->find(m) : nullptr;
       if (entry == nullptr) continue;  // not sent
-      use(entry->canId & 0xFFu, AddressUse{vehicle.node, "message " + message.name + " " + hexId(entry->canId, true),
-                                           Location::json(scheduleFile, config::JsonChecker::join("/messages", message.name))});
+      use(entry->canId & 0xFFu,
+          AddressUse{vehicle.node, "message " + message.name + " " + hexId(entry->canId, true),
+                     Location::json(scheduleFile, config::JsonChecker::join("/messages", message.name))});
       continue;
     }
     use(message.id & 0xFFu, AddressUse{message.transmitter, "message " + message.name + " " + hexId(message.id, true),
@@ -259,7 +260,8 @@ void checkIdentifiers(const config::VehicleConfig& vehicle, const VehicleFiles& 
                        message.transmitter + ") have the same PGN, destination and source address";
     text += sameNode ? " and differ only by priority: a J1939 receiver that matches by PGN takes one for the other"
                      : ": two nodes send frames no receiver can tell apart by their address";
-    out.push_back(Error{std::move(text), messageLocation(vehicle, message), sameNode ? Severity::Warning : Severity::Error});
+    out.push_back(
+        Error{std::move(text), messageLocation(vehicle, message), sameNode ? Severity::Warning : Severity::Error});
   }
 }
 

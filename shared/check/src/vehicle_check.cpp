@@ -68,8 +68,7 @@ bool protocolMessage(const dbc::Message& message, const VehicleFiles& files) {
 }
 
 /// Loads every file the checks read; a note per file that does not load.
-VehicleFiles loadFiles(const config::VehicleConfig& vehicle, const signals::Catalog& catalog,
-                       std::vector<Error>& out) {
+VehicleFiles loadFiles(const config::VehicleConfig& vehicle, const signals::Catalog& catalog, std::vector<Error>& out) {
   VehicleFiles files;
   const auto skipped = [&](const std::string& file) {
     out.push_back(Error{"not cross-checked with the other files: it does not load (its own check says why)",
@@ -151,8 +150,8 @@ std::vector<bool> readSignals(const config::VehicleConfig& vehicle, const signal
   }
   if (files.dashboard) {
     const config::DashboardConfig& dashboard = *files.dashboard;
-    for (const std::string* key : {&dashboard.voltageKey, &dashboard.currentKey, &dashboard.powerKey,
-                                   &dashboard.socKey, &dashboard.sohKey, &dashboard.chargerKey}) {
+    for (const std::string* key : {&dashboard.voltageKey, &dashboard.currentKey, &dashboard.powerKey, &dashboard.socKey,
+                                   &dashboard.sohKey, &dashboard.chargerKey}) {
       mark(*key);
     }
     for (const std::string& key : dashboard.statusKeys) mark(key);
@@ -222,7 +221,8 @@ void checkUnusedSignals(const config::VehicleConfig& vehicle, const signals::Cat
               ". vcu-can-rx still decodes them and vcu-hmi shows them; to drop a message, list the bus' "
               "messages without it";
     }
-    out.push_back(Error{std::move(text), Location::json(vehicle.path, config::JsonChecker::join("/buses", b) + "/messages"),
+    out.push_back(Error{std::move(text),
+                        Location::json(vehicle.path, config::JsonChecker::join("/buses", b) + "/messages"),
                         Severity::Warning});
   }
 }
@@ -294,17 +294,16 @@ void checkUnwrittenConditions(const config::VehicleConfig& vehicle, const signal
 
 /// The simulation's J1939-76 checks on messages no configured bus carries (its loader only
 /// looks the name up in the DBC): the simulated node would never see them.
-void checkSimulationMessages(const config::VehicleConfig& vehicle, const VehicleFiles& files,
-                             std::vector<Error>& out) {
+void checkSimulationMessages(const config::VehicleConfig& vehicle, const VehicleFiles& files, std::vector<Error>& out) {
   if (!files.simulation) return;
   for (std::size_t i = 0; i < files.simulation->safety.size(); ++i) {
     const std::string& name = files.simulation->safety[i].message;
     const dbc::Message* message = vehicle.database.findMessage(name);
     if (message == nullptr) continue;
     if (vehicle.busOf(static_cast<std::size_t>(message - vehicle.database.messages.data())) != nullptr) continue;
-    out.push_back(Error{"message '" + name + "' is on no configured bus: list it in a bus' \"messages\" of " +
-                            vehicle.path,
-                        Location::json(vehicle.simulationFile, config::JsonChecker::join("/safety", i) + "/message")});
+    out.push_back(
+        Error{"message '" + name + "' is on no configured bus: list it in a bus' \"messages\" of " + vehicle.path,
+              Location::json(vehicle.simulationFile, config::JsonChecker::join("/safety", i) + "/message")});
   }
 }
 

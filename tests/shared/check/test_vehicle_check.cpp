@@ -58,9 +58,9 @@ class VehicleFolder {
   std::map<std::string, int> addresses{{"VCU", 33}, {"BMS", 243}, {"INV", 239}};
   std::uint32_t bitrate{250000};
   std::string fsm;
-  std::string dashboard;    ///< empty: no dashboard.json
-  std::string schedule;     ///< empty: the schedule's defaults
-  std::string simulation;   ///< empty: no simulation file
+  std::string dashboard;   ///< empty: no dashboard.json
+  std::string schedule;    ///< empty: the schedule's defaults
+  std::string simulation;  ///< empty: no simulation file
   std::string busMessages{"\"all\""};
   std::string internalSignals{R"([{"name": "operator.Start"}, {"name": "mode.Eco"}])"};
 
@@ -81,14 +81,16 @@ class VehicleFolder {
     for (const MessageSpec& message : messages) {
       dbc += "BO_ " + std::to_string(0x80000000u | message.canId) + " " + message.name + ": 8 " + message.sender + "\n";
       for (std::size_t i = 0; i < message.signalNames.size(); ++i) {
-        dbc += " SG_ " + message.signalNames[i] + " : " + std::to_string(8 * i) + "|8@1+ (1,0) [0|250] \"\" Vector__XXX\n";
+        dbc +=
+            " SG_ " + message.signalNames[i] + " : " + std::to_string(8 * i) + "|8@1+ (1,0) [0|250] \"\" Vector__XXX\n";
       }
       dbc += "\n";
     }
-    dbc += "BA_DEF_ BU_ \"NmStationAddress\" INT 0 255;\nBA_DEF_ BO_ \"GenMsgCycleTime\" INT 0 65535;\n"
-           "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\",\"J1939PG\";\n"
-           "BA_DEF_DEF_ \"NmStationAddress\" 254;\nBA_DEF_DEF_ \"GenMsgCycleTime\" 0;\n"
-           "BA_DEF_DEF_ \"VFrameFormat\" \"J1939PG\";\n";
+    dbc +=
+        "BA_DEF_ BU_ \"NmStationAddress\" INT 0 255;\nBA_DEF_ BO_ \"GenMsgCycleTime\" INT 0 65535;\n"
+        "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\",\"J1939PG\";\n"
+        "BA_DEF_DEF_ \"NmStationAddress\" 254;\nBA_DEF_DEF_ \"GenMsgCycleTime\" 0;\n"
+        "BA_DEF_DEF_ \"VFrameFormat\" \"J1939PG\";\n";
     for (const auto& [node, address] : addresses) {
       dbc += "BA_ \"NmStationAddress\" BU_ " + node + " " + std::to_string(address) + ";\n";
     }
@@ -99,8 +101,10 @@ class VehicleFolder {
     }
     write("vehicle.dbc", dbc);
     std::string vehicle = R"({"instance": "check", "node": "VCU", "dbc": "vehicle.dbc", "buses": [{"name": "can0",
-      "link": "sim:can0", "bitrate": )" + std::to_string(bitrate) + R"(, "messages": )" + busMessages + R"(}],
-      "internalSignals": )" + internalSignals + R"(, "fsm": "fsm.json")";
+      "link": "sim:can0", "bitrate": )" +
+                          std::to_string(bitrate) + R"(, "messages": )" + busMessages + R"(}],
+      "internalSignals": )" +
+                          internalSignals + R"(, "fsm": "fsm.json")";
     if (!schedule.empty()) vehicle += R"(, "schedule": "schedule.json")";
     if (!simulation.empty()) vehicle += R"(, "simulation": "simulation.json")";
     write("vehicle.json", vehicle + "}");
@@ -131,7 +135,9 @@ std::string all(const std::vector<Error>& diagnostics) {
   return text;
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
 
 }  // namespace
 
@@ -216,7 +222,8 @@ TEST_CASE("two nodes declaring one NmStationAddress are an error, sending with a
     const auto diagnostics = sut.check();
     REQUIRE_MESSAGE(diagnostics.size() == 1, all(diagnostics));
     CHECK(diagnostics.front().severity == Severity::Error);
-    CHECK(contains(diagnostics.front().message, "source address 0xF3 (243) is used by 2 nodes: BMS (message BMS_Status"));
+    CHECK(
+        contains(diagnostics.front().message, "source address 0xF3 (243) is used by 2 nodes: BMS (message BMS_Status"));
     CHECK(contains(diagnostics.front().message, "INV (NmStationAddress)"));
     CHECK(contains(diagnostics.front().message, "Two nodes declare it as their NmStationAddress"));
   }
@@ -228,7 +235,8 @@ TEST_CASE("two nodes declaring one NmStationAddress are an error, sending with a
     const auto diagnostics = sut.check();
     REQUIRE_MESSAGE(diagnostics.size() == 1, all(diagnostics));  // 0xE5, CHG's NmStationAddress, is its alone
     CHECK(diagnostics.front().severity == Severity::Warning);
-    CHECK(contains(diagnostics.front().message, "source address 0x21 (33) is used by 2 nodes: VCU (message VCU_Command"));
+    CHECK(
+        contains(diagnostics.front().message, "source address 0x21 (33) is used by 2 nodes: VCU (message VCU_Command"));
     CHECK(contains(diagnostics.front().message, "CHG (message CHG_Status 0x18FF4021)"));
     CHECK(diagnostics.front().location.file == sut.file("vehicle.dbc"));
     CHECK(diagnostics.front().location.line > 0);

@@ -47,9 +47,9 @@ TEST_CASE("Service::open refuses a vehicle whose files clash as a whole, with th
 
   REQUIRE_FALSE(refused.ok());
   const std::string text = refused.error().toString();
-  CHECK_MESSAGE(text.find("hhea.dbc: bus 'vehicle': J1939 source address 0xF3 (243) is used by 2 nodes") !=
-                    std::string::npos,
-                text);
+  CHECK_MESSAGE(
+      text.find("hhea.dbc: bus 'vehicle': J1939 source address 0xF3 (243) is used by 2 nodes") != std::string::npos,
+      text);
   CHECK(text.find("OBC (NmStationAddress)") != std::string::npos);
   fs::remove_all(folder);
 }
