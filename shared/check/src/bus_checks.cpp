@@ -215,18 +215,27 @@ void checkSourceAddresses(const config::VehicleConfig& vehicle, const VehicleFil
   }
 }
 
-/// Identifiers that collide on bus `b`: a scheduled ID (after the schedule's source and
-/// destination) equal to another DBC message's (error); J1939 messages with one PGN,
+/// Identifiers that collide on bus `b`: two DBC messages with one ID (error); a scheduled ID
+/// (after the schedule's source and destination) equal to another DBC message's (error); J1939 messages with one PGN,
 /// destination and source from two nodes (error) or from one node, differing only by
 /// priority (warning; the VCU's own pairs are left to can-tx's safety-identity warnings).
 void checkIdentifiers(const config::VehicleConfig& vehicle, const VehicleFiles& files, std::size_t b,
                       std::vector<Error>& out) {
   const config::BusConfig& bus = vehicle.buses[b];
   const auto& messages = vehicle.database.messages;
-  // Exact identifiers on the bus: scheduled entries for the VCU's, the DBC's for the rest.
+  // Exact identifiers of the bus' DBC messages: the DBC only warns about a repeated ID (it
+  // may belong to another bus); on one bus every frame decodes as the first message.
   std::map<std::pair<bool, std::uint32_t>, std::size_t> byId;
   for (const std::size_t m : bus.messages) {
-    if (!config::sentBy(messages[m], vehicle.node)) byId.emplace(std::pair{messages[m].extended, messages[m].id}, m);
+    const dbc::Message& message = messages[m];
+    const auto [it, inserted] = byId.emplace(std::pair{message.extended, message.id}, m);
+    if (inserted) continue;
+    out.push_back(Error{"bus '" + bus.name + "': " + message.name + " (" + message.transmitter +
+                            ") has the identifier " + hexId(message.id, message.extended) + " of " +
+                            messages[it->second].name + " (" + messages[it->second].transmitter +
+                            "): every such frame decodes as " + messages[it->second].name +
+                            "; put them on different buses or correct the ID",
+                        messageLocation(vehicle, message)});
   }
   if (files.schedule) {
     for (const schedule::ScheduledMessage& entry : files.schedule->messages) {
@@ -252,6 +261,7 @@ void checkIdentifiers(const config::VehicleConfig& vehicle, const VehicleFiles& 
     const auto [it, inserted] = byIdentity.emplace(identity, m);
     if (inserted) continue;
     const dbc::Message& first = messages[it->second];
+    if (first.id == message.id) continue;  // the same identifier: reported above
     const bool sameNode = first.transmitter == message.transmitter;
     // The VCU's own pairs are can-tx's (schedule::safetyIdentityWarnings, logged at its start).
     if (sameNode && config::sentBy(message, vehicle.node)) continue;

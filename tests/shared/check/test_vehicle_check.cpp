@@ -259,6 +259,16 @@ TEST_CASE("identifiers that collide on a bus: a scheduled ID equal to another no
     CHECK(it->location.jsonPath == "/messages/VCU_Command");
     CHECK(contains(it->message, "the identifier of BMS_Status2 (sent by BMS)"));
   }
+  SUBCASE("the inverter's message has the battery status' identifier on the same bus: an error") {
+    sut.messages.push_back({"INV_Copy", 0x18FF10F3, "INV", 0, {"Copy"}});
+    sut.dashboard = R"({"items": [{"key": "BMS.BMS_Status.SOC"}, {"key": "BMS.BMS_Temps.Temp"},
+                                  {"key": "INV.INV_Status.Speed"}, {"key": "INV.INV_Copy.Copy"}]})";
+    const auto errors = withSeverity(sut.check(), Severity::Error);  // and a warning: INV sends with 0xF3
+    REQUIRE_MESSAGE(errors.size() == 1, all(errors));
+    CHECK(contains(errors.front().message,
+                   "INV_Copy (INV) has the identifier 0x18FF10F3 of BMS_Status (BMS): every such frame decodes as"));
+    CHECK(errors.front().location.line > 0);
+  }
   SUBCASE("two battery messages differ only by priority: a warning") {
     sut.messages.push_back({"BMS_Status_P3", 0x0CFF10F3, "BMS", 0, {"Other"}});
     sut.dashboard = R"({"items": [{"key": "BMS.BMS_Status.SOC"}, {"key": "BMS.BMS_Temps.Temp"},
