@@ -22,9 +22,9 @@
 //     node sending J1939 messages with an address another node holds (by its
 //     NmStationAddress or its messages' SA; the VCU's from its scheduled IDs) is a warning;
 //     two DBC messages with one ID on one bus, or a scheduled ID equal to another DBC
-//     message's, is an error; two J1939 messages with
-//     one PGN, destination and source are an error from two nodes and a warning from one
-//     (priority-only twins; the VCU's own are can-tx's safety-identity warnings);
+//     message's, is an error; two J1939 messages with one PGN, destination and source are
+//     an error from two nodes and a warning from one (priority-only twins; the VCU's own
+//     are can-tx's safety-identity warnings);
 //   - a simulation J1939-76 check on a message no configured bus carries: an error.
 // Messages the schedule, receive or simulation file names that are not in the DBC are the
 // loaders' errors (with file and JSON path); these checks do not repeat them. A file that
