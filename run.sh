@@ -4,6 +4,7 @@
 #   ./run.sh                      the stack + the simulated vehicle, a live status view, and
 #                                 the Qt HMI when a display is available (DISPLAY/WAYLAND_DISPLAY)
 #   ./run.sh --scenario drive     also drive it: Start -> Connect Driving -> AC charging -> Stop
+#                                 (the HHEA loader only)
 #   ./run.sh --headless           no HMI, no status view: a status line every 3 s
 #   ./run.sh --for SECONDS        stop after SECONDS
 #   ./run.sh --isolated           in private mount, network and PID namespaces (LCM multicast
@@ -34,12 +35,18 @@ while [ $# -gt 0 ]; do
     --record) record=$(realpath -m -- "${2:?--record needs a folder}"); shift ;;
     --config) config=$(realpath -m -- "${2:?--config needs a file}"); shift ;;
     --check) check=1 ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
   esac
   shift
 done
 case "$scenario" in ""|drive) ;; *) echo "run.sh: unknown scenario '$scenario' (known: drive)" >&2; exit 2 ;; esac
+# the drive scenario sets HHEA's operator switches: another vehicle is driven by its own tests
+if [ -n "$scenario" ] && [ "$(realpath -m -- "$config")" != "$root/config/hhea/vehicle.json" ]; then
+  echo "run.sh: --scenario $scenario drives the HHEA loader (config/hhea) only; drive $config with" \
+    "'vcu signal set' (its README names the switches)" >&2
+  exit 2
+fi
 case "$bus" in ""|socketcan:*) ;; *) echo "run.sh: --bus takes socketcan:IFACE" >&2; exit 2 ;; esac
 if [ -n "$seconds" ] && ! [[ "$seconds" =~ ^[0-9]+$ ]]; then echo "run.sh: --for takes whole seconds" >&2; exit 2; fi
 cd "$root"

@@ -1,6 +1,7 @@
-// vcu-ecu-sim: the simulated vehicle: every node but this VCU (the HHEA loader's VIC/BMS, PDU,
-// OBC, DC-DC, Editron and four HVLP inverters) on the sim bus or a SocketCAN interface, with
-// fault injection. README.md.
+// vcu-ecu-sim: the simulated vehicle: every node but this VCU on the sim bus or a SocketCAN
+// interface (the generic model: the DBC's cyclic messages and the file's rules; "hhea": the
+// HHEA loader's VIC/BMS, PDU, OBC, DC-DC, Editron and four HVLP inverters), with fault
+// injection. README.md.
 
 #include "openvcu/service/main.hpp"
 

@@ -33,7 +33,7 @@ grep -q "7 files, 3 errors" "$work/out" || fail "the summary does not count 3 er
 # Valid JSON the loaders refuse (#20): a state of charge over 100 % and a dashboard signal
 # the catalog lacks, each named with its JSON path.
 cp "$root"/config/hhea/* "$work/"
-printf '{"battery": {"initialSoc": 150}}\n' > "$work/simulation.json"
+printf '{"model": "hhea", "battery": {"initialSoc": 150}}\n' > "$work/simulation.json"
 printf '{"items": [{"key": "internal.relay.Cl16"}]}\n' > "$work/dashboard.json"
 "${RUN_SH:-$root/run.sh}" --check --config "$work/vehicle.json" >"$work/out" 2>"$work/err"
 status=$?

@@ -398,6 +398,12 @@ struct ReceiverImpl {
       if (bus.loadSlot != NO_SLOT) {
         table.writeBus(static_cast<signals::SignalIndex>(bus.loadSlot), load, nowNs, 0, signals::Quality::Valid);
       }
+      // the state as of the last bus event (Active from the link's opening: a sim link has no
+      // LinkUp event), rewritten with the load so its age says can-rx is looking
+      if (bus.stateSlot != NO_SLOT) {
+        table.writeBus(static_cast<signals::SignalIndex>(bus.stateSlot), static_cast<double>(bus.state), nowNs, 0,
+                       signals::Quality::Valid);
+      }
     }
     for (SafetyState& group : safety) {
       // From the start, a group gets one SHM cycle before its first SHM is overdue.

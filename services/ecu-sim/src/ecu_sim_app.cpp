@@ -11,6 +11,7 @@
 
 #include "openvcu/core/clock.hpp"
 #include "openvcu/can_links/open_link.hpp"
+#include "generic_model.hpp"
 #include "vehicle_model.hpp"
 
 namespace openvcu::ecusim {
@@ -32,7 +33,8 @@ struct EcuSimAppImpl {
   service::Service& runtime;
   config::SimConfig config;
   std::optional<VirtualBus> bus;
-  std::optional<VehicleModel> model;
+  std::optional<VehicleModel> model;      ///< "model": "hhea"
+  std::optional<GenericModel> generic;    ///< "model": "generic"
   std::vector<std::unique_ptr<can::Link>> links;
   std::optional<signals::SignalIndex> wakeIndex;
   std::thread thread;
@@ -59,9 +61,15 @@ struct EcuSimAppImpl {
     auto busResult = VirtualBus::create(vehicle);
     if (!busResult) return busResult.error();
     bus.emplace(std::move(*busResult));
-    auto modelResult = VehicleModel::create(*bus, config);
-    if (!modelResult) return modelResult.error();
-    model.emplace(std::move(*modelResult));
+    if (config.model == config::SimModel::Hhea) {
+      auto modelResult = VehicleModel::create(*bus, config);
+      if (!modelResult) return modelResult.error();
+      model.emplace(std::move(*modelResult));
+    } else {
+      auto modelResult = GenericModel::create(*bus, config);
+      if (!modelResult) return modelResult.error();
+      generic.emplace(std::move(*modelResult));
+    }
     if (!config.wakeSignal.empty()) {
       wakeIndex = runtime.catalog().indexOf(config.wakeSignal);
       if (!wakeIndex) return Error{config.file + ": /wakeSignal: no signal '" + config.wakeSignal + "' in the catalog"};
@@ -77,8 +85,16 @@ struct EcuSimAppImpl {
     policy.custom = [this](const ipc::CommandRequest& request) { return request_(request); };
     if (Status answering = runtime.answerCommands(std::move(policy)); !answering) return answering.error();
     registerCounters();
-    runtime.log().info("simulating " + std::to_string(bus->nodes().size()) + " nodes on " +
-                       std::to_string(links.size()) + " bus(es); SOC " + std::to_string(static_cast<int>(config.initialSoc)) + " %");
+    std::string what = "simulating " + std::to_string(bus->nodes().size()) + " nodes on " +
+                       std::to_string(links.size()) + " bus(es), model " + std::string(config::simModelName(config.model));
+    if (model) what += "; SOC " + std::to_string(static_cast<int>(config.initialSoc)) + " %";
+    if (generic) {
+      const config::SimRules& rules = config.rules;
+      what += " (" + std::to_string(rules.rules.size()) + " rules, " + std::to_string(rules.follow.size()) +
+              " follow, " + std::to_string(rules.integrate.size()) + " integrate, " +
+              std::to_string(rules.faults.size()) + " faults, " + std::to_string(config.safety.size()) + " pairs)";
+    }
+    runtime.log().info(what);
     thread = std::thread([this] { run(); });
     return {};
   }
@@ -95,9 +111,10 @@ struct EcuSimAppImpl {
         for (const std::string& candidate : nodes) known += (known.empty() ? "" : ", ") + candidate;
         return "no simulated node '" + node + "' (nodes: " + known + ")";
       }
-    } else if (!faultByName(name)) {
+    } else if (model ? !faultByName(name) : !generic->faultIndex(name)) {
       std::string known;
-      for (std::size_t i = 0; i < FAULT_COUNT; ++i) known += std::string(faultName(static_cast<Fault>(i))) + ", ";
+      for (std::size_t i = 0; model && i < FAULT_COUNT; ++i) known += std::string(faultName(static_cast<Fault>(i))) + ", ";
+      for (std::size_t i = 0; generic && i < generic->faultCount(); ++i) known += generic->faultName(i) + ", ";
       return "unknown fault '" + name + "' (faults: " + known + "silent.<node>)";
     }
     std::lock_guard lock(requestsMutex);
@@ -111,8 +128,10 @@ struct EcuSimAppImpl {
     for (const auto& [name, on] : requests) {
       if (name.starts_with(SILENT_PREFIX)) {
         bus->setSilent(name.substr(SILENT_PREFIX.size()), on);
-      } else if (const auto fault = faultByName(name)) {
+      } else if (const auto fault = faultByName(name); fault && model) {
         model->setFault(*fault, on);
+      } else if (const auto index = generic ? generic->faultIndex(name) : std::nullopt) {
+        generic->setFault(*index, on);
       }
       ipc::FaultEvent event;
       event.timestampNs = clock::realtimeNs();
@@ -138,7 +157,7 @@ struct EcuSimAppImpl {
       for (auto& link : links) {
         std::size_t count = 0;
         while ((count = link->receive(batch)) > 0) {
-          for (std::size_t i = 0; i < count; ++i) model->receive(batch[i].frame, batch[i].monotonicNs);
+          for (std::size_t i = 0; i < count; ++i) receive(batch[i].frame, batch[i].monotonicNs);
           if (count < batch.size()) break;
         }
       }
@@ -149,25 +168,44 @@ struct EcuSimAppImpl {
           const auto level = runtime.table().readBus(*wakeIndex);
           wake = level && level->updates > 0 && level->value >= 0.5;
         }
-        model->step(now, clock::realtimeNs(), wake, send);
+        if (model) {
+          model->step(now, clock::realtimeNs(), wake, send);
+          reportSafety(model->takeSafetyChange(), model->safety(), "sim.vic_safety", "the simulated VIC");
+        } else {
+          generic->step(now);
+          reportSafety(generic->takeSafetyChange(), generic->safety(), "sim.safety_pairs", "the simulator");
+        }
         nextTick += ((now - nextTick) / config.tickNs + 1) * config.tickNs;
-        reportSafety();
       }
-      model->sendDue(now, send);
+      if (model) {
+        model->sendDue(now, send);
+      } else {
+        bus->sendDue(now, send);
+      }
       mirror();
       sleepUntil(std::min(nextTick, bus->nextDueNs()));
     }
   }
 
-  void reportSafety() {
-    const auto change = model->takeSafetyChange();
+  void receive(const can::Frame& frame, std::int64_t atNs) noexcept {
+    if (model) {
+      model->receive(frame, atNs);
+    } else {
+      generic->receive(frame, atNs);
+    }
+  }
+
+  /// One fault event per change of the pair verdict (`name`), and a log line for refusals
+  /// that were no change (`who` refused them).
+  void reportSafety(std::optional<j1939::SafetyResult> change, const SafetyStats& stats, const char* name,
+                    const char* who) {
     // A refusal followed by a good pair within one tick is no change any more by the time it
     // is looked at: the count says it happened, and why.
-    if (const std::uint64_t refused = model->safety().refused; refused != refusedLogged) {
+    if (const std::uint64_t refused = stats.refused; refused != refusedLogged) {
       if (!change || *change == j1939::SafetyResult::Ok) {
-        runtime.log().error("the simulated VIC refused " + std::to_string(refused - refusedLogged) +
+        runtime.log().error(std::string(who) + " refused " + std::to_string(refused - refusedLogged) +
                             " J1939-76 pair(s) since its last report, the last for " +
-                            std::string(j1939::safetyResultName(model->safety().lastRefusal)));
+                            std::string(j1939::safetyResultName(stats.lastRefusal)));
       }
       refusedLogged = refused;
     }
@@ -175,12 +213,12 @@ struct EcuSimAppImpl {
     const bool ok = *change == j1939::SafetyResult::Ok;
     ipc::FaultEvent event;
     event.timestampNs = clock::realtimeNs();
-    event.name = "sim.vic_safety";
+    event.name = name;
     event.source = runtime.program();
     event.severity = ipc::FaultSeverity::Error;
     event.active = !ok;
-    event.text = ok ? std::string("the simulated VIC accepts the VCU's J1939-76 pairs again")
-                    : "the simulated VIC refuses the VCU's J1939-76 pairs: " +
+    event.text = ok ? std::string(who) + " accepts the VCU's J1939-76 pairs again"
+                    : std::string(who) + " refuses the VCU's J1939-76 pairs: " +
                           std::string(j1939::safetyResultName(*change));
     runtime.events().publish(event);
     if (ok) {
@@ -196,6 +234,16 @@ struct EcuSimAppImpl {
     };
     put(sent, static_cast<std::int64_t>(bus->framesSent()));
     put(received, static_cast<std::int64_t>(bus->framesReceived()));
+    if (generic) {
+      put(pairsOk, static_cast<std::int64_t>(generic->safety().ok));
+      put(pairsRefused, static_cast<std::int64_t>(generic->safety().refused));
+      std::int64_t mask = 0;
+      for (std::size_t i = 0; i < generic->faultCount() && i < 63; ++i) {
+        if (generic->fault(i)) mask |= std::int64_t{1} << i;
+      }
+      put(faultsActive, mask);
+      return;
+    }
     put(awake, model->awake() ? 1 : 0);
     put(connection, model->connection());
     put(socTenths, static_cast<std::int64_t>(model->soc() * 10));
@@ -219,6 +267,14 @@ struct EcuSimAppImpl {
     add("frames_sent", sent);
     add("frames_received", received);
     add("send_failures", sendFailures);
+    if (generic) {
+      add("faults_active", faultsActive);  // bit i: the file's fault i (file order)
+      if (generic->checksPairs()) {
+        add("vic_pairs_ok", pairsOk);
+        add("vic_pairs_refused", pairsRefused);
+      }
+      return;
+    }
     add("vic_awake", awake);
     add("vic_connection", connection);
     add("soc_tenths", socTenths);

@@ -1,6 +1,7 @@
 #pragma once
 // vcu-ecu-sim as an object over the service runtime: opens the configuration's buses as the
-// other nodes (sim bus or SocketCAN), runs the node models (vehicle_model.hpp) on one thread
+// other nodes (sim bus or SocketCAN), runs the node models (simulation.json's "model": the
+// HHEA models of vehicle_model.hpp, or the generic model of generic_model.hpp) on one thread
 // with absolute deadlines (the model tick and each message's cycle), answers `vcu sim fault`
 // (CommandKind::SimFault) and reports in its heartbeat and LCM fault events.
 //

@@ -33,10 +33,6 @@ Result<VehicleModel> VehicleModel::create(VirtualBus& bus, const config::SimConf
   bus.setSilent("VIC", true);  // asleep until the keep-alive (and the wake signal) come
   model.m_soc = config.initialSoc;
   model.m_socBeforeLow = config.initialSoc;
-  for (const config::SafetyCheckConfig& pair : config.safety) {
-    const j1939::SafetyPairConfig checker{pair.dataCanId, pair.srvtNs, pair.sctNs};
-    model.m_pairs.push_back(Pair{j1939::SafetyPairChecker(checker), j1939::safetyHeaderCanId(pair.dataCanId)});
-  }
   return model;
 }
 
@@ -149,55 +145,21 @@ void VehicleModel::setFault(Fault fault, bool active) noexcept {
 }
 
 void VehicleModel::receive(const can::Frame& frame, std::int64_t atNs) noexcept {
-  // As a J1939-76 receiver: an SHM is PGN 0x0E00 from the SDM's SA to its DA (any priority)
-  // naming this SDM in its bytes; the SDM is the next frame after it with the SDM's PGN, SA
-  // and DA, whatever its priority (j1939::sameSafetyIdentity). HHEA's PropA_C4 (0x18EFF321)
-  // shares S1_ES's (0x0CEFF321): sent between S1_ES's SHM and SDM it is taken for the SDM and
-  // fails the CRC. Without an SHM waiting, only the SDM's own identifier is judged (an SDM
-  // without its SHM: MissingHeader), unless another frame just took its SHM: that pair has
-  // its verdict already (one per SHM, so a fault is reported as what it is, not flipping).
-  // Other frames of its identity are ordinary frames.
   // Asleep, the VIC checks no pairs (a powered-down ECU has no receiver state): the pairs the
   // VCU sends while it wakes or after it went to sleep are neither used nor refused.
-  for (Pair& pair : m_pairs) {
-    if (!m_awake) break;
-    const std::uint32_t dataId = pair.checker.dataCanId();
-    if (frame.extended() && j1939::sameSafetyIdentity(frame.id, pair.headerId)) {
-      const auto header = j1939::parseSafetyHeader(frame.payload());
-      if (header && !header->matchesData(dataId)) continue;  // another SDM's SHM to the same DA (HVESSC1's)
-      pair.checker.onHeader(frame.payload(), atNs);
-      pair.awaitingData = true;
-      pair.headerTakenByOther = false;
-      return;
+  if (m_awake) {
+    switch (m_pairs.receive(frame, atNs, fault(Fault::ShmExpectation))) {
+      case SafetyPairs::Outcome::Header:
+      case SafetyPairs::Outcome::NotUsed:
+        return;
+      case SafetyPairs::Outcome::Used:  // only a good pair's data is used
+        m_bus->receive(frame, atNs);
+        m_relayRequest = m_bus->get(m_esRelay);
+        m_lastGoodPairNs = atNs;
+        return;
+      case SafetyPairs::Outcome::NotPaired:
+        break;
     }
-    const bool next = pair.awaitingData && frame.extended() && j1939::sameSafetyIdentity(frame.id, dataId);
-    if (!next && frame.id != dataId) continue;
-    if (!next && pair.headerTakenByOther) {
-      pair.headerTakenByOther = false;  // the SDM whose SHM another frame took: not used, judged already
-      return;
-    }
-    pair.headerTakenByOther = next && frame.id != dataId;
-    pair.awaitingData = false;
-    std::array<std::uint8_t, 8> data{};
-    const std::size_t length = std::min<std::size_t>(frame.length, data.size());
-    std::copy_n(frame.data.begin(), length, data.begin());
-    if (fault(Fault::ShmExpectation)) data[7] ^= 0x01;  // a receiver that expects another CRC
-    const j1939::SafetyResult result = pair.checker.onData(std::span<const std::uint8_t>(data.data(), length), atNs);
-    m_safetyStats.last = result;
-    if (result == j1939::SafetyResult::Ok) {
-      ++m_safetyStats.ok;
-      m_bus->receive(frame, atNs);  // only a good pair's data is used
-      m_relayRequest = m_bus->get(m_esRelay);
-      m_lastGoodPairNs = atNs;
-    } else if (result != j1939::SafetyResult::Synchronising) {
-      ++m_safetyStats.refused;
-      m_safetyStats.lastRefusal = result;
-    }
-    if (result != j1939::SafetyResult::Synchronising && m_reportedSafety != result) {
-      m_reportedSafety = result;
-      m_safetyChanged = true;
-    }
-    return;
   }
   if ((frame.id & 0x03FFFF00) == (m_timeDateId & 0x03FFFF00) && m_timeAnswerPending) {
     m_timeAnswerPending = false;
@@ -213,12 +175,6 @@ void VehicleModel::receive(const can::Frame& frame, std::int64_t atNs) noexcept 
   m_bus->receive(frame, atNs);
 }
 
-std::optional<j1939::SafetyResult> VehicleModel::takeSafetyChange() noexcept {
-  if (!m_safetyChanged) return std::nullopt;
-  m_safetyChanged = false;
-  return m_reportedSafety;
-}
-
 void VehicleModel::stepVic(std::int64_t nowNs, double dt, bool wake) {
   const auto recent = [&](bridge::SignalRef ref) {
     const std::int64_t at = m_bus->lastReceivedNs(ref);
@@ -231,11 +187,7 @@ void VehicleModel::stepVic(std::int64_t nowNs, double dt, bool wake) {
     m_bus->setSilent("VIC", !m_awake);
     // Woken, its J1939-76 receivers start without history: the first pair synchronises, and
     // the gap since the pairs it saw before it slept is no cycle timeout.
-    for (Pair& pair : m_pairs) {
-      pair.checker.reset();
-      pair.awaitingData = false;
-      pair.headerTakenByOther = false;
-    }
+    m_pairs.reset();
   }
   // the relay request lapses when no good pair came for the keep-alive timeout
   const bool pairsFresh = m_lastGoodPairNs != 0 && nowNs - m_lastGoodPairNs <= m_config->keepAliveTimeoutNs;

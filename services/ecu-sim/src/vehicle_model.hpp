@@ -27,6 +27,7 @@
 
 #include "openvcu/config/simulation.hpp"
 #include "openvcu/j1939/safety.hpp"
+#include "safety_pairs.hpp"
 #include "virtual_bus.hpp"
 
 namespace openvcu::ecusim {
@@ -52,14 +53,6 @@ inline constexpr std::size_t FAULT_COUNT = static_cast<std::size_t>(Fault::Count
 [[nodiscard]] std::string_view faultName(Fault fault) noexcept;
 [[nodiscard]] std::optional<Fault> faultByName(std::string_view name) noexcept;
 
-/// What the VIC's pair checks saw, for the heartbeat and the fault events.
-struct SafetyStats {
-  std::uint64_t ok{};
-  std::uint64_t refused{};
-  j1939::SafetyResult last{j1939::SafetyResult::Ok};
-  j1939::SafetyResult lastRefusal{j1939::SafetyResult::Ok};  ///< the verdict of the last refused pair
-};
-
 class VehicleModel {
  public:
   static Result<VehicleModel> create(VirtualBus& bus, const config::SimConfig& config);
@@ -82,13 +75,13 @@ class VehicleModel {
   [[nodiscard]] int connection() const noexcept { return m_connection; }
   [[nodiscard]] bool awake() const noexcept { return m_awake; }
   [[nodiscard]] int inverterStatus(std::size_t i) const noexcept { return m_inverters[i].status; }
-  [[nodiscard]] const SafetyStats& safety() const noexcept { return m_safetyStats; }
+  [[nodiscard]] const SafetyStats& safety() const noexcept { return m_pairs.stats(); }
   [[nodiscard]] std::uint64_t timeRequests() const noexcept { return m_timeRequests; }
   [[nodiscard]] std::uint64_t timeAnswers() const noexcept { return m_timeAnswers; }
   [[nodiscard]] std::uint64_t timeAnswerErrors() const noexcept { return m_timeAnswerErrors; }
   [[nodiscard]] std::uint64_t sohAnswers() const noexcept { return m_sohAnswers; }
   /// The last pair verdict changed since the previous call (for one fault event per change).
-  [[nodiscard]] std::optional<j1939::SafetyResult> takeSafetyChange() noexcept;
+  [[nodiscard]] std::optional<j1939::SafetyResult> takeSafetyChange() noexcept { return m_pairs.takeChange(); }
 
  private:
   struct Inverter {
@@ -98,14 +91,8 @@ class VehicleModel {
     int stage{6};             ///< the last ControlWord followed
     std::int64_t stepAtNs{};  ///< when the next ControlWord may be followed
   };
-  struct Pair {
-    j1939::SafetyPairChecker checker;
-    std::uint32_t headerId;
-    bool awaitingData{};        ///< an SHM came: the next frame with the SDM's PGN, SA and DA is the SDM
-    bool headerTakenByOther{};  ///< that frame was not the SDM's identifier: the SDM after it is not judged
-  };
-
-  VehicleModel(VirtualBus& bus, const config::SimConfig& config) : m_bus(&bus), m_config(&config) {}
+  VehicleModel(VirtualBus& bus, const config::SimConfig& config)
+      : m_bus(&bus), m_config(&config), m_pairs(config.safety) {}
   Status resolve();
   void stepVic(std::int64_t nowNs, double dt, bool wake);
   void stepPowerNodes(std::int64_t nowNs, double dt);
@@ -130,10 +117,7 @@ class VehicleModel {
   bridge::SignalRef m_pduStatus{}, m_groupA{}, m_groupB{}, m_pduU{}, m_pduI{}, m_obcU{}, m_obcI{}, m_obcFault{}, m_obcReady{},
       m_obcComm{}, m_dcU{}, m_dcI{}, m_dcSts{}, m_motFault{}, m_motRun{}, m_motN{}, m_motUdc{};
   std::array<Inverter, 4> m_inverters{};
-  std::vector<Pair> m_pairs;
-  SafetyStats m_safetyStats;
-  std::optional<j1939::SafetyResult> m_reportedSafety;
-  bool m_safetyChanged{};
+  SafetyPairs m_pairs;
   // state
   double m_relayRequest{0};   ///< Control_Es_Relay from the last good pair
   std::int64_t m_lastGoodPairNs{};

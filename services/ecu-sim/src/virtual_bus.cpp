@@ -77,6 +77,13 @@ void VirtualBus::set(bridge::SignalRef ref, double value) noexcept {
                                               std::span<std::uint8_t>(tx.frame.data.data(), tx.frame.length));
 }
 
+double VirtualBus::current(bridge::SignalRef ref) const noexcept {
+  if (!isOutput(ref)) return std::numeric_limits<double>::quiet_NaN();
+  const Tx& tx = m_tx[static_cast<std::size_t>(m_txByMessage[ref.message])];
+  const auto value = m_bindings[ref.message].value(ref.signal, tx.frame.payload());
+  return value ? *value : std::numeric_limits<double>::quiet_NaN();
+}
+
 bool VirtualBus::receive(const can::Frame& frame, std::int64_t atNs) noexcept {
   for (Rx& rx : m_rx) {
     if (rx.id != frame.id || rx.extended != frame.extended()) continue;

@@ -51,6 +51,16 @@ class VirtualBus {
     const Rx* rx = rxOf(ref);
     return rx != nullptr ? rx->values[ref.signal] : std::numeric_limits<double>::quiet_NaN();
   }
+  /// The value an output() signal has in its message's payload now (what the node sends);
+  /// NaN when it is not decoded (not active, not inside the payload) or for a ref of no
+  /// transmitted message. @note noexcept, allocation-free.
+  [[nodiscard]] double current(bridge::SignalRef ref) const noexcept;
+  /// true when a simulated node transmits ref's message (set() writes it).
+  [[nodiscard]] bool isOutput(bridge::SignalRef ref) const noexcept {
+    return ref.message < m_txByMessage.size() && m_txByMessage[ref.message] >= 0;
+  }
+  /// true when the VCU transmits ref's message (get() reads it).
+  [[nodiscard]] bool isInput(bridge::SignalRef ref) const noexcept { return rxOf(ref) != nullptr; }
   /// CLOCK_MONOTONIC ns of the last frame of a VCU message; 0 when none came.
   [[nodiscard]] std::int64_t lastReceivedNs(bridge::SignalRef ref) const noexcept {
     const Rx* rx = rxOf(ref);

@@ -1,5 +1,6 @@
 #include "openvcu/config/dashboard.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -133,6 +134,12 @@ Result<DashboardConfig> loadDashboardConfig(const std::string& path, const signa
   std::ostringstream text;
   text << in.rdbuf();
   return parseDashboardConfig(text.str(), path, catalog);
+}
+
+std::string dashboardBeside(const std::string& vehiclePath) {
+  const std::filesystem::path beside = std::filesystem::path(vehiclePath).parent_path() / "dashboard.json";
+  std::error_code error;
+  return std::filesystem::exists(beside, error) ? beside.string() : std::string();
 }
 
 }  // namespace openvcu::config

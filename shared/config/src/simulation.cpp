@@ -1,12 +1,20 @@
 #include "openvcu/config/simulation.hpp"
 
+#include <span>
+
 #include "openvcu/config/json.hpp"
+#include "simulation_rules_loader.hpp"
 
 namespace openvcu::config {
 namespace {
 
 using config::Json;
 using config::JsonChecker;
+
+/// The keys only the HHEA node models read.
+constexpr std::string_view HHEA_KEYS[] = {"battery", "loads", "timing", "wakeSignal"};
+/// The keys only the generic model reads (simulation_rules.cpp).
+constexpr std::string_view GENERIC_KEYS[] = {"rules", "follow", "integrate", "faults"};
 
 class Loader {
  public:
@@ -16,20 +24,46 @@ class Loader {
 
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
-    m_check.onlyKeys(root, "", {"tick", "battery", "loads", "timing", "wakeSignal", "safety", "comment"});
+    m_check.onlyKeys(root, "", {"model", "tick", "safety", "comment", "battery", "loads", "timing", "wakeSignal",
+                                "rules", "follow", "integrate", "faults"});
+    model(root);
     m_config.tickNs = duration(root, "", "tick", m_config.tickNs);
     if (m_config.tickNs < 1'000'000) m_check.error("/tick", "must be at least 1ms");
-    m_config.wakeSignal = m_check.string(root, "", "wakeSignal", false).value_or("");
-    battery(root);
-    loads(root);
-    timing(root);
+    const bool hhea = m_config.model == SimModel::Hhea;
+    for (const std::string_view key : hhea ? std::span<const std::string_view>(GENERIC_KEYS)
+                                           : std::span<const std::string_view>(HHEA_KEYS)) {
+      if (root.contains(std::string(key))) {
+        m_check.error(JsonChecker::join("", key), std::string("a key of \"model\": \"") + (hhea ? "generic" : "hhea") +
+                                                      "\" (this file's model is " +
+                                                      std::string(simModelName(m_config.model)) + ")");
+      }
+    }
+    if (hhea) {
+      m_config.wakeSignal = m_check.string(root, "", "wakeSignal", false).value_or("");
+      battery(root);
+      loads(root);
+      timing(root);
+    }
     safety(root);
+    if (!hhea) loadSimRules(root, m_check, m_vehicle, !m_config.safety.empty(), m_config.rules);
   }
 
   JsonChecker& check() { return m_check; }
   SimConfig& config() { return m_config; }
 
  private:
+  void model(const Json& root) {
+    const auto name = m_check.string(root, "", "model", false);
+    if (!name) return;
+    if (*name == "generic") {
+      m_config.model = SimModel::Generic;
+    } else if (*name == "hhea") {
+      m_config.model = SimModel::Hhea;
+    } else {
+      m_check.error("/model", "unknown model '" + *name + "'; expected \"generic\" or \"hhea\"");
+    }
+  }
+
   void battery(const Json& root) {
     const Json* battery = m_check.member(root, "", "battery", false);
     if (!battery || !m_check.isObject(*battery, "/battery")) return;
@@ -123,14 +157,10 @@ class Loader {
 
 }  // namespace
 
+std::string_view simModelName(SimModel model) noexcept { return model == SimModel::Hhea ? "hhea" : "generic"; }
+
 Result<SimConfig> loadSimConfig(const std::string& path, const config::VehicleConfig& vehicle) {
-  if (path.empty()) {
-    SimConfig defaults;
-    if (const dbc::Message* s1 = vehicle.database.findMessage("S1_ES_PGN61427")) {
-      defaults.safety.push_back(SafetyCheckConfig{s1->name, s1->id});
-    }
-    return defaults;
-  }
+  if (path.empty()) return SimConfig{};
   auto json = config::readJsonFile(path);
   if (!json) return json.error();
   Loader loader(path, vehicle);

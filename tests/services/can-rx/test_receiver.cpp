@@ -439,10 +439,16 @@ TEST_CASE("forwarding rules copy matching frames to the other bus, with an ID re
 
 TEST_CASE("bus events set the bus state slot and raise a fault for bus-off until the bus is back") {
   Fixture f;
+  CHECK(f.bus("internal.bus.a.state").updates == 0);
+  f.sut->onTick(START + MS / 2);  // a link without a LinkUp event (sim) reads Active from the first tick
+  CHECK(f.bus("internal.bus.a.state").updates > 0);
+  CHECK(f.bus("internal.bus.a.state").value == 0.0);
   f.sut->onBusEvent(BUS_A, can::BusEvent{can::BusEventKind::ErrorPassive, START + MS, 0, 128, 0});
   CHECK(f.bus("internal.bus.a.state").value == 2.0);
   CHECK(f.outputs.faults.empty());
   f.sut->onBusEvent(BUS_A, can::BusEvent{can::BusEventKind::BusOff, START + 2 * MS, 0, 255, 0});
+  CHECK(f.bus("internal.bus.a.state").value == 3.0);
+  f.sut->onTick(START + 2 * MS + MS / 2);  // the tick keeps the last event's state
   CHECK(f.bus("internal.bus.a.state").value == 3.0);
   REQUIRE(f.outputs.lastFault("bus.a") != nullptr);
   CHECK(f.outputs.lastFault("bus.a")->active);

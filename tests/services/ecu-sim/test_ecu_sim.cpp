@@ -112,7 +112,7 @@ TEST_CASE("the HHEA simulation file loads, and a bad one is refused with its JSO
   CHECK(f.sim.safety[0].dataCanId == 0x0CEFF321u);
   CHECK(f.sim.wakeSignal == "internal.gpio.Cl15");
   const fs::path file = fs::temp_directory_path() / ("openvcu-sim-" + std::to_string(::getpid()) + ".json");
-  std::ofstream(file) << R"({"battery": {"capacityAh": -1, "colour": 1}, "timing": {"connect": "fast"},
+  std::ofstream(file) << R"({"model": "hhea", "battery": {"capacityAh": -1, "colour": 1}, "timing": {"connect": "fast"},
     "safety": [{"message": "S1_ES"}]})";
   auto bad = config::loadSimConfig(file.string(), f.vehicle);
   fs::remove(file);

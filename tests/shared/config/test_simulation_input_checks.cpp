@@ -44,7 +44,7 @@ TEST_CASE("#19 a fault value beyond a double (infinity) is refused with its plac
 }
 
 TEST_CASE("#19 a range error names the bounds and the value in short form") {
-  const auto sut = loadText(R"({"battery": {"capacityAh": 1e308}})");
+  const auto sut = loadText(R"({"model": "hhea", "battery": {"capacityAh": 1e308}})");
   REQUIRE_FALSE(sut);
   CHECK(sut.error().toString().ends_with("/battery/capacityAh: must be within [0.1, 10000], not 1e+308"));
 }

@@ -202,7 +202,7 @@ std::string hheaCopyWithReceive(const std::string& name, const std::string& rece
 }
 
 TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file and the JSON path (#19, #20)") {
-  const std::string vehicle = hheaCopy("check_simulation", "simulation.json", R"({"battery": {"initialSoc": 150}})");
+  const std::string vehicle = hheaCopy("check_simulation", "simulation.json", R"({"model": "hhea", "battery": {"initialSoc": 150}})");
 
   const RunResult result = runVcu({"check", "--config", vehicle});
 

@@ -10,6 +10,7 @@
 #include "diagnostics.hpp"
 #include "fsm_commands.hpp"
 #include "gpio_commands.hpp"
+#include "init_command.hpp"
 #include "record_commands.hpp"
 #include "sim_commands.hpp"
 #include "top_commands.hpp"
@@ -81,6 +82,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerTopCommands(app, context);
     registerCheckCommands(app, context);
     registerTraceCommands(app, context);
+    registerInitCommand(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

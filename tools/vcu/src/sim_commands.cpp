@@ -11,13 +11,16 @@ namespace {
 
 constexpr const char* FAULT_DESCRIPTION = "Inject a fault into the simulated vehicle, or clear it";
 constexpr const char* FAULT_FOOTER =
-    "Sends a SimFault command to vcu-ecu-sim and waits for its acknowledgement.\n"
-    "Faults: battery (the VIC reports 14 and opens), isolation, contactor_stuck, pdu,\n"
-    "hvlp (inverter 0x71 status 1), hvlp_shutdown (13), editron (st_mot_fault 2), obc,\n"
-    "soc_low / soc_high (SOC jumps to the configured low / high value; restored when\n"
-    "cleared),\n"
-    "shm_expectation (the simulated VIC expects another CRC: it refuses every J1939-76\n"
-    "pair), silent.<NODE> (the node stops sending: silent.VIC, silent.PDU, ...).\n"
+    "Sends a SimFault command to vcu-ecu-sim and waits for its acknowledgement; a name\n"
+    "the simulated vehicle does not know is refused with the list of those it knows.\n"
+    "The faults depend on simulation.json's model (services/ecu-sim/README.md):\n"
+    "- \"generic\": the names under \"faults\" in simulation.json, and silent.<NODE>\n"
+    "  (the node stops sending) for every simulated node.\n"
+    "- \"hhea\" (config/hhea): battery (the VIC reports 14 and opens), isolation,\n"
+    "  contactor_stuck, pdu, hvlp (inverter 0x71 status 1), hvlp_shutdown (13), editron\n"
+    "  (st_mot_fault 2), obc, soc_low / soc_high (SOC jumps to the configured low / high\n"
+    "  value; restored when cleared), shm_expectation (the simulated VIC expects another\n"
+    "  CRC: it refuses every J1939-76 pair), silent.<NODE> (silent.VIC, silent.PDU, ...).\n"
     "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
     "\n"
     "Examples:\n"
@@ -48,7 +51,7 @@ void registerSimCommands(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<SimFaultOptions>();
   CLI::App* fault = group->add_subcommand("fault", FAULT_DESCRIPTION);
   fault->footer(FAULT_FOOTER);
-  fault->add_option("NAME", options->name, "the fault: battery, pdu, silent.VIC, ...")->required();
+  fault->add_option("NAME", options->name, "the fault: a name from simulation.json (generic) or battery, pdu, ... (hhea); silent.<NODE>")->required();
   fault->add_option("STATE", options->state, "on (default) or off");
   fault->add_option("--timeout", options->timeoutSeconds, "seconds to wait for the acknowledgement")
       ->check(CLI::PositiveNumber);

@@ -12,10 +12,12 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "diagnostics.hpp"
 #include "openvcu/core/clock.hpp"
+#include "openvcu/config/dashboard.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/service/process_stats.hpp"
 #include "openvcu/ipc/event_bus.hpp"
@@ -43,9 +45,10 @@ constexpr const char* TOP_FOOTER =
     "Refreshes once a second until Ctrl-C (or --for SECONDS): the services heard on the\n"
     "heartbeat channel (pid, uptime, restarts seen while top runs, heartbeat age, CPU %\n"
     "and RSS of local processes, status), the FSM state and how long it has held, the\n"
-    "battery (SOC, HV connection, pack voltage and current), contactors, the four HVLP\n"
-    "inverters, the GPIO lines, each bus's load, can-tx's worst period error p99 and the\n"
-    "active faults (LCM fault events since top started). --once prints one snapshot\n"
+    "vehicle's key signals from its dashboard.json (BATTERY: SOC, voltage, current,\n"
+    "charger; STATUS: the HMI's status keys), the GPIO lines, each bus's load, can-tx's\n"
+    "worst period error p99 and the active faults (LCM fault events since top started).\n"
+    "--once prints one snapshot\n"
     "after 1.5 s without clearing the screen.\n"
     "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
     "\n"
@@ -73,7 +76,10 @@ std::string fixed(double value, int decimals) {
 
 class Top {
  public:
-  Top(const Stack& stack, Streams streams) : m_stack(stack), m_streams(streams) { loadStateNames(); }
+  Top(const Stack& stack, Streams streams) : m_stack(stack), m_streams(streams) {
+    loadStateNames();
+    loadDashboard();
+  }
 
   Status open() {
     auto events = ipc::EventBus::open(m_stack.config.lcmUrl, m_stack.config.instance);
@@ -192,29 +198,7 @@ class Top {
       }
     }
     out += "FSM         " + state + "\n";
-    const auto line = [&](const std::string& label, std::initializer_list<std::pair<const char*, const char*>> items) {
-      std::string text;
-      bool any = false;
-      for (const auto& [name, key] : items) {
-        if (!m_stack.catalog.indexOf(key)) continue;
-        any = true;
-        text += std::string(name) + " " + value(key) + "   ";
-      }
-      if (any) out += label + text + "\n";
-    };
-    line("BATTERY     ", {{"SOC", "VIC.HVESSD2_PGN61585.HS_FastUpdSOC"},
-                          {"HV", "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts"},
-                          {"U", "VIC.HVESSD1_PGN61584.HS_ULvl"},
-                          {"I", "VIC.HVESSD1_PGN61584.HS_I"}});
-    line("CONTACTORS  ", {{"VIC+", "VIC.HVESSS1_PGN61590.HS_HiUBusPosCntctrSts"},
-                          {"VIC-", "VIC.HVESSS1_PGN61590.HS_HiUBusNegCntctrSts"},
-                          {"PDU A", "PDU.PDU_Tx_1.GroupA_Contactors_State"},
-                          {"PDU B", "PDU.PDU_Tx_1.GroupB_Contactors_State"}});
-    line("INVERTERS   ", {{"0x71", "HVLP_SA71.HS2_Status_Feedback.InverterStatus"},
-                          {"0x72", "HVLP_SA72.HS2_Status_Feedback_2.InverterStatus"},
-                          {"0x73", "HVLP_SA73.HS2_Status_Feedback_3.InverterStatus"},
-                          {"0x74", "HVLP_SA74.HS2_Status_Feedback_4.InverterStatus"},
-                          {"Editron", "Editron.ST_MOT_2.st_mot_fault"}});
+    keySignals(out);
     std::string gpio;
     for (const config::GpioLine& lineSpec : m_stack.config.gpio.lines) {
       gpio += lineSpec.name + " " + value(lineSpec.statusKey()) + "   ";
@@ -237,6 +221,56 @@ class Top {
       }
       if (worst >= 0) out += "TX TIMING   worst period error p99 " + txPercentileText(worst) + " (" + which + ")\n";
     }
+  }
+
+  /// The vehicle's key signals from its dashboard (dashboard.json beside vehicle.json, as
+  /// vcu-hmi shows them): BATTERY = the header's SOC, the voltage and current dials and the
+  /// charger; STATUS = the Vehicle tab's status keys, labelled as the dashboard's items (else
+  /// the signal's name), wrapped at about 100 columns. Nothing here names one vehicle's signal.
+  void keySignals(std::string& out) {
+    if (!m_dashboardError.empty()) {
+      out += "DASHBOARD   not loaded: " + m_dashboardError + "\n";
+      return;
+    }
+    if (!m_dashboard) return;
+    std::string battery;
+    for (const auto& [name, key] : {std::pair{"SOC", &m_dashboard->socKey}, std::pair{"U", &m_dashboard->voltageKey},
+                                    std::pair{"I", &m_dashboard->currentKey}, std::pair{"charger", &m_dashboard->chargerKey}}) {
+      if (!key->empty()) battery += std::string(name) + " " + value(*key) + "   ";
+    }
+    if (!battery.empty()) out += "BATTERY     " + battery + "\n";
+    std::string line;
+    const char* label = "STATUS      ";
+    for (const std::string& key : m_dashboard->statusKeys) {
+      const std::string item = statusLabel(key) + " " + value(key) + "   ";
+      if (!line.empty() && line.size() + item.size() > 88) {
+        out += label + line + "\n";
+        label = "            ";
+        line.clear();
+      }
+      line += item;
+    }
+    if (!line.empty()) out += label + line + "\n";
+  }
+
+  /// A status key's label: the dashboard item's for the same key, else the key's last part.
+  [[nodiscard]] std::string statusLabel(const std::string& key) const {
+    for (const config::DashboardItem& item : m_dashboard->items) {
+      if (item.key == key) return item.label;
+    }
+    const auto dot = key.rfind('.');
+    return dot == std::string::npos ? key : key.substr(dot + 1);
+  }
+
+  void loadDashboard() {
+    const std::string path = config::dashboardBeside(m_stack.config.path);
+    if (path.empty()) return;
+    auto dashboard = config::loadDashboardConfig(path, m_stack.catalog);
+    if (!dashboard) {
+      m_dashboardError = formatDiagnostic(dashboard.error());
+      return;
+    }
+    m_dashboard.emplace(std::move(*dashboard));
   }
 
   void faults(std::string& out) {
@@ -271,6 +305,8 @@ class Top {
   std::int32_t m_txStatsPid{};
   std::map<std::string, ipc::FaultEvent> m_faults;
   std::vector<std::string> m_stateNames;
+  std::optional<config::DashboardConfig> m_dashboard;
+  std::string m_dashboardError;  ///< why dashboard.json did not load
 };
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <cstdio>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/config/dashboard.hpp"
 #include "openvcu/service/notify.hpp"
 #include "openvcu/service/shutdown.hpp"
 
@@ -101,9 +102,7 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
   options.stack.dashboardPath = parser.value(dashboard).toStdString();
   if (options.stack.dashboardPath.empty()) {
     // default: dashboard.json beside the vehicle configuration, when there is one
-    const QString beside =
-        QFileInfo(QString::fromStdString(options.stack.configPath)).dir().filePath(QStringLiteral("dashboard.json"));
-    if (QFileInfo::exists(beside)) options.stack.dashboardPath = beside.toStdString();
+    options.stack.dashboardPath = config::dashboardBeside(options.stack.configPath);
   }
   options.stack.instance = parser.value(instance).toStdString();
   options.stack.lcmUrl = parser.value(lcmUrl).toStdString();

@@ -60,6 +60,11 @@ Result<DashboardConfig> loadDashboardConfig(const std::string& path, const signa
 Result<DashboardConfig> parseDashboardConfig(std::string_view text, const std::string& source,
                                              const signals::Catalog& catalog);
 
+/// dashboard.json in the folder of `vehiclePath`, where vcu-hmi, `vcu top` and `vcu check`
+/// look for it; empty when there is no such file. "config/hhea/vehicle.json" ->
+/// "config/hhea/dashboard.json".
+[[nodiscard]] std::string dashboardBeside(const std::string& vehiclePath);
+
 /// True when `format` is one printf number conversion (%f %e %g with flags, width,
 /// precision; "%%" allowed) and nothing that reads memory (%s, %n), under 32 characters:
 /// what a dashboard item's "format" may be. "%.1f" -> true, "%s" -> false.

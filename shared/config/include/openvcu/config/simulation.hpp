@@ -1,14 +1,21 @@
 #pragma once
-// The simulation parameters ("simulation" in vehicle.json; HHEA: config/hhea/simulation.json):
-// the battery, the loads, the timing of the simulated nodes, the J1939-76 pairs the
-// simulated VIC checks; loaded by vcu-ecu-sim and checked by `vcu check`. Every key optional
-// (defaults below); unknown keys and bad values are errors with file and JSON path.
-// Reference: services/ecu-sim/README.md.
+// The simulation parameters ("simulation" in vehicle.json; HHEA: config/hhea/simulation.json),
+// loaded by vcu-ecu-sim and checked by `vcu check`. `"model"` chooses what the simulated
+// nodes do besides sending their cyclic messages from the DBC's start values:
+//   "generic" (the default, also without a file): the rules, follow, integrate and faults
+//           of simulation_rules.hpp;
+//   "hhea": the HHEA node models with the battery, the loads, the timing of the simulated
+//           nodes and the wake signal below (keys refused under "generic").
+// Both: the model tick and the J1939-76 pairs the simulator checks. Every key optional
+// (defaults below); unknown keys, keys of the other model and bad values are errors with
+// file and JSON path. Reference: services/ecu-sim/README.md.
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "openvcu/config/simulation_rules.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 
@@ -21,8 +28,17 @@ struct SafetyCheckConfig {
   std::int64_t sctNs{60'000'000};   ///< longest SHM -> SHM time accepted
 };
 
+enum class SimModel : std::uint8_t {
+  Generic,  ///< the DBC's cyclic messages from their start values (and the rules)
+  Hhea,     ///< the HHEA node models (services/ecu-sim/src/vehicle_model.hpp)
+};
+
+/// "generic", "hhea".
+std::string_view simModelName(SimModel model) noexcept;
+
 struct SimConfig {
   std::string file;
+  SimModel model{SimModel::Generic};
   std::int64_t tickNs{10'000'000};  ///< the node models' step
   // battery
   double capacityAh{100};
@@ -47,9 +63,10 @@ struct SimConfig {
   std::int64_t timeDateAnswerNs{1'000'000'000};    ///< the VCU's Time/Date answer must come within this
   std::string wakeSignal;  ///< when set, the VIC also needs this table key (bus plane) = 1 to wake (the Cl15 relay)
   std::vector<SafetyCheckConfig> safety;
+  SimRules rules;  ///< the generic model's rules, follow, integrate and faults
 };
 
-/// Loads `path` (empty: the defaults and the S1_ES pair of the HHEA DBC when present).
+/// Loads `path` (empty: the defaults, i.e. the generic model without pairs).
 Result<SimConfig> loadSimConfig(const std::string& path, const config::VehicleConfig& vehicle);
 
 }  // namespace openvcu::config
