@@ -4,7 +4,6 @@
 #include "openvcu/check/vehicle_check.hpp"
 
 #include <algorithm>
-#include <filesystem>
 #include <iomanip>
 #include <map>
 #include <sstream>
@@ -44,12 +43,6 @@ std::string listNames(const std::vector<std::string>& names) {
   for (std::size_t i = 0; i < shown; ++i) text += (i == 0 ? "" : ", ") + names[i];
   if (names.size() > shown) text += " and " + std::to_string(names.size() - shown) + " more";
   return text;
-}
-
-std::string dashboardFile(const config::VehicleConfig& vehicle) {
-  const std::filesystem::path beside = std::filesystem::path(vehicle.path).parent_path() / "dashboard.json";
-  std::error_code error;
-  return std::filesystem::exists(beside, error) ? beside.string() : std::string();
 }
 
 namespace {
@@ -98,7 +91,7 @@ VehicleFiles loadFiles(const config::VehicleConfig& vehicle, const signals::Cata
       skipped(vehicle.simulationFile);
     }
   }
-  if (const std::string dashboard = dashboardFile(vehicle); !dashboard.empty()) {
+  if (const std::string dashboard = config::dashboardBeside(vehicle.path); !dashboard.empty()) {
     if (auto loaded = config::loadDashboardConfig(dashboard, catalog)) {
       files.dashboard = std::move(*loaded);
     } else {
@@ -184,7 +177,7 @@ void checkUnusedSignals(const config::VehicleConfig& vehicle, const signals::Cat
   // A file that does not load reads nothing here: counting would blame signals it may read.
   const bool complete = files.schedule && files.receive && (vehicle.fsmFile.empty() || files.machine) &&
                         (vehicle.simulationFile.empty() || files.simulation) &&
-                        (dashboardFile(vehicle).empty() || files.dashboard);
+                        (config::dashboardBeside(vehicle.path).empty() || files.dashboard);
   if (!complete) return;
   const std::vector<bool> used = readSignals(vehicle, catalog, files);
   for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
@@ -217,7 +210,8 @@ void checkUnusedSignals(const config::VehicleConfig& vehicle, const signals::Cat
                        "simulation, GPIO map)";
     if (!unusedMessages.empty()) {
       text += "; " + std::to_string(unusedMessages.size()) + " of its " + std::to_string(receivedMessages) +
-              " received messages have none read: " + listNames(unusedMessages) +
+              " received messages " + (unusedMessages.size() == 1 ? "has" : "have") +
+              " none read: " + listNames(unusedMessages) +
               ". vcu-can-rx still decodes them and vcu-hmi shows them; to drop a message, list the bus' "
               "messages without it";
     }

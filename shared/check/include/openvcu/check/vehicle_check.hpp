@@ -48,9 +48,6 @@ inline constexpr double BUS_LOAD_ERROR = 1.00;
 /// How many names a summary diagnostic lists before "and N more".
 inline constexpr std::size_t NAMES_SHOWN = 5;
 
-/// dashboard.json beside vehicle.json (where vcu-hmi looks for it); empty when absent.
-std::string dashboardFile(const config::VehicleConfig& vehicle);
-
 /// Every whole-vehicle diagnostic of a loaded configuration and its catalog (see the file
 /// comment), errors and warnings in the order above. Reads the FSM, schedule, receive,
 /// simulation and dashboard files with their own loaders. Never throws.
