@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "openvcu/check/vehicle_check.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/core/input_file.hpp"
 #include "openvcu/ipc/runtime.hpp"
@@ -57,6 +58,28 @@ Result<std::unique_ptr<Service>> Service::open(ServiceInfo info, ServiceOptions 
   return service;
 }
 
+Status Service::checkWholeVehicle() {
+  // The files of the vehicle checked together (docs/config.md, "Whole-vehicle checks"), as
+  // `vcu check` does: the first error refuses the start, warnings and notes are logged once.
+  std::optional<Error> firstError;
+  std::size_t errors = 0;
+  for (const Error& diagnostic : check::checkVehicle(m_config, m_catalog)) {
+    if (diagnostic.severity == Severity::Error) {
+      if (!firstError) firstError = diagnostic;
+      ++errors;
+    } else if (diagnostic.severity == Severity::Warning) {
+      m_logger.warning(diagnostic.toString());
+    } else {
+      m_logger.info(diagnostic.toString());
+    }
+  }
+  if (!firstError) return {};
+  if (errors > 1) {
+    firstError->message += " (" + std::to_string(errors - 1) + " more: vcu check --config " + m_options.configPath + ")";
+  }
+  return *firstError;
+}
+
 Status Service::start() {
   // The writer id is part of the contract (config/services.hpp): a known service with
   // another id would make its table writes look like someone else's.
@@ -81,6 +104,7 @@ Status Service::start() {
   auto catalogResult = config::buildCatalog(m_config);
   if (!catalogResult) return Error{m_options.configPath + ": " + catalogResult.error().message};
   m_catalog = std::move(*catalogResult);
+  if (auto checked = checkWholeVehicle(); !checked) return checked;
 
   auto tableResult = signals::SignalTable::open(m_catalog, m_config.instance);
   if (!tableResult) return tableResult.error();

@@ -134,10 +134,14 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
                            "schedule.json: 0 errors", "simulation.json: 0 errors", "dashboard.json: 0 errors"}) {
     CHECK_MESSAGE(contains(result.out, file), file);
   }
-  CHECK(contains(result.out, "vehicle 'hhea': 7 files, 0 errors, 0 warnings\n"));
+  // the whole-vehicle checks' two warnings (#22): received messages nothing reads, and the
+  // DC-DC command the VCU sends with the charger's source address 0xE5 (as the original did)
+  CHECK(contains(result.out, "vehicle 'hhea': 7 files, 0 errors, 2 warnings\n"));
+  CHECK(contains(result.err, "vehicle.json: /buses/0/messages: warning: bus 'vehicle': "));
+  CHECK(contains(result.err, "hhea.dbc:166: warning: bus 'vehicle': J1939 source address 0xE5 (229)"));
   CHECK_FALSE(contains(result.err, "error:"));
   // every file through its loader: no note that a service checks the rest when it starts (#20)
-  CHECK_MESSAGE(result.err.empty(), result.err);
+  CHECK_FALSE(contains(result.err, "note:"));
 }
 
 TEST_CASE("vcu check reports a broken simulation, dashboard and schedule together with their locations (#19)") {
@@ -228,7 +232,29 @@ TEST_CASE("vcu check passes a receive file its loader accepts and counts it") {
 
   CHECK_MESSAGE(result.exitCode == EXIT_OK, result.err);
   CHECK(contains(result.out, "receive.json: 0 errors, 0 warnings"));
-  CHECK(contains(result.out, "vehicle 'hhea': 8 files, 0 errors, 0 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 8 files, 0 errors, 2 warnings\n"));  // the whole-vehicle ones (#22)
+}
+
+TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two nodes with one address (#22)") {
+  const std::string vehicle = hheaCopy("check_address");
+  std::string dbc;
+  {
+    std::ifstream in(HHEA_FOLDER / "hhea.dbc");
+    dbc.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string charger = "BA_ \"NmStationAddress\" BU_ OBC 229;";
+  REQUIRE(dbc.find(charger) != std::string::npos);
+  dbc.replace(dbc.find(charger), charger.size(), "BA_ \"NmStationAddress\" BU_ OBC 243;");  // the VIC's
+  writeScratchFile("check_address/hhea.dbc", dbc);
+
+  const RunResult result = runVcu({"check", "--config", vehicle});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  CHECK_MESSAGE(contains(result.err, "hhea.dbc: error: bus 'vehicle': J1939 source address 0xF3 (243) is used by 2 nodes"),
+                result.err);
+  CHECK(contains(result.err, "OBC (NmStationAddress)"));
+  CHECK(contains(result.out, "hhea.dbc: 1 error, 1 warning"));
+  CHECK(contains(result.out, "vehicle 'hhea': 7 files, 1 error, 2 warnings\n"));
 }
 
 TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "diagnostics.hpp"
+#include "openvcu/check/vehicle_check.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/dashboard.hpp"
 #include "openvcu/config/json.hpp"
@@ -30,7 +31,11 @@ constexpr const char* FOOTER =
     "schedule, simulation and receive files and the HMI dashboard (dashboard.json beside\n"
     "vehicle.json, if present) with the loaders the services use when they start.\n"
     "While vehicle.json itself does not load, the files it names get the JSON syntax check\n"
-    "only (a note says so). Diagnostics on stderr, one per line with file:line:column or\n"
+    "only (a note says so). Then the whole-vehicle checks, which the services also run at\n"
+    "start: unused received signals, FSM conditions on signals nobody writes, the expected\n"
+    "load of each bus (above 70 % a warning, above 100 % an error), colliding J1939\n"
+    "addresses and identifiers (docs/config.md, \"Whole-vehicle checks\").\n"
+    "Diagnostics on stderr, one per line with file:line:column or\n"
     "the JSON path; then one summary line per file and a total on stdout.\n"
     "The configuration: --config FILE, else $OPENVCU_CONFIG, else the running stack's.\n"
     "\n"
@@ -258,6 +263,10 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
       checkWithLoader(
           dashboard, [&] { return config::loadDashboardConfig(dashboard, stack->catalog); }, tally, options.quiet,
           streams.err);
+    }
+    // The files together (docs/config.md, "Whole-vehicle checks"), as every service does at start.
+    for (const Error& diagnostic : check::checkVehicle(vehicle, stack->catalog)) {
+      tally.report(diagnostic, options.quiet, streams.err);
     }
   } else {
     if (!options.quiet) {

@@ -15,7 +15,8 @@
 //   }
 //
 // open() in order: blocks SIGTERM/SIGINT (signalfd; before any thread exists), loads the
-// configuration (--instance overrides its instance), builds the catalog, attaches to (or
+// configuration (--instance overrides its instance), builds the catalog, runs the
+// whole-vehicle checks (check::checkVehicle: an error refuses, warnings are logged), attaches to (or
 // creates) the signal table, opens the event bus at the configuration's LCM URL, registers
 // with iox-roudi when the service uses frame streams, and puts the signalfd, the bus and
 // the heartbeat timer into the loop. Any failure is one Error whose message says what and
@@ -113,6 +114,7 @@ class Service {
  private:
   Service(ServiceInfo info, ServiceOptions options, ShutdownSignals signals);
   Status start();
+  Status checkWholeVehicle();
   void onShutdownSignal();
   void onHeartbeatTick();
   void beginStopping(const std::string& reason);
