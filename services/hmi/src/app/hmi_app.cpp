@@ -11,6 +11,7 @@
 #include <QSocketNotifier>
 #include <cstdio>
 
+#include "openvcu/check/vehicle_check.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/dashboard.hpp"
 #include "openvcu/service/notify.hpp"
@@ -174,8 +175,11 @@ Result<HmiOptions> parseCommandLine(const QStringList& arguments) {
 Status checkBeforeStart(const HmiOptions& options) {
   auto vehicle = config::loadVehicleConfig(options.stack.configPath);
   if (!vehicle) return vehicle.error();
-  if (auto catalog = config::buildCatalog(*vehicle); !catalog) {
-    return Error{options.stack.configPath + ": " + catalog.error().message};
+  auto catalog = config::buildCatalog(*vehicle);
+  if (!catalog) return Error{options.stack.configPath + ": " + catalog.error().message};
+  // the whole-vehicle checks every service runs at start (service::Service::open): an error refuses
+  for (const Error& diagnostic : check::checkVehicle(*vehicle, *catalog)) {
+    if (diagnostic.severity == Severity::Error) return diagnostic;
   }
   const bool display = !qEnvironmentVariableIsEmpty("DISPLAY") || !qEnvironmentVariableIsEmpty("WAYLAND_DISPLAY") ||
                        !qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM");
