@@ -1,6 +1,6 @@
 #!/bin/bash
 # Issue 22 (inside run_isolated.sh): a DBC is a running stack in one command.
-#   init_stack_test.sh DBC NODE NAME
+#   init_stack_test.sh DBC NODE NAME      (NODE "+VCU": add VCU to the DBC's empty BU_ first)
 # `vcu init` writes a folder for NODE of DBC, ./run.sh runs it for 10 s on the simulated
 # bus with the generic simulated vehicle and records the bus. Checked:
 #   - every service of the stack beats (vcu status: 5 services, none reports an error);
@@ -28,6 +28,15 @@ fail() { echo "$NAME: FAIL: $*"; exit 1; }
 
 work=$(mktemp -d)
 dir=$work/$name
+if [ "${node#+}" != "$node" ]; then
+  # "+VCU": the DBC declares no nodes (an empty BU_ line): vcu init refuses it and says to add
+  # the VCU's node to BU_; the test does that on a copy (the node then sends nothing and
+  # listens to every message)
+  node=${node#+}
+  grep -qE $'^BU_: *\r?$' "$dbc" || fail "$dbc: the BU_ line is not empty"
+  sed -E "s/^BU_: *\r?$/BU_: $node/" "$dbc" > "$work/$(basename "$dbc")"
+  dbc=$work/$(basename "$dbc")
+fi
 "$vcu" init "$dir" --dbc "$dbc" --node "$node" || fail "vcu init failed"
 config=$dir/vehicle.json
 export OPENVCU_LOG_DIR=$work/logs
