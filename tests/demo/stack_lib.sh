@@ -9,24 +9,16 @@
 #   wait_state NAME   until the FSM is in NAME: each look takes vcu top's 1.5 s, at most 20
 #   drive             Start -> Ready -> Connect Driving -> Driving, or fail
 #   hmi               1 when vcu-hmi is built and runs (offscreen) under supervisord
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
-bin=${OPENVCU_BIN:-$root/build/bin}
-vcu=$bin/vcu
-config=$root/config/hhea/vehicle.json
-run=$(mktemp -d)
-export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run OPENVCU_ROUDI=$root/config/iceoryx/iox-roudi.sh
-sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
+VEHICLE=hhea
+source "$(dirname "${BASH_SOURCE[0]}")/supervised_stack.sh"
 # the HMI joins when it is built, offscreen (no display in the sandbox)
 hmi=0
 if [ -x "$bin/vcu-hmi" ]; then
   hmi=1
   sed -i -e '/^\[program:hmi\]/,/^$/s/^autostart=false/autostart=true\nenvironment=QT_QPA_PLATFORM="offscreen",XDG_RUNTIME_DIR="'"${run//\//\\/}"'"/' "$run/openvcu.conf"
 fi
-ctl() { supervisorctl -c "$run/openvcu.conf" "$@"; }
 fail() { echo "$NAME: FAIL: $*"; ctl shutdown >/dev/null 2>&1; exit 1; }
-supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
-supervisor=$!
-trap 'ctl shutdown >/dev/null 2>&1; wait $supervisor 2>/dev/null' EXIT
+start_supervisor
 
 beats() { "$vcu" status --config "$config" --wait 1.2 2>/dev/null; }
 state() { "$vcu" top --once --config "$config" 2>/dev/null | sed -n 's/^FSM *\([^(]*\).*/\1/p' | sed 's/ *$//'; }

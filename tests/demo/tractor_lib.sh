@@ -16,14 +16,8 @@
 #   up                         until every service beats, or fail
 #   key_on                     key switch on (simulated GPIO line), then Ready, or fail
 set -uo pipefail
-root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
-bin=${OPENVCU_BIN:-$root/build/bin}
-vcu=$bin/vcu
-config=$root/config/tractor/vehicle.json
-run=$(mktemp -d)
-export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run OPENVCU_ROUDI=$root/config/iceoryx/iox-roudi.sh
-sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
-ctl() { supervisorctl -c "$run/openvcu.conf" "$@"; }
+VEHICLE=tractor
+source "$(dirname "${BASH_SOURCE[0]}")/supervised_stack.sh"
 fail() {
   echo "$NAME: FAIL: $*"
   echo "-- FSM state: $(state)"
@@ -34,9 +28,7 @@ fail() {
   exit 1
 }
 pass() { echo "$NAME: PASS"; }
-supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
-supervisor=$!
-trap 'ctl shutdown >/dev/null 2>&1; wait $supervisor 2>/dev/null' EXIT
+start_supervisor
 
 get() { "$vcu" signal get "$1" --config "$config" 2>/dev/null; }
 bus() { get "$1" | awk '$1 == "bus" && $2 != "never" { print $2; exit }'; }
