@@ -12,6 +12,7 @@
 
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/j1939/safety.hpp"
+#include "sim_frames.hpp"
 #include "openvcu/config/simulation.hpp"
 #include "vehicle_model.hpp"
 
@@ -55,23 +56,7 @@ struct Fixture {
 
   /// A VCU frame from the DBC's initial payload with `values` encoded.
   can::Frame frame(const std::string& name, const std::map<std::string, double>& values) {
-    const dbc::Message* message = vehicle.database.findMessage(name);
-    REQUIRE_MESSAGE(message, name);
-    const auto index = static_cast<std::size_t>(message - vehicle.database.messages.data());
-    can::Frame out;
-    out.id = message->id;
-    out.flags = can::FLAG_EXTENDED;
-    const auto initial = codecs[index].initialPayload();
-    out.length = static_cast<std::uint8_t>(initial.size());
-    std::copy(initial.begin(), initial.end(), out.data.begin());
-    for (const auto& [signal, value] : values) {
-      const auto* found = message->findSignal(signal);
-      REQUIRE_MESSAGE(found, signal);
-      const auto signalIndex = static_cast<std::uint32_t>(found - message->signals.data());
-      REQUIRE(codecs[index].encode(signalIndex, value, std::span<std::uint8_t>(out.data.data(), out.length)) ==
-              dbc::EncodeStatus::Ok);
-    }
-    return out;
+    return ecusim::test::encodedFrame(vehicle.database, codecs, name, values);
   }
 
   /// The keep-alive and one S1_ES pair (SHM, then the SDM 0.3 ms later; `corrupt` flips a bit).
@@ -80,12 +65,7 @@ struct Fixture {
     model->receive(frame("HVESSC1_PGN6912", {{"HS_OperConsent", 1}}), at);
     model->receive(frame("CN_PGN61483", {{"Crash_Typ", 0}}), at);
     can::Frame data = frame("S1_ES_PGN61427", {{"Control_Es_Relay", relay}});
-    const auto header = builder->nextHeader(j1939::SafetyDataView(data.data.data(), 8));
-    can::Frame shm;
-    shm.id = builder->headerCanId();
-    shm.flags = can::FLAG_EXTENDED;
-    shm.length = 8;
-    std::copy(header.begin(), header.end(), shm.data.begin());
+    const can::Frame shm = ecusim::test::safetyHeaderFor(*builder, data);
     if (corrupt) data.data[7] ^= 0x01;
     model->receive(shm, at);
     for (const can::Frame& other : betweenShmAndSdm) model->receive(other, at + 100'000);
@@ -200,12 +180,7 @@ TEST_CASE("issue 18: a frame with S1_ES's PGN, SA and DA between its SHM and SDM
   const can::Frame propA = f.frame("PropA_C4_PGN61184", {});
   REQUIRE(propA.id == 0x18EFF321u);  // priority 6; S1_ES is 0x0CEFF321, priority 3
   const can::Frame sdm = f.frame("S1_ES_PGN61427", {{"Control_Es_Relay", 3}});
-  const auto header = f.builder->nextHeader(j1939::SafetyDataView(sdm.data.data(), 8));
-  can::Frame shm;
-  shm.id = f.builder->headerCanId();
-  shm.flags = can::FLAG_EXTENDED;
-  shm.length = 8;
-  std::copy(header.begin(), header.end(), shm.data.begin());
+  const can::Frame shm = ecusim::test::safetyHeaderFor(*f.builder, sdm);
 
   f.run(T0 - 200 * MS, T0 - 20 * MS, 0);  // awake (asleep, the VIC checks no pairs)
   REQUIRE(f.model->awake());
@@ -244,13 +219,8 @@ TEST_CASE("issue 18: an SHM naming another SDM to the same DA is not taken for S
   // HVESSC1's SHM (PGN 0x1B00 to 0xF3) sent at S1_ES's priority 3: the very identifier of S1_ES's SHM
   j1939::SafetyPairBuilder hvesscPair(0x0C1BF321u);
   const can::Frame hvessc = f.frame("HVESSC1_PGN6912", {{"HS_OperConsent", 1}});
-  const auto header = hvesscPair.nextHeader(j1939::SafetyDataView(hvessc.data.data(), 8));
-  can::Frame shm;
-  shm.id = hvesscPair.headerCanId();
+  const can::Frame shm = ecusim::test::safetyHeaderFor(hvesscPair, hvessc);
   REQUIRE(shm.id == 0x0C0EF321u);
-  shm.flags = can::FLAG_EXTENDED;
-  shm.length = 8;
-  std::copy(header.begin(), header.end(), shm.data.begin());
   f.betweenShmAndSdm.push_back(shm);
   f.run(T0, T0 + 1000 * MS, 3);
   CHECK(f.model->connection() == 1);

@@ -16,6 +16,7 @@
 #include "openvcu/config/simulation.hpp"
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/j1939/safety.hpp"
+#include "sim_frames.hpp"
 
 using namespace openvcu;
 namespace fs = std::filesystem;
@@ -63,23 +64,7 @@ struct Fixture {
 
   /// A VCU frame of `name` from the DBC's initial payload with `values` encoded.
   can::Frame frame(const std::string& name, const std::map<std::string, double>& values) {
-    const dbc::Message* message = vehicle.database.findMessage(name);
-    REQUIRE_MESSAGE(message, name);
-    const auto index = static_cast<std::size_t>(message - vehicle.database.messages.data());
-    can::Frame out;
-    out.id = message->id;
-    out.flags = message->extended ? can::FLAG_EXTENDED : 0;
-    const auto initial = codecs[index].initialPayload();
-    out.length = static_cast<std::uint8_t>(initial.size());
-    std::copy(initial.begin(), initial.end(), out.data.begin());
-    for (const auto& [signal, value] : values) {
-      const auto* found = message->findSignal(signal);
-      REQUIRE_MESSAGE(found, signal);
-      const auto signalIndex = static_cast<std::uint32_t>(found - message->signals.data());
-      REQUIRE(codecs[index].encode(signalIndex, value, std::span<std::uint8_t>(out.data.data(), out.length)) ==
-              dbc::EncodeStatus::Ok);
-    }
-    return out;
+    return ecusim::test::encodedFrame(vehicle.database, codecs, name, values);
   }
   void receive(const std::string& name, const std::map<std::string, double>& values) {
     sut->receive(frame(name, values), now);
@@ -217,12 +202,7 @@ TEST_CASE("#22 with a safety list the generic model judges the VCU's J1939-76 pa
   const auto pairs = [&](double relayValue, bool corrupt, std::int64_t until) {
     while (f.now + 20 * MS <= until) {  // S1_ES's 20 ms cycle: SHM, SDM 0.3 ms later, then two ticks
       can::Frame data = f.frame("S1_ES_PGN61427", {{"Control_Es_Relay", relayValue}});
-      const auto header = builder.nextHeader(j1939::SafetyDataView(data.data.data(), 8));
-      can::Frame shm;
-      shm.id = builder.headerCanId();
-      shm.flags = can::FLAG_EXTENDED;
-      shm.length = 8;
-      std::copy(header.begin(), header.end(), shm.data.begin());
+      const can::Frame shm = ecusim::test::safetyHeaderFor(builder, data);
       if (corrupt) data.data[7] ^= 0x01;
       f.sut->receive(shm, f.now);
       f.sut->receive(data, f.now + 300'000);
@@ -256,12 +236,7 @@ TEST_CASE("#22 a simulator that comes up between an SHM and its SDM judges nothi
   j1939::SafetyPairBuilder builder(f.vehicle.database.findMessage("S1_ES_PGN61427")->id);
   const auto pair = [&](std::int64_t atNs, bool withHeader) {
     can::Frame data = f.frame("S1_ES_PGN61427", {{"Control_Es_Relay", 3}});
-    const auto header = builder.nextHeader(j1939::SafetyDataView(data.data.data(), 8));
-    can::Frame shm;
-    shm.id = builder.headerCanId();
-    shm.flags = can::FLAG_EXTENDED;
-    shm.length = 8;
-    std::copy(header.begin(), header.end(), shm.data.begin());
+    const can::Frame shm = ecusim::test::safetyHeaderFor(builder, data);
     if (withHeader) f.sut->receive(shm, atNs);
     f.sut->receive(data, atNs + 300'000);
   };
