@@ -13,6 +13,10 @@
 #   ./run.sh --record DIR         record the session: every bus as candump -L, the LCM events
 #   ./run.sh --bus socketcan:can0 the vehicle bus on real hardware (no simulated vehicle)
 #   ./run.sh --config FILE        another vehicle (default config/hhea/vehicle.json)
+#   ./run.sh --dbc FILE --node NAME [--into DIR]
+#                                 a new machine from its DBC in one command: `vcu init DIR`
+#                                 (default ./<DBC name>) for the VCU node NAME, then runs it;
+#                                 an existing DIR/vehicle.json is run as it is (docs/bring-up.md)
 #   ./run.sh --check              only `vcu check` every file of the vehicle and exit with its
 #                                 code (0 clean, 1 errors); installs and builds nothing
 # Ctrl-C (or the end of --for) stops every process cleanly and removes the stack's shared
@@ -23,8 +27,8 @@ set -euo pipefail
 # realpath -m: the folder of --record need not exist yet
 root=$(dirname "$(readlink -f "$0")")
 
-headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0; record=""
-config=$root/config/hhea/vehicle.json
+headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0; record=""; dbc=""; node=""; into=""
+config=$root/config/hhea/vehicle.json; config_given=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --headless) headless=1 ;;
@@ -33,14 +37,27 @@ while [ $# -gt 0 ]; do
     --isolated) isolated=1 ;;
     --bus) bus=${2:?--bus needs socketcan:IFACE}; shift ;;
     --record) record=$(realpath -m -- "${2:?--record needs a folder}"); shift ;;
-    --config) config=$(realpath -m -- "${2:?--config needs a file}"); shift ;;
+    --config) config=$(realpath -m -- "${2:?--config needs a file}"); config_given=1; shift ;;
     --check) check=1 ;;
-    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+    --dbc) dbc=$(realpath -m -- "${2:?--dbc needs a DBC file}"); shift ;;
+    --node) node=${2:?--node needs the node name of the VCU}; shift ;;
+    --into) into=$(realpath -m -- "${2:?--into needs a folder}"); shift ;;
+    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
   esac
   shift
 done
 case "$scenario" in ""|drive) ;; *) echo "run.sh: unknown scenario '$scenario' (known: drive)" >&2; exit 2 ;; esac
+if [ -n "$dbc" ]; then
+  [ -n "$node" ] || { echo "run.sh: --dbc needs --node NAME (the VCU's node in the DBC)" >&2; exit 2; }
+  [ $config_given -eq 0 ] || { echo "run.sh: --dbc and --config exclude each other" >&2; exit 2; }
+  [ $check -eq 0 ] || { echo "run.sh: --check takes --config (vcu init checks what it writes)" >&2; exit 2; }
+  [ -f "$dbc" ] || { echo "run.sh: --dbc $dbc: no such file" >&2; exit 2; }
+  [ -n "$into" ] || into=$(realpath -m -- "$(basename "$dbc" .dbc)")
+  config=$into/vehicle.json
+elif [ -n "$node" ] || [ -n "$into" ]; then
+  echo "run.sh: --node and --into go with --dbc" >&2; exit 2
+fi
 # the drive scenario sets HHEA's operator switches: another vehicle is driven by its own tests
 if [ -n "$scenario" ] && [ "$(realpath -m -- "$config")" != "$root/config/hhea/vehicle.json" ]; then
   echo "run.sh: --scenario $scenario drives the HHEA loader (config/hhea) only; drive $config with" \
@@ -72,6 +89,19 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
   echo "== building (build/)"
   cmake --build build -j "$(nproc 2>/dev/null || echo 2)" | tail -1
+fi
+
+# --dbc: the vehicle folder from the DBC (vcu init checks every file before writing any)
+if [ -n "$dbc" ]; then
+  if [ -f "$config" ]; then
+    echo "== $config exists: running it as it is (vcu init --force $into ... regenerates it)"
+  else
+    echo "== vcu init $into for node $node of $dbc"
+    "$vcu" init "$into" --dbc "$dbc" --node "$node" || { echo "run.sh: vcu init failed (above)" >&2; exit 1; }
+  fi
+fi
+
+if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   if [ $isolated -eq 1 ]; then
     # the same sandbox as the tests: fresh /dev/shm and /tmp, lo only, PID namespace
     keep=(--keep "$root" --keep "$(dirname "$config")")
