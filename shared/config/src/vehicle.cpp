@@ -112,7 +112,7 @@ class Loader {
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
     m_check.onlyKeys(root, "", {"instance", "node", "dbc", "buses", "fsm", "schedule", "gpio", "simulation",
-                                "receive", "internalSignals", "lcm", "commandGroup", "comment"});
+                                "receive", "diagnostics", "internalSignals", "lcm", "commandGroup", "comment"});
     instance(root);
     dbcFiles(root);
     node(root);
@@ -311,7 +311,8 @@ class Loader {
                                                                  {"schedule", &m_config.scheduleFile},
                                                                  {"gpio", &m_config.gpioFile},
                                                                  {"simulation", &m_config.simulationFile},
-                                                                 {"receive", &m_config.receiveFile}};
+                                                                 {"receive", &m_config.receiveFile},
+                                                                 {"diagnostics", &m_config.diagnosticsFile}};
     for (const auto& [key, target] : entries) {
       const auto file = m_check.string(root, "", key, false);
       if (!file) continue;
