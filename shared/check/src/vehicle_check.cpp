@@ -1,6 +1,6 @@
 // The whole-vehicle checks (vehicle_check.hpp): loading the files, unused signals, FSM
-// conditions on signals nobody writes, the simulation's J1939-76 checks; the bus checks are
-// in bus_checks.cpp.
+// conditions on signals nobody writes, the simulation's J1939-76 checks, diagnostics.json
+// against the FSM and the catalog; the bus checks are in bus_checks.cpp.
 #include "openvcu/check/vehicle_check.hpp"
 
 #include <algorithm>
@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/config/diagnostics.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/j1939/acknowledgement.hpp"
 #include "openvcu/j1939/dm1.hpp"
@@ -301,6 +302,33 @@ void checkSimulationMessages(const config::VehicleConfig& vehicle, const Vehicle
   }
 }
 
+/// diagnostics.json with the FSM's state names and the catalog: every error and warning of
+/// its loader, then a warning per FSM state whose entry raises a fault that no DTC maps.
+void checkDiagnostics(const config::VehicleConfig& vehicle, const signals::Catalog& catalog,
+                      const VehicleFiles& files, std::vector<Error>& out) {
+  if (vehicle.diagnosticsFile.empty()) return;
+  std::vector<std::string> states;
+  if (files.machine) {
+    for (const fsm::State& state : files.machine->states) states.push_back(state.name);
+  }
+  auto loaded = config::loadDiagnosticsConfig(vehicle, catalog, files.machine ? &states : nullptr, &out);
+  if (!loaded || !files.machine) return;
+  for (std::size_t i = 0; i < files.machine->states.size(); ++i) {
+    const fsm::State& state = files.machine->states[i];
+    const auto raise = std::find_if(state.entry.begin(), state.entry.end(),
+                                    [](const fsm::Action& action) { return action.kind == fsm::ActionKind::RaiseFault; });
+    if (raise == state.entry.end()) continue;
+    const bool mapped = std::any_of(loaded->dtcs.begin(), loaded->dtcs.end(), [&](const config::DtcConfig& dtc) {
+      return dtc.source == config::DtcSource::FsmState && dtc.fsmState == state.name;
+    });
+    if (mapped) continue;
+    out.push_back(Error{"state '" + state.name + "' raises fault '" + raise->name + "' but no DTC of " +
+                            vehicle.diagnosticsFile + " has \"fsmState\": \"" + state.name + "\"",
+                        Location::json(files.machine->file, config::JsonChecker::join("/states", i)),
+                        Severity::Warning});
+  }
+}
+
 }  // namespace
 
 std::vector<Error> checkVehicle(const config::VehicleConfig& vehicle, const signals::Catalog& catalog) {
@@ -311,6 +339,7 @@ std::vector<Error> checkVehicle(const config::VehicleConfig& vehicle, const sign
   checkBusLoads(vehicle, files, out);
   checkAddresses(vehicle, files, out);
   checkSimulationMessages(vehicle, files, out);
+  checkDiagnostics(vehicle, catalog, files, out);
   return out;
 }
 
