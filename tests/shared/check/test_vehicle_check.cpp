@@ -369,3 +369,15 @@ TEST_CASE("the shipped HHEA diagnostics map every FSM state that raises a fault 
     CHECK_MESSAGE(!contains(diagnostic.message, "no DTC"), diagnostic.toString());
   }
 }
+
+TEST_CASE("a signal a DTC of diagnostics.json reads is not 'read by no file' (#24)") {
+  VehicleFolder sut;
+  sut.dashboard = R"({"items": [{"key": "BMS.BMS_Status.SOC"}, {"key": "INV.INV_Status.Speed"}]})";
+  const auto withoutDtc = sut.check();
+  REQUIRE_MESSAGE(withoutDtc.size() == 1, all(withoutDtc));  // BMS_Temps.Temp is read by no file
+  CHECK(contains(withoutDtc.front().message, "BMS_Temps"));
+  sut.diagnostics = R"({"dtcs": [{"name": "hot", "signal": "BMS.BMS_Temps.Temp", "activeWhen": {"gt": 90},
+                                  "spn": 520192, "fmi": 0, "lamps": ["amber"]}]})";
+  const auto withDtc = sut.check();
+  CHECK_MESSAGE(withDtc.empty(), all(withDtc));
+}

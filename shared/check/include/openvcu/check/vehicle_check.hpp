@@ -12,7 +12,8 @@
 // What is checked (each diagnostic names the file and the JSON path or DBC line):
 //   - unused signals: per bus one warning counting the received DBC signals no file of the
 //     vehicle reads (FSM conditions and copies, dashboard, schedule, receive forwarding and
-//     J1939-76 checks, simulation), naming the first messages none of whose signals is read;
+//     J1939-76 checks, simulation, diagnostics), naming the first messages none of whose
+//     signals is read;
 //   - FSM conditions on signals nobody writes (catalog ownership, FSM actions, GPIO inputs,
 //     operator switches, the schedule, can-rx's DM1 decoding): a warning per signal;
 //   - expected bus load per bus: the schedule's cyclic frames plus every other node's cyclic
