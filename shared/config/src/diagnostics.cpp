@@ -15,10 +15,14 @@ namespace openvcu::config {
 
 bool DtcConfig::activeFor(double signalValue) const noexcept {
   switch (compare) {
-    case DtcCompare::Eq: return signalValue == value;
-    case DtcCompare::Ne: return signalValue != value;
-    case DtcCompare::Gt: return signalValue > value;
-    case DtcCompare::Lt: return signalValue < value;
+    case DtcCompare::Eq:
+      return signalValue == value;
+    case DtcCompare::Ne:
+      return signalValue != value;
+    case DtcCompare::Gt:
+      return signalValue > value;
+    case DtcCompare::Lt:
+      return signalValue < value;
   }
   return false;
 }
@@ -79,8 +83,8 @@ class Loader {
       const std::string path = JsonChecker::join("/dtcs", i);
       const Json& item = (*list)[i];
       if (!m_check.isObject(item, path)) continue;
-      m_check.onlyKeys(item, path, {"name", "fsmState", "signal", "activeWhen", "spn", "fmi", "lamps", "flash",
-                                    "comment"});
+      m_check.onlyKeys(item, path,
+                       {"name", "fsmState", "signal", "activeWhen", "spn", "fmi", "lamps", "flash", "comment"});
       DtcConfig dtc;
       dtc.path = path;
       dtc.name = m_check.string(item, path, "name").value_or("");
@@ -270,9 +274,8 @@ class Loader {
     IdentificationConfig& out = m_config.identification;
     if (const Json* software = m_check.array(*ident, "/identification", "software", false)) {
       if (software->size() > MAX_CONFIGURED_SOFTWARE_FIELDS) {
-        m_check.error("/identification/software",
-                      "at most " + std::to_string(MAX_CONFIGURED_SOFTWARE_FIELDS) +
-                          " fields (SOFT holds 125; the service appends the version)");
+        m_check.error("/identification/software", "at most " + std::to_string(MAX_CONFIGURED_SOFTWARE_FIELDS) +
+                                                      " fields (SOFT holds 125; the service appends the version)");
       }
       for (std::size_t i = 0; i < software->size(); ++i) {
         const std::string where = JsonChecker::join("/identification/software", i);
@@ -287,8 +290,8 @@ class Loader {
     if (const Json* ecu = m_check.member(*ident, "/identification", "ecu", false)) {
       const std::string path = "/identification/ecu";
       if (m_check.isObject(*ecu, path)) {
-        m_check.onlyKeys(*ecu, path, {"partNumber", "serialNumber", "location", "type", "manufacturer", "hardwareId",
-                                      "comment"});
+        m_check.onlyKeys(*ecu, path,
+                         {"partNumber", "serialNumber", "location", "type", "manufacturer", "hardwareId", "comment"});
         text(*ecu, path, "partNumber", out.partNumber);
         text(*ecu, path, "serialNumber", out.serialNumber);
         text(*ecu, path, "location", out.location);
@@ -333,7 +336,8 @@ class Loader {
     }
     const std::filesystem::path file(name);
     const std::filesystem::path folder = std::filesystem::path(m_config.file).parent_path();
-    m_config.countsFile = file.is_absolute() ? file.lexically_normal().string() : (folder / file).lexically_normal().string();
+    m_config.countsFile =
+        file.is_absolute() ? file.lexically_normal().string() : (folder / file).lexically_normal().string();
   }
 
   const VehicleConfig& m_vehicle;

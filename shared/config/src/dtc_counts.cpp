@@ -80,7 +80,8 @@ DtcCountsLoad loadDtcCounts(const std::string& path) {
   std::error_code existsError;
   if (!std::filesystem::exists(path, existsError)) return load;  // first start: all counts 0
   auto json = readJsonFile(path);
-  Result<std::vector<j1939::Dtc>> parsed = json ? parseCounts(*json, path) : Result<std::vector<j1939::Dtc>>(json.error());
+  Result<std::vector<j1939::Dtc>> parsed =
+      json ? parseCounts(*json, path) : Result<std::vector<j1939::Dtc>>(json.error());
   if (parsed) {
     load.counts = std::move(*parsed);
     return load;
@@ -98,8 +99,9 @@ DtcCountsLoad loadDtcCounts(const std::string& path) {
 Status saveDtcCounts(const std::string& path, std::span<const j1939::Dtc> counts) {
   Json root = Json::object();
   root["format"] = COUNTS_FORMAT;
-  root["comment"] = "occurrence counts of the VCU's own DTCs (J1939-73), kept across restarts "
-                    "(docs/design/j1939-diagnostics.md)";
+  root["comment"] =
+      "occurrence counts of the VCU's own DTCs (J1939-73), kept across restarts "
+      "(docs/design/j1939-diagnostics.md)";
   Json list = Json::array();
   for (const j1939::Dtc& dtc : counts) {
     list.push_back(Json{{"spn", dtc.spn}, {"fmi", dtc.fmi}, {"count", dtc.occurrenceCount}});

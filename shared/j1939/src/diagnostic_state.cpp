@@ -1,19 +1,17 @@
 #include "openvcu/j1939/diagnostic_state.hpp"
 
-#include "openvcu/j1939/dm_encode.hpp"
-
 #include <algorithm>
 #include <limits>
 #include <string>
+
+#include "openvcu/j1939/dm_encode.hpp"
 
 namespace openvcu::j1939 {
 namespace {
 
 /// Fast over slow over not flashing (Reserved counts as not flashing).
 constexpr LampFlash strongerFlash(LampFlash a, LampFlash b) noexcept {
-  const auto rank = [](LampFlash flash) {
-    return flash == LampFlash::Fast ? 2 : flash == LampFlash::Slow ? 1 : 0;
-  };
+  const auto rank = [](LampFlash flash) { return flash == LampFlash::Fast ? 2 : flash == LampFlash::Slow ? 1 : 0; };
   return rank(a) >= rank(b) ? a : b;
 }
 
@@ -143,13 +141,16 @@ std::size_t DiagnosticState::encodeDm2(std::span<std::uint8_t> out) const noexce
   return j1939::encodeDm2(m_lamps, m_previousDtcs, out);
 }
 
-bool DiagnosticState::dm1Due(std::int64_t nowNs) const noexcept { return nowNs >= nextDm1DueNs(); }
+bool DiagnosticState::dm1Due(std::int64_t nowNs) const noexcept {
+  return nowNs >= nextDm1DueNs();
+}
 
 std::int64_t DiagnosticState::nextDm1DueNs() const noexcept {
   if (!m_sentOnce) return std::numeric_limits<std::int64_t>::min();
   std::int64_t next = m_lastSentNs + m_periodNs;
   if (m_changePending) {
-    next = std::min(next, m_changeSentOnce ? m_lastChangeSentNs + m_periodNs : std::numeric_limits<std::int64_t>::min());
+    next =
+        std::min(next, m_changeSentOnce ? m_lastChangeSentNs + m_periodNs : std::numeric_limits<std::int64_t>::min());
   }
   return next;
 }

@@ -66,7 +66,8 @@ std::size_t encodeDm2(const LampStates& lamps, std::span<const Dtc> dtcs, std::s
 }
 
 bool validIdentificationField(std::string_view field) noexcept {
-  return field.size() <= IDENTIFICATION_MAX_FIELD_LENGTH && field.find(IDENTIFICATION_DELIMITER) == std::string_view::npos;
+  return field.size() <= IDENTIFICATION_MAX_FIELD_LENGTH &&
+         field.find(IDENTIFICATION_DELIMITER) == std::string_view::npos;
 }
 
 std::size_t encodeSoftwareIdentification(std::span<const std::string_view> fields,
@@ -82,8 +83,8 @@ std::size_t encodeSoftwareIdentification(std::span<const std::string_view> field
 }
 
 std::size_t encodeEcuIdentification(const EcuIdentification& ecu, std::span<std::uint8_t> out) noexcept {
-  return appendFields({ecu.partNumber, ecu.serialNumber, ecu.location, ecu.type, ecu.manufacturer, ecu.hardwareId},
-                      out, 0);
+  return appendFields({ecu.partNumber, ecu.serialNumber, ecu.location, ecu.type, ecu.manufacturer, ecu.hardwareId}, out,
+                      0);
 }
 
 std::size_t encodeComponentIdentification(const ComponentIdentification& component,

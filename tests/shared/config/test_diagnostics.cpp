@@ -24,8 +24,8 @@ const std::vector<std::string> FSM_STATES = {"Ready", "Battery Fault", "Crash"};
 class DiagnosticsFixture {
  public:
   DiagnosticsFixture() {
-    m_dir = fs::temp_directory_path() / ("openvcu-diagnostics-test-" + std::to_string(::getpid()) + "-" +
-                                         std::to_string(s_counter++));
+    m_dir = fs::temp_directory_path() /
+            ("openvcu-diagnostics-test-" + std::to_string(::getpid()) + "-" + std::to_string(s_counter++));
     fs::create_directories(m_dir);
     auto loaded = config::loadVehicleConfig(test::CONFIG_DATA_DIR + "/small.json");
     REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().toString()));
@@ -199,7 +199,9 @@ TEST_CASE("a missing counts file is no counts and no error") {
 TEST_CASE("a corrupt counts file is set aside as .rejected and the counts start at 0") {
   DiagnosticsFixture fixture;
   const std::string path = fixture.file("dtc_counts.json");
-  SUBCASE("not JSON") { std::ofstream(path) << "{\"format\": 1, \"counts\": [ {"; }
+  SUBCASE("not JSON") {
+    std::ofstream(path) << "{\"format\": 1, \"counts\": [ {";
+  }
   SUBCASE("a count out of range") {
     std::ofstream(path) << R"({"format": 1, "counts": [{"spn": 100, "fmi": 1, "count": 200}]})";
   }

@@ -1,12 +1,12 @@
 // DiagnosticState (diagnostic_state.hpp) on a set clock: occurrence counts, DM1/DM2 content,
 // lamps, DM3/DM11 clears, persistence and DM1 timing. Issue 24.
-#include "openvcu/j1939/diagnostic_state.hpp"
-
 #include <doctest/doctest.h>
 
 #include <array>
 #include <cstdint>
 #include <vector>
+
+#include "openvcu/j1939/diagnostic_state.hpp"
 
 using namespace openvcu::j1939;
 
@@ -179,14 +179,14 @@ TEST_CASE("a change makes DM1 due at once, further changes within the period wai
   sut.dm1Sent(0);
   set(sut, true, false, false, 100 * MS);
   CHECK(sut.dm1Due(100 * MS));
-  sut.dm1Sent(100 * MS);                     // the on-change DM1; the period restarts
-  set(sut, false, false, false, 300 * MS);   // a second change 200 ms later
+  sut.dm1Sent(100 * MS);                    // the on-change DM1; the period restarts
+  set(sut, false, false, false, 300 * MS);  // a second change 200 ms later
   CHECK_FALSE(sut.dm1Due(300 * MS));
   CHECK_FALSE(sut.dm1Due(1099 * MS));
   CHECK(sut.nextDm1DueNs() == 1100 * MS);
   CHECK(sut.dm1Due(1100 * MS));
   sut.dm1Sent(1100 * MS);
-  set(sut, true, false, false, 2500 * MS);   // more than a period after the last on-change DM1
+  set(sut, true, false, false, 2500 * MS);  // more than a period after the last on-change DM1
   CHECK(sut.dm1Due(2500 * MS));
 }
 

@@ -1,7 +1,5 @@
 // DM1/DM2 and identification encoding (dm_encode.hpp), byte by byte; DM1 read back with
 // decodeDm1(). Issue 24.
-#include "openvcu/j1939/dm_encode.hpp"
-
 #include <doctest/doctest.h>
 
 #include <array>
@@ -9,6 +7,8 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "openvcu/j1939/dm_encode.hpp"
 
 using namespace openvcu::j1939;
 
@@ -41,7 +41,9 @@ Bytes encoded(const LampStates& lamps, std::span<const Dtc> dtcs) {
   return Bytes(buffer.begin(), buffer.begin() + static_cast<std::ptrdiff_t>(length));
 }
 
-Bytes text(std::string_view s) { return Bytes(s.begin(), s.end()); }
+Bytes text(std::string_view s) {
+  return Bytes(s.begin(), s.end());
+}
 
 }  // namespace
 
@@ -55,20 +57,18 @@ TEST_CASE("DM1 with one DTC is one frame padded with FF") {
 }
 
 TEST_CASE("DM1 with five DTCs is 2 + 4 x 5 bytes, records in order, without padding") {
-  const std::array dtcs{Dtc{SPN_OIL_PRESSURE, FMI_LOW, 1, false},
-                        Dtc{SPN_PROPRIETARY, FMI_BAD_DEVICE, 2, false},
-                        Dtc{SPN_PROPRIETARY + 1, FMI_CONDITION_EXISTS, 126, false},
-                        Dtc{DTC_MAX_SPN, 0, 127, false},
+  const std::array dtcs{Dtc{SPN_OIL_PRESSURE, FMI_LOW, 1, false}, Dtc{SPN_PROPRIETARY, FMI_BAD_DEVICE, 2, false},
+                        Dtc{SPN_PROPRIETARY + 1, FMI_CONDITION_EXISTS, 126, false}, Dtc{DTC_MAX_SPN, 0, 127, false},
                         Dtc{0x12345, 7, 5, true}};
   LampStates lamps = amberOn();
   lamps.redStop = LampStatus::On;
   lamps.redStopFlash = LampFlash::Fast;
-  const Bytes expected{0x14, 0xDF,                     // red (5-4 = 01) + amber (3-2 = 01); red flashes fast (01)
-                       0x64, 0x00, 0x01, 0x01,         // SPN 100 FMI 1 OC 1
-                       0x00, 0xF0, 0xEC, 0x02,         // SPN 0x7F000: bits 18..16 = 7 -> 0xE0 | FMI 12
-                       0x01, 0xF0, 0xFF, 0x7E,         // SPN 0x7F001 FMI 31 OC 126
-                       0xFF, 0xFF, 0xE0, 0x7F,         // SPN 0x7FFFF FMI 0 OC 127
-                       0x45, 0x23, 0x27, 0x85};        // SPN 0x12345 FMI 7, CM 1, OC 5
+  const Bytes expected{0x14, 0xDF,               // red (5-4 = 01) + amber (3-2 = 01); red flashes fast (01)
+                       0x64, 0x00, 0x01, 0x01,   // SPN 100 FMI 1 OC 1
+                       0x00, 0xF0, 0xEC, 0x02,   // SPN 0x7F000: bits 18..16 = 7 -> 0xE0 | FMI 12
+                       0x01, 0xF0, 0xFF, 0x7E,   // SPN 0x7F001 FMI 31 OC 126
+                       0xFF, 0xFF, 0xE0, 0x7F,   // SPN 0x7FFFF FMI 0 OC 127
+                       0x45, 0x23, 0x27, 0x85};  // SPN 0x12345 FMI 7, CM 1, OC 5
   CHECK(dm1EncodedLength(dtcs.size()) == 22);
   CHECK(encoded(lamps, dtcs) == expected);
 }

@@ -48,11 +48,11 @@ struct DtcConfig {
   std::string name;
   std::string path;  ///< its JSON path ("/dtcs/3"), for messages
   DtcSource source{DtcSource::FsmState};
-  std::string fsmState;   ///< DtcSource::FsmState
-  std::string signal;     ///< DtcSource::Signal: the table key ("internal.fault.Contactor")
+  std::string fsmState;                ///< DtcSource::FsmState
+  std::string signal;                  ///< DtcSource::Signal: the table key ("internal.fault.Contactor")
   DtcCompare compare{DtcCompare::Ne};  ///< without "activeWhen": value != 0
-  double value{0.0};      ///< a number, or a value-table text resolved through the catalog
-  j1939::DtcDefinition definition;  ///< SPN, FMI, lamps
+  double value{0.0};                   ///< a number, or a value-table text resolved through the catalog
+  j1939::DtcDefinition definition;     ///< SPN, FMI, lamps
   std::string comment;
 
   /// Whether `signalValue` makes this (signal) DTC active.
@@ -65,7 +65,7 @@ enum class ClearPolicy : std::uint8_t { Refuse, Accept };
 struct IdentificationConfig {
   std::vector<std::string> software;  ///< SOFT fields; the service appends the build version
   std::string partNumber, serialNumber, location, type, manufacturer, hardwareId;  ///< ECUID
-  std::string make, model, componentSerialNumber, unitNumber;                       ///< CI
+  std::string make, model, componentSerialNumber, unitNumber;                      ///< CI
 
   [[nodiscard]] j1939::EcuIdentification ecu() const noexcept {
     return {partNumber, serialNumber, location, type, manufacturer, hardwareId};
@@ -80,7 +80,7 @@ inline constexpr std::string_view DEFAULT_DTC_COUNTS_FILE = "dtc_counts.json";
 struct DiagnosticsConfig {
   std::string file;
   std::vector<DtcConfig> dtcs;
-  ClearPolicy dm3{ClearPolicy::Refuse};   ///< default: refuse (any node could erase the history)
+  ClearPolicy dm3{ClearPolicy::Refuse};  ///< default: refuse (any node could erase the history)
   ClearPolicy dm11{ClearPolicy::Refuse};
   std::int64_t dm1PeriodNs{j1939::DM1_PERIOD_NS};
   IdentificationConfig identification;

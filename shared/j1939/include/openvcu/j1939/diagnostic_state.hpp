@@ -30,13 +30,13 @@
 // @note not thread-safe: one thread (the transmit thread) owns it. Allocation-free after
 //       create(); every member except create() is noexcept.
 
-#include "openvcu/core/result.hpp"
-#include "openvcu/j1939/dm1.hpp"
-
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
+
+#include "openvcu/core/result.hpp"
+#include "openvcu/j1939/dm1.hpp"
 
 namespace openvcu::j1939 {
 
@@ -119,7 +119,7 @@ class DiagnosticState {
   std::vector<DtcDefinition> m_definitions;
   std::vector<std::uint8_t> m_active;  ///< 0/1 per definition
   std::vector<std::uint8_t> m_counts;
-  std::vector<Dtc> m_activeDtcs;       ///< capacity = definitions, filled by rebuild()
+  std::vector<Dtc> m_activeDtcs;  ///< capacity = definitions, filled by rebuild()
   std::vector<Dtc> m_previousDtcs;
   LampStates m_lamps;
   std::int64_t m_periodNs;

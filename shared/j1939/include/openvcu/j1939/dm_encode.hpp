@@ -17,22 +17,22 @@
 //   CI    PGN 65259: make (SPN 586) * model (587) * serial number (588) * unit number (233) *
 // Messages of up to 8 bytes go as one frame, longer ones by transport protocol.
 
-#include "openvcu/j1939/dm1.hpp"
-
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string_view>
+
+#include "openvcu/j1939/dm1.hpp"
 
 namespace openvcu::j1939 {
 
 inline constexpr std::uint32_t PGN_SOFTWARE_IDENTIFICATION = 0xFEDA;   ///< SAE J1939-71 PGN 65242 SOFT
 inline constexpr std::uint32_t PGN_ECU_IDENTIFICATION = 0xFDC5;        ///< SAE J1939-71 PGN 64965 ECUID
 inline constexpr std::uint32_t PGN_COMPONENT_IDENTIFICATION = 0xFEEB;  ///< SAE J1939-71 PGN 65259 CI
-inline constexpr char IDENTIFICATION_DELIMITER = '*';  ///< ends every identification field, 0x2A (42)
-inline constexpr std::size_t SOFT_MAX_FIELDS = 125;    ///< SPN 965 operational range 0..125
-inline constexpr std::size_t IDENTIFICATION_MAX_FIELD_LENGTH = 200;  ///< "variable, up to 200 bytes"
-inline constexpr std::size_t DM1_SINGLE_FRAME_LENGTH = 8;  ///< DM1 with 0 or 1 DTC: one padded frame
+inline constexpr char IDENTIFICATION_DELIMITER = '*';                  ///< ends every identification field, 0x2A (42)
+inline constexpr std::size_t SOFT_MAX_FIELDS = 125;                    ///< SPN 965 operational range 0..125
+inline constexpr std::size_t IDENTIFICATION_MAX_FIELD_LENGTH = 200;    ///< "variable, up to 200 bytes"
+inline constexpr std::size_t DM1_SINGLE_FRAME_LENGTH = 8;              ///< DM1 with 0 or 1 DTC: one padded frame
 
 /// The DM1/DM2 length for `dtcCount` DTCs: 8 for 0 or 1, else 2 + 4 x dtcCount.
 [[nodiscard]] constexpr std::size_t dm1EncodedLength(std::size_t dtcCount) noexcept {
