@@ -197,6 +197,12 @@ class TpReceiver {
   /// The earliest deadline of any session; empty when no session is open.
   [[nodiscard]] std::optional<std::int64_t> nextDeadlineNs() const noexcept;
 
+  /// Our address changed (J1939-81 address claim): RTS/CTS sessions to the new address are
+  /// answered from now on (NULL_ADDRESS or GLOBAL_ADDRESS: BAM only). An RTS/CTS session
+  /// running to the old address no longer gets its packets and ends by timeout (its Abort
+  /// goes out from the new address); BAM sessions go on.
+  void setOwnAddress(std::uint8_t address) noexcept;
+
   /// Sessions receiving or held.
   [[nodiscard]] std::size_t activeSessions() const noexcept { return m_activeSessions; }
   [[nodiscard]] const TpCounters& counters() const noexcept { return m_counters; }
