@@ -204,15 +204,14 @@ void TpSender::setOwnAddress(std::uint8_t address, std::int64_t nowNs, TpSendSin
     }
   }
   m_ownAddress = address;
-  if (address < NULL_ADDRESS) {
-    startQueued(nowNs, sink);
-    return;
-  }
+  // Without an address nothing may start; a message to our new address would go to ourselves.
+  const bool canTransmit = address < NULL_ADDRESS;
   for (Session& session : m_sessions) {
-    if (session.state == State::Queued) {
+    if (session.state == State::Queued && (!canTransmit || session.destination == address)) {
       finish(session, TpSendOutcome::AddressChanged, TpAbortReason::None, sink);
     }
   }
+  startQueued(nowNs, sink);
 }
 
 std::optional<std::int64_t> TpSender::nextDeadlineNs() const noexcept {

@@ -2,6 +2,7 @@
 // sides of J1939-21 agree and the payload arrives intact.
 #include "openvcu/j1939/transport.hpp"
 #include "openvcu/j1939/transport_sender.hpp"
+#include "transport_sender_support.hpp"  // printers
 
 #include <doctest/doctest.h>
 

@@ -159,7 +159,8 @@ class TpSender {
   /// Our address changed (J1939-81 address claim lost or a new address claimed). Running
   /// sessions end as AddressChanged without a frame (the old address is no longer ours;
   /// their receivers time out). Queued messages start from the new address, or end as
-  /// AddressChanged when it is NULL_ADDRESS or GLOBAL_ADDRESS. The same address: no effect.
+  /// AddressChanged when it is NULL_ADDRESS or GLOBAL_ADDRESS (and those addressed to the
+  /// new address itself). The same address: no effect.
   void setOwnAddress(std::uint8_t address, std::int64_t nowNs, TpSendSink& sink) noexcept;
 
   /// When poll() has work: the next packet or the earliest timeout; empty when no session
