@@ -166,8 +166,8 @@ void TpSender::onFrame(std::uint32_t canId, std::span<const std::uint8_t> data, 
   const std::uint16_t index = m_running[source];
   if (data.size() != TP_FRAME_LENGTH || index == NO_SESSION ||
       pgnField(data) != m_sessions[index].pgn) {
-    // J1939-21: a CTS for a connection that does not exist is ignored; so are answers about
-    // another PGN (the running session continues).
+    // Nothing to act on: no session with that node, or an answer about another PGN (the
+    // running session continues under its own timers).
     ++m_counters.framesIgnored;
     return;
   }
