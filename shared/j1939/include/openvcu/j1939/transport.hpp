@@ -56,8 +56,8 @@ inline constexpr std::int64_t TP_T1_NS = 750'000'000;   ///< T1 750 ms: longest 
 inline constexpr std::int64_t TP_T2_NS = 1'250'000'000; ///< T2 1250 ms: our CTS -> the first TP.DT
 inline constexpr std::int64_t TP_T3_NS = 1'250'000'000; ///< T3 1250 ms: originator, last TP.DT -> CTS/EoMA
 inline constexpr std::int64_t TP_T4_NS = 1'050'000'000; ///< T4 1050 ms: originator, CTS(0) -> next CTS
-inline constexpr std::int64_t TP_BAM_MIN_GAP_NS = 50'000'000;  ///< BAM: 50 ms at least between its frames
-inline constexpr std::int64_t TP_BAM_MAX_GAP_NS = 200'000'000; ///< BAM: 200 ms at most between its frames
+inline constexpr std::int64_t TP_BAM_MIN_GAP_NS = 50'000'000;  ///< J1939-21 BAM: 50 ms at least between its frames
+inline constexpr std::int64_t TP_BAM_MAX_GAP_NS = 200'000'000; ///< J1939-21 BAM: 200 ms at most between its frames
 
 /// J1939-21 connection abort reasons (TP.Conn_Abort byte 1). 251..255 follow the J1939-71
 /// conventions (error, not available); a received abort may carry any value.
