@@ -87,7 +87,8 @@ struct TpSenderConfig {
   /// Sessions running at once, 1..255 (one per destination, BAM counting as the global
   /// destination); more wait in the queue.
   std::size_t maxSessions{4};
-  /// Messages waiting for their destination or a session place; beyond, RefusedQueueFull.
+  /// Messages waiting for their destination or a session place (at most 4096); beyond,
+  /// RefusedQueueFull.
   std::size_t queueCapacity{8};
   /// RTS byte 4, 1..255: the most packets one CTS may ask for (255: no limit).
   std::uint8_t maxPacketsPerCts{TP_NO_PACKET_LIMIT};
