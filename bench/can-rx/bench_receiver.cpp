@@ -58,6 +58,7 @@ struct CountingOutputs final : canrx::ReceiverOutputs {
   std::uint64_t faultCount{};
   void received(std::size_t, const can::ReceivedFrame&) noexcept override { ++receivedCount; }
   void request(std::size_t, const j1939::Request&, std::int64_t) noexcept override { ++requestCount; }
+  void network(std::size_t, const can::ReceivedFrame&) noexcept override {}
   void forward(std::size_t, const can::Frame&) noexcept override { ++forwardCount; }
   bool transmit(std::size_t, const can::Frame&) noexcept override {
     ++transmitCount;

@@ -101,6 +101,9 @@ struct CanRxAppImpl final : ReceiverOutputs {
     sample.global = request.global;
     if (!publisher.publish(sample)) ++buses[bus].publishFailures;
   }
+  void network(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
+    if (!publish(buses[bus].networkOut, frame.frame, frame.monotonicNs, bus)) ++buses[bus].publishFailures;
+  }
   void forward(std::size_t toBus, const can::Frame& frame) noexcept override {
     if (!publish(buses[toBus].sendRequestsOut, frame, clock::monotonicNs(), toBus)) ++buses[toBus].forwardFailures;
   }
@@ -218,6 +221,8 @@ struct CanRxAppImpl final : ReceiverOutputs {
       add("out_of_range", [](const BusCounters& c, const BusIo&) { return c.outOfRange; });
       add("timeouts", [](const BusCounters& c, const BusIo&) { return c.timeouts; });
       add("requests", [](const BusCounters& c, const BusIo&) { return c.requests; });
+      add("address_claims", [](const BusCounters& c, const BusIo&) { return c.addressClaims; });
+      add("own_address_changes", [](const BusCounters& c, const BusIo&) { return c.ownAddressChanges; });
       add("tp_sessions", [](const BusCounters& c, const BusIo&) { return c.tpSessions; });
       add("tp_completed", [](const BusCounters& c, const BusIo&) { return c.tpCompleted; });
       add("tp_aborted", [](const BusCounters& c, const BusIo&) { return c.tpAborted; });

@@ -9,6 +9,7 @@
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/matcher.hpp"
+#include "address_map.hpp"
 #include "openvcu/j1939/dm1.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/j1939/request.hpp"
@@ -19,11 +20,16 @@ namespace openvcu::canrx {
 namespace {
 
 constexpr std::int64_t MS = 1'000'000;
+/// SAE J1939-81 PGN 60928 Address Claimed, 0xee00.
+constexpr std::uint32_t ADDRESS_CLAIMED_PGN = 0xEE00;
 constexpr std::int32_t NO_SLOT = -1;
 constexpr std::string_view SOURCE = "vcu-can-rx";
 
 /// Bus states as written to internal.bus.<bus>.state.
 enum class BusState : std::uint8_t { Active = 0, Warning = 1, Passive = 2, BusOff = 3, Down = 4 };
+
+/// The VCU's J1939-81 NAME on `bus`, when it claims an address there.
+std::optional<std::uint64_t> ownNameOf(const config::BusConfig& /*bus*/) { return std::nullopt; }
 
 std::string hex(std::uint32_t value, int digits) {
   char buffer[16];
@@ -67,6 +73,7 @@ struct Dm1State {
 struct BusSlot {
   std::string name;
   std::unique_ptr<j1939::TpReceiver> transport;
+  std::unique_ptr<AddressMap> addresses;  ///< J1939-81 claims: the VCU's address, moved nodes' home addresses
   std::unique_ptr<can::BusLoadMeter> load;
   BusCounters counters;
   std::int32_t loadSlot{NO_SLOT};
@@ -137,6 +144,8 @@ struct ReceiverImpl {
     if (frame.extended()) {
       const j1939::Id id = j1939::Id::fromCanId(frame.id);
       const std::uint32_t pgn = id.pgn();
+      if (pgn == ADDRESS_CLAIMED_PGN) onAddressClaimed(busIndex, id.sourceAddress, received);
+      if (pgn == j1939::PGN_TP_CM && answersOurTransfer(bus, id, frame)) outputs.network(busIndex, received);
       if (pgn == j1939::PGN_TP_CM || pgn == j1939::PGN_TP_DT) {
         TpSink sink(*this, busIndex, received.monotonicNs);
         bus.transport->onFrame(frame.id, frame.payload(), received.monotonicNs, sink);
@@ -153,7 +162,11 @@ struct ReceiverImpl {
       if (receive.dm1 && pgn == j1939::PGN_DM1) onDm1(busIndex, id.sourceAddress, frame.payload(), received.monotonicNs);
       if (checkSafetyHeader(frame, received.monotonicNs)) return;
     }
-    const std::int32_t match = matcher.match(frame.id, frame.extended());
+    // A node that claimed a new address is decoded by its home address (address_map.hpp).
+    const std::uint32_t matchId =
+        frame.extended() ? (frame.id & ~0xFFu) | bus.addresses->homeAddress(static_cast<std::uint8_t>(frame.id & 0xFFu))
+                         : frame.id;
+    const std::int32_t match = matcher.match(matchId, frame.extended());
     if (match == dbc::MessageMatcher::NO_MATCH || busByMessage[static_cast<std::size_t>(match)] !=
                                                       static_cast<std::int32_t>(busIndex)) {
       ++bus.counters.unknownIds;
@@ -219,6 +232,27 @@ struct ReceiverImpl {
   // ---- J1939-76 -------------------------------------------------------------------------
 
   /// true when `frame` is the SHM of a configured group (then it is consumed here).
+  /// J1939-81: follows the VCU's own address and moved nodes, and hands the claim to can-tx.
+  void onAddressClaimed(std::size_t busIndex, std::uint8_t source, const can::ReceivedFrame& received) noexcept {
+    BusSlot& bus = buses[busIndex];
+    ++bus.counters.addressClaims;
+    if (bus.addresses->onAddressClaimed(source, received.frame.payload())) {
+      ++bus.counters.ownAddressChanges;
+      const std::uint8_t address = bus.addresses->ownAddress();
+      bus.transport->setOwnAddress(address);
+      if (address < j1939::NULL_ADDRESS) ownAddress[address] = true;
+    }
+    outputs.network(busIndex, received);
+  }
+
+  /// A TP.CM CTS, EndOfMsgAck or Abort to the VCU's current address on this bus: an answer
+  /// to a transfer can-tx sends (an Abort may also end a session we receive: both see it).
+  static bool answersOurTransfer(const BusSlot& bus, const j1939::Id& id, const can::Frame& frame) noexcept {
+    if (frame.length == 0 || id.pduSpecific != bus.addresses->ownAddress()) return false;
+    const std::uint8_t control = frame.data[0];
+    return control == j1939::TP_CM_CTS || control == j1939::TP_CM_END_OF_MSG_ACK || control == j1939::TP_CM_ABORT;
+  }
+
   bool checkSafetyHeader(const can::Frame& frame, std::int64_t nowNs) noexcept {
     for (SafetyState& group : safety) {
       if (group.headerCanId == frame.id) {
@@ -498,6 +532,7 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
     tpConfig.ownAddress = impl->tpAddress;
     tpConfig.maxPacketsPerCts = impl->receive.maxPacketsPerCts;
     bus.transport = std::make_unique<j1939::TpReceiver>(tpConfig);
+    bus.addresses = std::make_unique<AddressMap>(ownNameOf(busConfig), impl->tpAddress);
     bus.load = std::make_unique<can::BusLoadMeter>(busConfig.bitrate, busConfig.dataBitrate);
     bus.loadSlot = slotOf("internal.bus." + busConfig.name + ".load");
     bus.stateSlot = slotOf("internal.bus." + busConfig.name + ".state");
@@ -620,6 +655,7 @@ std::vector<can::IdFilter> Receiver::filters(std::size_t busIndex) const {
   addPgn(j1939::PGN_TP_CM);
   addPgn(j1939::PGN_TP_DT);
   addPgn(j1939::PGN_DM1);
+  addPgn(ADDRESS_CLAIMED_PGN);
   for (const SafetyState& group : m_impl->safety) {
     if (m_impl->busByMessage[group.messageIndex] == static_cast<std::int32_t>(busIndex)) {
       result.push_back(can::IdFilter{group.headerCanId, can::EXTENDED_ID_MASK, true});

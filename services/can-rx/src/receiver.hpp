@@ -45,6 +45,9 @@ class ReceiverOutputs {
   /// A J1939 Request for this node (or global), parsed (j1939::parseRequest): for can-tx
   /// ("req" stream). `monotonicNs`: when its frame was received.
   virtual void request(std::size_t bus, const j1939::Request& request, std::int64_t monotonicNs) noexcept = 0;
+  /// A J1939 network-management frame for can-tx ("net" stream): every Address Claimed
+  /// (PGN 0xEE00) and the TP.CM CTS, EndOfMsgAck and Abort frames to this node's address.
+  virtual void network(std::size_t bus, const can::ReceivedFrame& frame) noexcept = 0;
   /// A frame to forward onto bus `toBus` (can-tx's "send" stream).
   virtual void forward(std::size_t toBus, const can::Frame& frame) noexcept = 0;
   /// A TP control frame to send on bus `bus` now (CTS, EndOfMsgAck, Abort). false: not sent.
@@ -65,6 +68,8 @@ struct BusCounters {
   std::uint64_t tpSessions{};     ///< transport sessions started
   std::uint64_t tpCompleted{};    ///< ... reassembled
   std::uint64_t tpAborted{};      ///< ... aborted (either side) or timed out
+  std::uint64_t addressClaims{};  ///< J1939-81 Address Claimed frames seen (any node, Cannot Claim too)
+  std::uint64_t ownAddressChanges{};  ///< the VCU's address on this bus changed (seen in its claims)
   std::uint64_t dm1Messages{};    ///< DM1 messages decoded
   std::uint64_t safetyFailures{}; ///< SDMs refused by the J1939-76 check
   std::uint64_t forwarded{};      ///< frames forwarded to another bus

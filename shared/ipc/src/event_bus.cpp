@@ -14,6 +14,7 @@
 #include <openvcu_lcm/signal_snapshot_t.hpp>
 #include <openvcu_lcm/stats_t.hpp>
 #include <openvcu_lcm/tx_schedule_t.hpp>
+#include <openvcu_lcm/j1939_network_t.hpp>
 
 // The C API, not lcm-cpp.hpp: LCM 1.3.1's member-handler subscription crashes when built
 // with -fsanitize=vptr (part of the Asan preset's -fsanitize=undefined); the C API is all we need.
@@ -223,6 +224,65 @@ TxSchedule fromLcm(const openvcu_lcm::tx_schedule_t& in) {
   return out;
 }
 
+bool toLcm(const J1939Network& in, openvcu_lcm::j1939_network_t& out) {
+  if (!fitsArray(in.nodes.size()) || !fitsArray(in.dtcs.size())) return false;
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.service = in.service;
+  out.instance = in.instance;
+  out.pid = in.pid;
+  out.bus = in.bus;
+  out.claim_state = static_cast<std::int8_t>(in.claimState);
+  out.address = in.address;
+  out.name = static_cast<std::int64_t>(in.name);
+  out.num_nodes = static_cast<std::int32_t>(in.nodes.size());
+  out.node_addresses.clear();
+  out.node_names.clear();
+  for (const J1939Node& node : in.nodes) {
+    out.node_addresses.push_back(node.address);
+    out.node_names.push_back(static_cast<std::int64_t>(node.name));
+  }
+  out.num_dtcs = static_cast<std::int32_t>(in.dtcs.size());
+  out.dtc_names.clear();
+  out.dtc_spns.clear();
+  out.dtc_fmis.clear();
+  out.dtc_occurrences.clear();
+  out.dtc_active.clear();
+  for (const J1939Dtc& dtc : in.dtcs) {
+    out.dtc_names.push_back(dtc.name);
+    out.dtc_spns.push_back(dtc.spn);
+    out.dtc_fmis.push_back(static_cast<std::int8_t>(dtc.fmi));
+    out.dtc_occurrences.push_back(static_cast<std::int8_t>(dtc.occurrences));
+    out.dtc_active.push_back(dtc.active ? 1 : 0);
+  }
+  out.lamps = static_cast<std::int8_t>(in.lamps);
+  return true;
+}
+J1939Network fromLcm(const openvcu_lcm::j1939_network_t& in) {
+  J1939Network out;
+  out.timestampNs = in.timestamp_ns;
+  out.service = in.service;
+  out.instance = in.instance;
+  out.pid = in.pid;
+  out.bus = in.bus;
+  out.claimState = in.claim_state >= 0 && in.claim_state <= 3 ? static_cast<ClaimState>(in.claim_state) : ClaimState::Off;
+  out.address = static_cast<std::uint8_t>(in.address & 0xFF);
+  out.name = static_cast<std::uint64_t>(in.name);
+  const std::size_t nodes = std::min(in.node_addresses.size(), in.node_names.size());
+  for (std::size_t i = 0; i < nodes; ++i) {
+    out.nodes.push_back(J1939Node{static_cast<std::uint8_t>(in.node_addresses[i] & 0xFF),
+                                  static_cast<std::uint64_t>(in.node_names[i])});
+  }
+  const std::size_t dtcs = std::min({in.dtc_names.size(), in.dtc_spns.size(), in.dtc_fmis.size(),
+                                     in.dtc_occurrences.size(), in.dtc_active.size()});
+  for (std::size_t i = 0; i < dtcs; ++i) {
+    out.dtcs.push_back(J1939Dtc{in.dtc_names[i], static_cast<std::uint32_t>(in.dtc_spns[i] & 0x7FFFF),
+                                static_cast<std::uint8_t>(in.dtc_fmis[i]), static_cast<std::uint8_t>(in.dtc_occurrences[i]),
+                                in.dtc_active[i] != 0});
+  }
+  out.lamps = static_cast<std::uint8_t>(in.lamps);
+  return out;
+}
+
 // ---- datagram-sized parts ------------------------------------------------------------------
 // LCM encodes a string as int32 length (with the NUL), the bytes and the NUL.
 constexpr std::size_t encodedStringSize(const std::string& text) noexcept { return 4 + text.size() + 1; }
@@ -394,6 +454,14 @@ bool fits(const openvcu_lcm::tx_schedule_t*, const void* data, std::size_t size)
                      F::ByteArray, F::ByteArray});
 }
 
+bool fits(const openvcu_lcm::j1939_network_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size,
+                    {F::I64, F::Str, F::Str, F::I32, F::Str, F::I8, F::I64, F::I64, F::Count, F::I64Array,
+                     F::I64Array, F::Count, F::StrArray, F::I64Array, F::ByteArray, F::ByteArray, F::ByteArray,
+                     F::I8});
+}
+
 /// The layout check for LcmType.
 template <typename LcmType>
 bool fitsType(const void* data, std::size_t size) noexcept {
@@ -450,6 +518,7 @@ bool fitsEventLayout(EventKind kind, const void* data, std::size_t size) noexcep
     case EventKind::Snapshot: return fitsType<openvcu_lcm::signal_snapshot_t>(data, size);
     case EventKind::Stats: return fitsType<openvcu_lcm::stats_t>(data, size);
     case EventKind::Schedule: return fitsType<openvcu_lcm::tx_schedule_t>(data, size);
+    case EventKind::J1939: return fitsType<openvcu_lcm::j1939_network_t>(data, size);
   }
   return false;
 }
@@ -647,6 +716,12 @@ Result<Subscription> EventBus::onStats(std::function<void(const Stats&)> callbac
 Result<Subscription> EventBus::onSchedule(std::function<void(const TxSchedule&)> callback) {
   return m_impl->subscribe<openvcu_lcm::tx_schedule_t>(EventKind::Schedule, std::move(callback));
 }
+bool EventBus::publish(const J1939Network& message) noexcept {
+  return m_impl->publish<openvcu_lcm::j1939_network_t>(EventKind::J1939, message);
+}
+Result<Subscription> EventBus::onJ1939Network(std::function<void(const J1939Network&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::j1939_network_t>(EventKind::J1939, std::move(callback));
+}
 
 namespace {
 template <typename LcmType, typename Plain>
@@ -660,6 +735,7 @@ std::size_t encodedSizeOf(const Plain& message) {
 std::size_t encodedSize(const Heartbeat& message) { return encodedSizeOf<openvcu_lcm::heartbeat_t>(message); }
 std::size_t encodedSize(const Stats& message) { return encodedSizeOf<openvcu_lcm::stats_t>(message); }
 std::size_t encodedSize(const TxSchedule& message) { return encodedSizeOf<openvcu_lcm::tx_schedule_t>(message); }
+std::size_t encodedSize(const J1939Network& message) { return encodedSizeOf<openvcu_lcm::j1939_network_t>(message); }
 
 Result<Subscription> EventBus::onHeartbeat(std::function<void(const Heartbeat&)> callback) {
   return m_impl->subscribe<openvcu_lcm::heartbeat_t>(EventKind::Heartbeat, std::move(callback));

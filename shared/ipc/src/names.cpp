@@ -42,8 +42,24 @@ std::string_view channelSuffix(EventKind kind) noexcept {
       return "STATS";
     case EventKind::Schedule:
       return "SCHEDULE";
+    case EventKind::J1939:
+      return "J1939";
   }
   return "UNKNOWN";
+}
+
+std::string_view claimStateName(ClaimState state) noexcept {
+  switch (state) {
+    case ClaimState::Off:
+      return "off";
+    case ClaimState::Claiming:
+      return "claiming";
+    case ClaimState::Claimed:
+      return "claimed";
+    case ClaimState::CannotClaim:
+      return "cannot claim";
+  }
+  return "unknown";
 }
 
 std::string channelName(std::string_view instance, EventKind kind) {

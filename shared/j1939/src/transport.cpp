@@ -118,6 +118,11 @@ TpReceiver::TpReceiver(const TpReceiverConfig& config) : m_config(config) {
   m_sessionIndex.fill(NO_SESSION);
 }
 
+void TpReceiver::setOwnAddress(std::uint8_t address) noexcept {
+  m_config.ownAddress = address;
+  m_acceptsDirected = address < NULL_ADDRESS;
+}
+
 void TpReceiver::onFrame(std::uint32_t canId, std::span<const std::uint8_t> data,
                          std::int64_t nowNs, TpSink& sink) noexcept {
   const Id id = Id::fromCanId(canId);

@@ -32,6 +32,8 @@ Result<BusPorts> openBusPorts(const std::string& instance, const config::BusConf
       return opened.error();
     if (Status opened = openPort(ports.sendRequestsOut, bus, publisher(ipc::FrameStream::SendRequest)); !opened)
       return opened.error();
+    if (Status opened = openPort(ports.networkOut, bus, publisher(ipc::FrameStream::Network)); !opened)
+      return opened.error();
     return ports;
   }
   if (Status opened = openPort(ports.sent, bus, publisher(ipc::FrameStream::Sent)); !opened) return opened.error();
@@ -42,6 +44,11 @@ Result<BusPorts> openBusPorts(const std::string& instance, const config::BusConf
     return opened.error();
   if (Status opened =
           openPort(ports.requestsIn, bus, [&] { return ipc::RequestSubscriber::create(instance, bus.name); });
+      !opened)
+    return opened.error();
+  if (Status opened = openPort(ports.networkIn, bus, [&] {
+        return ipc::FrameSubscriber::create({instance, bus.name, ipc::FrameStream::Network});
+      });
       !opened)
     return opened.error();
   return ports;

@@ -29,7 +29,7 @@ constexpr std::size_t BUS_B = 1;
 const std::string CONFIG = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/can-rx/vehicle.json";
 
 struct Recorder final : canrx::ReceiverOutputs {
-  std::vector<std::pair<std::size_t, can::Frame>> receivedFrames, forwarded, transmitted;
+  std::vector<std::pair<std::size_t, can::Frame>> receivedFrames, forwarded, transmitted, networkFrames;
   std::vector<std::pair<std::size_t, j1939::Request>> requests;
   std::vector<ipc::FaultEvent> faults;
   void received(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
@@ -37,6 +37,9 @@ struct Recorder final : canrx::ReceiverOutputs {
   }
   void request(std::size_t bus, const j1939::Request& request, std::int64_t) noexcept override {
     requests.emplace_back(bus, request);
+  }
+  void network(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
+    networkFrames.emplace_back(bus, frame.frame);
   }
   void forward(std::size_t toBus, const can::Frame& frame) noexcept override { forwarded.emplace_back(toBus, frame); }
   bool transmit(std::size_t bus, const can::Frame& frame) noexcept override {
@@ -486,6 +489,7 @@ TEST_CASE("the DBC filters of a bus accept its messages and the J1939 protocol P
   CHECK(accepts(0x1CEB2110, true));   // TP.DT
   CHECK(accepts(0x18EA21F3, true));   // Request
   CHECK(accepts(0x18FECAF3, true));   // DM1
+  CHECK(accepts(0x18EEFF10, true));   // Address Claimed
   CHECK(accepts(j1939::safetyHeaderCanId(SDM_ID), true));
   CHECK_FALSE(accepts(0x18FF6045, true));  // GW_Info is on bus b
   CHECK_FALSE(accepts(0x124, false));
@@ -532,4 +536,24 @@ TEST_CASE("a request the DBC does not define is counted as an unknown ID after i
   f.sut->onFrame(BUS_A, frameOf(0x18EA21F3, {0xE6, 0xFE, 0x00}, START + MS));
   CHECK(f.outputs.requests.size() == 1);
   CHECK(f.sut->counters(BUS_A).unknownIds == 1);
+}
+
+TEST_CASE("address claims and TP answers to this node go to can-tx on the net stream and others do not (issue 24)") {
+  Fixture f;
+  f.sut->onFrame(BUS_A, frameOf(0x18EEFF10, {1, 2, 3, 4, 5, 6, 7, 8}, START + MS));        // Address Claimed by 0x10
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC2110, {0x11, 2, 1, 0xFF, 0xFF, 0xCA, 0xFE, 0}, START + 2 * MS));  // CTS to us
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC2110, {0x13, 20, 0, 3, 0xFF, 0xCA, 0xFE, 0}, START + 3 * MS));   // EoMA to us
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC2110, {0xFF, 3, 0xFF, 0xFF, 0xFF, 0xCA, 0xFE, 0}, START + 4 * MS));  // Abort to us
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC3310, {0x11, 2, 1, 0xFF, 0xFF, 0xCA, 0xFE, 0}, START + 5 * MS));  // CTS to 0x33
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC2110, {0x10, 20, 0, 3, 0xFF, 0x30, 0xFF, 0}, START + 6 * MS));   // RTS to us: can-rx's
+  REQUIRE(f.outputs.networkFrames.size() == 4);
+  CHECK(f.outputs.networkFrames[0].second.id == 0x18EEFF10);
+  CHECK(f.outputs.networkFrames[1].second.data[0] == 0x11);
+  CHECK(f.outputs.networkFrames[2].second.data[0] == 0x13);
+  CHECK(f.outputs.networkFrames[3].second.data[0] == 0xFF);
+  CHECK(f.sut->counters(BUS_A).addressClaims == 1);
+  CHECK(f.sut->counters(BUS_A).ownAddressChanges == 0);
+  // the RTS went to the receiver as before: it answered with a CTS
+  REQUIRE_FALSE(f.outputs.transmitted.empty());
+  CHECK(f.outputs.transmitted.back().second.data[0] == 0x11);
 }

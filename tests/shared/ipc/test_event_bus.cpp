@@ -53,6 +53,26 @@ TEST_CASE("channel names are OPENVCU_<INSTANCE>_<KIND> with the instance in uppe
   CHECK(ipc::channelName("hhea", ipc::EventKind::Snapshot) == "OPENVCU_HHEA_SNAPSHOT");
   CHECK(ipc::channelName("hhea", ipc::EventKind::Stats) == "OPENVCU_HHEA_STATS");
   CHECK(ipc::channelName("hhea", ipc::EventKind::Schedule) == "OPENVCU_HHEA_SCHEDULE");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::J1939) == "OPENVCU_HHEA_J1939");
+}
+
+TEST_CASE("a J1939 network view goes out and comes back field by field, a full NAME included (#24)") {
+  ipc::EventBus sut = openMemq("hhea");
+  ipc::J1939Network sent{.timestampNs = SOME_TIME_NS, .service = "vcu-can-tx", .instance = "hhea", .pid = 44,
+                         .bus = "vehicle", .claimState = ipc::ClaimState::Claimed, .address = 0x21,
+                         .name = 0xA00C'8100'0020'0001ull, .nodes = {}, .dtcs = {}, .lamps = 0x14};
+  sent.nodes.push_back(ipc::J1939Node{0xF3, 0x8000'0000'0000'00F3ull});
+  sent.nodes.push_back(ipc::J1939Node{0x10, 0x0123'4567'89AB'CDEFull});
+  sent.dtcs.push_back(ipc::J1939Dtc{"Battery Fault", 520192, 31, 3, true});
+  sent.dtcs.push_back(ipc::J1939Dtc{"Crash", 524287, 0, 126, false});
+  std::vector<ipc::J1939Network> received;
+  auto subscription = sut.onJ1939Network([&](const ipc::J1939Network& message) { received.push_back(message); });
+  REQUIRE(subscription.ok());
+  REQUIRE(sut.publish(sent));
+  sut.handleAll();
+  REQUIRE(received.size() == 1);
+  CHECK(received[0] == sent);
+  CHECK(ipc::claimStateName(received[0].claimState) == "claimed");
 }
 
 TEST_CASE("statistics and the transmit schedule go out in parts that each fit one datagram (#19)") {

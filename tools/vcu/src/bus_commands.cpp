@@ -90,9 +90,10 @@ constexpr const char* DUMP_FOOTER =
     "  (1700000000.123456) vehicle 18FEF121#0102030405060708\n"
     "--stream: rx (default) frames vcu-can-rx received; tx frames vcu-can-tx sent;\n"
     "send requests to can-tx (vcu send, the HMI); req J1939 requests for this node\n"
-    "(can-rx -> can-tx); wire a simulated bus itself (sim: buses only: every frame any\n"
+    "(can-rx -> can-tx); net J1939 address claims and TP answers to this node's\n"
+    "transfers (can-rx -> can-tx); wire a simulated bus itself (sim: buses only: every frame any\n"
     "node sends, no service needed); all of them (wire on sim: buses), each line\n"
-    "prefixed with its stream ('rx  ', 'tx  ', 'send', 'req ', 'wire'), in arrival\n"
+    "prefixed with its stream ('rx  ', 'tx  ', 'send', 'req ', 'net ', 'wire'), in arrival\n"
     "order per stream.\n"
     "The time (UTC seconds) is the frame's kernel/hardware stamp when it has one, else\n"
     "its publication time (CLOCK_MONOTONIC, converted with the current clock offset).\n"
@@ -300,7 +301,8 @@ std::vector<ipc::FrameTopic> dumpTopics(const std::string& stream, const config:
   const ipc::FrameTopic wire{"sim", bus.link.target, ipc::FrameStream::SimWire};
   std::vector<ipc::FrameTopic> topics;
   for (const ipc::FrameStream candidate :
-       {ipc::FrameStream::Received, ipc::FrameStream::Sent, ipc::FrameStream::SendRequest, ipc::FrameStream::Request}) {
+       {ipc::FrameStream::Received, ipc::FrameStream::Sent, ipc::FrameStream::SendRequest, ipc::FrameStream::Request,
+        ipc::FrameStream::Network}) {
     if (stream == "all" || stream == ipc::eventName(candidate)) {
       topics.push_back(ipc::FrameTopic{config.instance, bus.name, candidate});
     }
@@ -326,6 +328,7 @@ std::string_view publisherHint(ipc::FrameStream stream) noexcept {
   switch (stream) {
     case ipc::FrameStream::Received:
     case ipc::FrameStream::Request:
+    case ipc::FrameStream::Network:
       return " (is vcu-can-rx running?)";
     case ipc::FrameStream::Sent:
       return " (is vcu-can-tx running?)";
@@ -584,8 +587,8 @@ void registerBusCommands(CLI::App& app, CommandContext& context) {
   dump->footer(std::string(DUMP_FOOTER) + CONFIG_NOTE);
   dump->add_option("BUS", dumpOptions->bus, "bus name in the configuration, e.g. vehicle")->required()->type_name("");
   dump->add_option("-s,--stream", dumpOptions->stream, "which frames (default rx)")
-      ->check(CLI::IsMember({"rx", "tx", "send", "req", "wire", "all"}))
-      ->option_text("rx|tx|send|req|wire|all");
+      ->check(CLI::IsMember({"rx", "tx", "send", "req", "net", "wire", "all"}))
+      ->option_text("rx|tx|send|req|net|wire|all");
   dump->add_flag("-d,--decode", dumpOptions->decode, "append the DBC message and its signal values");
   dump->add_option("-n,--count", dumpOptions->count, "stop after N frames")->option_text("N");
   dump->add_option("--timeout", dumpOptions->timeoutSeconds, "stop after this many seconds without a frame")

@@ -80,6 +80,7 @@ class EventBus {
   /// Sent as parts of one datagram each (events.hpp); `part` and `parts` are set here.
   bool publish(const Stats& message) noexcept;
   bool publish(const TxSchedule& message) noexcept;
+  bool publish(const J1939Network& message) noexcept;
 
   /// Calls `callback` from handle() for each message on this instance's channel.
   /// A message that does not decode is dropped and counted (decodeErrors()); an exception
@@ -93,6 +94,7 @@ class EventBus {
   /// Called once per part (Stats::part of Stats::parts).
   Result<Subscription> onStats(std::function<void(const Stats&)> callback);
   Result<Subscription> onSchedule(std::function<void(const TxSchedule&)> callback);
+  Result<Subscription> onJ1939Network(std::function<void(const J1939Network&)> callback);
   void unsubscribe(Subscription subscription) noexcept;
 
   /// Readable when a message waits: for poll/epoll or Waiter::attachFd. -1 on failure.

@@ -13,6 +13,7 @@
 //   OPENVCU_<INSTANCE>_SNAPSHOT   SignalSnapshot   openvcu_lcm.signal_snapshot_t
 //   OPENVCU_<INSTANCE>_STATS      Stats            openvcu_lcm.stats_t        (in datagram-sized parts)
 //   OPENVCU_<INSTANCE>_SCHEDULE   TxSchedule       openvcu_lcm.tx_schedule_t  (in datagram-sized parts)
+//   OPENVCU_<INSTANCE>_J1939      J1939Network     openvcu_lcm.j1939_network_t (one per bus)
 //
 // A heartbeat always fits one datagram (LCM_DATAGRAM_BYTES): per-bus and per-message
 // statistics go to STATS, can-tx's live schedule to SCHEDULE, each split into parts that
@@ -34,8 +35,8 @@ namespace openvcu::ipc {
 /// lcm-spy and lcm-logger without arguments see the stack.
 inline constexpr std::string_view DEFAULT_EVENT_URL = "udpm://239.255.76.67:7667?ttl=0";
 
-enum class EventKind : std::uint8_t { Command, Ack, Fsm, Fault, Log, Heartbeat, Snapshot, Stats, Schedule };
-inline constexpr std::size_t EVENT_KIND_COUNT = 9;
+enum class EventKind : std::uint8_t { Command, Ack, Fsm, Fault, Log, Heartbeat, Snapshot, Stats, Schedule, J1939 };
+inline constexpr std::size_t EVENT_KIND_COUNT = 10;
 
 /// LCM 1.3 sends a message of at most this many bytes (its 8-byte header, the channel name
 /// with its NUL, the payload) as one UDP datagram, and fragments anything larger.
@@ -47,7 +48,8 @@ constexpr std::size_t datagramPayloadLimit(std::string_view channel) noexcept {
   return LCM_DATAGRAM_BYTES - 8 - (channel.size() + 1);
 }
 
-/// "COMMAND", "ACK", "FSM", "FAULT", "LOG", "HEARTBEAT", "SNAPSHOT", "STATS", "SCHEDULE".
+/// "COMMAND", "ACK", "FSM", "FAULT", "LOG", "HEARTBEAT", "SNAPSHOT", "STATS", "SCHEDULE",
+/// "J1939".
 std::string_view channelSuffix(EventKind kind) noexcept;
 
 /// "OPENVCU_HHEA_HEARTBEAT" for ("hhea", EventKind::Heartbeat). `instance` must satisfy
@@ -186,11 +188,51 @@ struct TxSchedule {
   bool operator==(const TxSchedule&) const = default;
 };
 
+/// The VCU's address claim state on one bus (J1939-81), as j1939_network_t carries it.
+enum class ClaimState : std::int8_t { Off = 0, Claiming = 1, Claimed = 2, CannotClaim = 3 };
+
+/// Another node's address claim.
+struct J1939Node {
+  std::uint8_t address{};
+  std::uint64_t name{};
+  bool operator==(const J1939Node&) const = default;
+};
+
+/// One of the VCU's own diagnostic trouble codes (J1939-73).
+struct J1939Dtc {
+  std::string name;  ///< diagnostics.json name
+  std::uint32_t spn{};
+  std::uint8_t fmi{};
+  std::uint8_t occurrences{};
+  bool active{};  ///< true: in DM1; false: previously active (DM2)
+  bool operator==(const J1939Dtc&) const = default;
+};
+
+/// vcu-can-tx's view of one J1939 network (shared/ipc/lcm/j1939_network_t.lcm).
+struct J1939Network {
+  std::int64_t timestampNs{};
+  std::string service;
+  std::string instance;
+  std::int32_t pid{};
+  std::string bus;
+  ClaimState claimState{ClaimState::Off};
+  std::uint8_t address{0xFE};  ///< 254 (null) while none is claimed
+  std::uint64_t name{};
+  std::vector<J1939Node> nodes;
+  std::vector<J1939Dtc> dtcs;
+  std::uint8_t lamps{};  ///< DM1 byte 0
+  bool operator==(const J1939Network&) const = default;
+};
+
+/// "off", "claiming", "claimed", "cannot claim".
+std::string_view claimStateName(ClaimState state) noexcept;
+
 /// Encoded size in bytes of the LCM payload (with the 8-byte fingerprint) of a message,
 /// as EventBus sends it; compare with datagramPayloadLimit().
 std::size_t encodedSize(const Heartbeat& message);
 std::size_t encodedSize(const Stats& message);
 std::size_t encodedSize(const TxSchedule& message);
+std::size_t encodedSize(const J1939Network& message);
 
 /// One signal in a snapshot.
 struct SignalValue {

@@ -8,6 +8,9 @@
 //   ("openvcu", "<instance>.<bus>", "tx")    frames actually sent on the bus (can-tx publishes)
 //   ("openvcu", "<instance>.<bus>", "send")  one-shot send requests          (can-tx subscribes)
 //   ("openvcu", "<instance>.<bus>", "req")   J1939 requests for this node     (can-rx -> can-tx)
+//   ("openvcu", "<instance>.<bus>", "net")   J1939 network management frames  (can-rx -> can-tx):
+//        every Address Claimed (PGN 0xEE00) and the TP.CM frames to this node that answer a
+//        transfer it sends (CTS, EndOfMsgAck, Abort)
 // and one per simulated bus (the sim:NAME link itself, shared by every stack instance):
 //   ("openvcu", "sim.<NAME>", "wire")        every frame on the simulated bus (sim links)
 //   e.g. FrameTopic{"hhea", "vehicle", FrameStream::Received} -> ("openvcu", "hhea.vehicle", "rx")
@@ -94,11 +97,12 @@ enum class FrameStream : std::uint8_t {
   SendRequest,  ///< "send": one-shot frames others ask can-tx to send
   Request,      ///< "req": J1939 Requests (PGN 59904) for this node, as RequestSample, for can-tx
   SimWire,      ///< "wire": the simulated bus itself (FrameTopic{"sim", NAME, SimWire})
+  Network,      ///< "net": J1939 address claims and TP answers to this node's transfers, for can-tx
 };
 
 inline constexpr std::string_view FRAME_TOPIC_SERVICE = "openvcu";
 
-/// "rx", "tx", "send", "req" or "wire".
+/// "rx", "tx", "send", "req", "wire" or "net".
 constexpr std::string_view eventName(FrameStream stream) noexcept {
   switch (stream) {
     case FrameStream::Received:
@@ -111,6 +115,8 @@ constexpr std::string_view eventName(FrameStream stream) noexcept {
       return "req";
     case FrameStream::SimWire:
       return "wire";
+    case FrameStream::Network:
+      return "net";
   }
   return "rx";
 }

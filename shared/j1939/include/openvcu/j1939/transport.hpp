@@ -46,6 +46,7 @@ inline constexpr std::size_t TP_MIN_MESSAGE_SIZE = 9;      ///< shorter messages
 inline constexpr std::size_t TP_MAX_MESSAGE_SIZE = 1785;   ///< 255 x 7 bytes, 0x6f9 (1785)
 inline constexpr std::uint8_t TP_CM_PRIORITY = 7;          ///< J1939-21 default priority of TP.CM
 inline constexpr std::uint8_t TP_NO_PACKET_LIMIT = 0xFF;   ///< RTS byte 4: no limit per CTS (255)
+inline constexpr std::uint8_t TP_ABORT_ROLE_ORIGINATOR = 0; ///< Abort byte 2 bits 1-0: the sender is the originator
 inline constexpr std::uint8_t TP_ABORT_ROLE_RESPONDER = 1; ///< Abort byte 2 bits 1-0: the sender is the responder
 
 /// J1939-21 timing, in nanoseconds of the caller's monotonic clock.
@@ -55,6 +56,8 @@ inline constexpr std::int64_t TP_T1_NS = 750'000'000;   ///< T1 750 ms: longest 
 inline constexpr std::int64_t TP_T2_NS = 1'250'000'000; ///< T2 1250 ms: our CTS -> the first TP.DT
 inline constexpr std::int64_t TP_T3_NS = 1'250'000'000; ///< T3 1250 ms: originator, last TP.DT -> CTS/EoMA
 inline constexpr std::int64_t TP_T4_NS = 1'050'000'000; ///< T4 1050 ms: originator, CTS(0) -> next CTS
+inline constexpr std::int64_t TP_BAM_MIN_GAP_NS = 50'000'000;  ///< J1939-21 BAM: 50 ms at least between its frames
+inline constexpr std::int64_t TP_BAM_MAX_GAP_NS = 200'000'000; ///< J1939-21 BAM: 200 ms at most between its frames
 
 /// J1939-21 connection abort reasons (TP.Conn_Abort byte 1). 251..255 follow the J1939-71
 /// conventions (error, not available); a received abort may carry any value.
@@ -75,8 +78,9 @@ enum class TpAbortReason : std::uint8_t {
 /// "BadSequenceNumber", ... for logs; "Unknown" for values the standard does not list.
 [[nodiscard]] std::string_view tpAbortReasonName(TpAbortReason reason) noexcept;
 
-/// A frame the receiver wants on the bus: CTS, EndOfMsgAck or Abort, always 8 bytes, on
-/// TP.CM at priority 7 from our address to the originator.
+/// A frame to put on the bus, always 8 bytes from our address: the receiver's CTS,
+/// EndOfMsgAck or Abort (TP.CM, priority 7, to the originator); the sender's RTS, BAM, Abort
+/// (TP.CM) and data packets (TP.DT) (transport_sender.hpp).
 struct TpFrame {
   std::uint32_t canId{};  ///< 29-bit identifier
   std::uint8_t length{};  ///< always TP_FRAME_LENGTH
@@ -196,6 +200,12 @@ class TpReceiver {
 
   /// The earliest deadline of any session; empty when no session is open.
   [[nodiscard]] std::optional<std::int64_t> nextDeadlineNs() const noexcept;
+
+  /// Our address changed (J1939-81 address claim): RTS/CTS sessions to the new address are
+  /// answered from now on (NULL_ADDRESS or GLOBAL_ADDRESS: BAM only). An RTS/CTS session
+  /// running to the old address no longer gets its packets and ends by timeout (its Abort
+  /// goes out from the new address); BAM sessions go on.
+  void setOwnAddress(std::uint8_t address) noexcept;
 
   /// Sessions receiving or held.
   [[nodiscard]] std::size_t activeSessions() const noexcept { return m_activeSessions; }

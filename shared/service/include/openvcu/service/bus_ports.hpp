@@ -3,9 +3,9 @@
 // (shared/ipc topics.hpp), opened in one call. vcu-can-rx and vcu-can-tx each hold one per
 // bus, in the role that says which ends of the streams are theirs:
 //
-//   role          link   "rx"       "tx"       "send"                   "req"
-//   Receiver      yes    publishes  publishes  publishes (forwarding)   publishes (parsed requests)
-//   Transmitter   yes    -          publishes  subscribes (one-shots)   subscribes (to answer)
+//   role          link   "rx"       "tx"       "send"                   "req"                         "net"
+//   Receiver      yes    publishes  publishes  publishes (forwarding)   publishes (parsed requests)   publishes (claims, TP answers)
+//   Transmitter   yes    -          publishes  subscribes (one-shots)   subscribes (to answer)        subscribes
 //
 //   auto portsResult = service::openBusPorts(runtime.instance(), bus, bus.linkOptions(), service::BusRole::Transmitter);
 //   if (!portsResult) return portsResult.error();          // "bus 'vehicle': sim:vehicle: ..."
@@ -40,6 +40,8 @@ struct BusPorts {
   std::optional<ipc::FrameSubscriber> sendRequestsIn;  ///< "send" (Transmitter)
   std::optional<ipc::RequestPublisher> requestsOut;    ///< "req"  (Receiver)
   std::optional<ipc::RequestSubscriber> requestsIn;    ///< "req"  (Transmitter)
+  std::optional<ipc::FramePublisher> networkOut;       ///< "net"  (Receiver: J1939 network management)
+  std::optional<ipc::FrameSubscriber> networkIn;       ///< "net"  (Transmitter)
 };
 
 /// Opens `bus`'s link with `options` (can::openLink) and the streams of `role` on
