@@ -15,11 +15,13 @@
 // Reference: docs/config.md.
 
 #include "openvcu/can/link.hpp"
+#include "openvcu/config/bus_j1939.hpp"
 #include "openvcu/config/gpio.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/model.hpp"
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -58,6 +60,7 @@ struct BusConfig {
   BusFilter filter{BusFilter::Dbc};
   ReplaySettings replay;
   std::vector<std::size_t> messages;     ///< indices into VehicleConfig::database.messages
+  std::optional<BusJ1939> j1939;         ///< this VCU's J1939-81 NAME and address claim here
 
   /// The link settings this bus gives every service that opens it (no filters: the
   /// receiver adds its own).
