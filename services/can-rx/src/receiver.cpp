@@ -10,6 +10,7 @@
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/matcher.hpp"
 #include "address_map.hpp"
+#include "openvcu/j1939/address_claim.hpp"
 #include "openvcu/j1939/dm1.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/j1939/request.hpp"
@@ -20,8 +21,6 @@ namespace openvcu::canrx {
 namespace {
 
 constexpr std::int64_t MS = 1'000'000;
-/// SAE J1939-81 PGN 60928 Address Claimed, 0xee00.
-constexpr std::uint32_t ADDRESS_CLAIMED_PGN = 0xEE00;
 constexpr std::int32_t NO_SLOT = -1;
 constexpr std::string_view SOURCE = "vcu-can-rx";
 
@@ -29,7 +28,10 @@ constexpr std::string_view SOURCE = "vcu-can-rx";
 enum class BusState : std::uint8_t { Active = 0, Warning = 1, Passive = 2, BusOff = 3, Down = 4 };
 
 /// The VCU's J1939-81 NAME on `bus`, when it claims an address there.
-std::optional<std::uint64_t> ownNameOf(const config::BusConfig& /*bus*/) { return std::nullopt; }
+std::optional<std::uint64_t> ownNameOf(const config::BusConfig& bus) {
+  if (!bus.j1939 || !bus.j1939->claim) return std::nullopt;
+  return bus.j1939->name.toValue();
+}
 
 std::string hex(std::uint32_t value, int digits) {
   char buffer[16];
@@ -144,7 +146,7 @@ struct ReceiverImpl {
     if (frame.extended()) {
       const j1939::Id id = j1939::Id::fromCanId(frame.id);
       const std::uint32_t pgn = id.pgn();
-      if (pgn == ADDRESS_CLAIMED_PGN) onAddressClaimed(busIndex, id.sourceAddress, received);
+      if (pgn == j1939::PGN_ADDRESS_CLAIMED) onAddressClaimed(busIndex, id.sourceAddress, received);
       if (pgn == j1939::PGN_TP_CM && answersOurTransfer(bus, id, frame)) outputs.network(busIndex, received);
       if (pgn == j1939::PGN_TP_CM || pgn == j1939::PGN_TP_DT) {
         TpSink sink(*this, busIndex, received.monotonicNs);
@@ -531,8 +533,13 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
     j1939::TpReceiverConfig tpConfig;
     tpConfig.ownAddress = impl->tpAddress;
     tpConfig.maxPacketsPerCts = impl->receive.maxPacketsPerCts;
+    const std::uint8_t ownAddress = busConfig.j1939 ? busConfig.j1939->preferredAddress : impl->tpAddress;
+    if (busConfig.j1939) {
+      tpConfig.ownAddress = ownAddress;
+      impl->ownAddress[ownAddress] = true;
+    }
     bus.transport = std::make_unique<j1939::TpReceiver>(tpConfig);
-    bus.addresses = std::make_unique<AddressMap>(ownNameOf(busConfig), impl->tpAddress);
+    bus.addresses = std::make_unique<AddressMap>(ownNameOf(busConfig), ownAddress);
     bus.load = std::make_unique<can::BusLoadMeter>(busConfig.bitrate, busConfig.dataBitrate);
     bus.loadSlot = slotOf("internal.bus." + busConfig.name + ".load");
     bus.stateSlot = slotOf("internal.bus." + busConfig.name + ".state");
@@ -655,7 +662,7 @@ std::vector<can::IdFilter> Receiver::filters(std::size_t busIndex) const {
   addPgn(j1939::PGN_TP_CM);
   addPgn(j1939::PGN_TP_DT);
   addPgn(j1939::PGN_DM1);
-  addPgn(ADDRESS_CLAIMED_PGN);
+  addPgn(j1939::PGN_ADDRESS_CLAIMED);
   for (const SafetyState& group : m_impl->safety) {
     if (m_impl->busByMessage[group.messageIndex] == static_cast<std::int32_t>(busIndex)) {
       result.push_back(can::IdFilter{group.headerCanId, can::EXTENDED_ID_MASK, true});

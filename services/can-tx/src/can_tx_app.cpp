@@ -11,13 +11,16 @@
 #include <filesystem>
 #include <optional>
 
+#include "openvcu/config/diagnostics.hpp"
 #include "openvcu/core/clock.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/j1939/request.hpp"
 #include "openvcu/service/bus_ports.hpp"
 #include "openvcu/service/timer.hpp"
+#include "network.hpp"
 #include "schedule_commands.hpp"
 #include "scheduler.hpp"
 #include "tx_thread.hpp"
@@ -46,6 +49,9 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   Overlay overlay;
   std::deque<BusIo> buses;  // deque: stable addresses (atomics, the loop's callbacks)
   std::unique_ptr<Scheduler> scheduler;
+  config::DiagnosticsConfig diagnostics;  ///< the network's DTC map (it keeps a reference)
+  std::unique_ptr<Network> network;       ///< J1939 address claim, own DM1, TP sending (issue 24)
+  std::int64_t lastNetworkPublishNs{};
   std::optional<TxThread> thread;
   std::optional<ScheduleCommands> commands;  ///< the schedule commands and overrides (loop thread)
   std::optional<service::PeriodicTimer> watchTimer;
@@ -145,8 +151,9 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       if (!portsResult) return portsResult.error();
       static_cast<service::BusPorts&>(buses.emplace_back()) = std::move(*portsResult);
     }
+    if (Status opened = openNetwork(); !opened) return opened.error();
     startNs = clock::monotonicNs();
-    auto schedulerResult = Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *this, *this,
+    auto schedulerResult = Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *network, *this,
                                              startNs);
     if (!schedulerResult) return schedulerResult.error();
     scheduler = std::move(*schedulerResult);
@@ -159,6 +166,9 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       ipc::RequestSubscriber& requests = *buses[b].requestsIn;
       if (Status added = runtime.loop().addSubscriber(requests, [this, b] { takeRequests(b); }); !added)
         return added.error();
+      ipc::FrameSubscriber& networkFrames = *buses[b].networkIn;
+      if (Status added = runtime.loop().addSubscriber(networkFrames, [this, b] { takeNetworkFrames(b); }); !added)
+        return added.error();
     }
     if (Status answering = runtime.answerCommands(commandPolicy()); !answering) return answering.error();
 
@@ -168,7 +178,10 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
     auto timerResult = service::PeriodicTimer::create(WATCH_PERIOD);
     if (!timerResult) return timerResult.error();
     watchTimer.emplace(std::move(*timerResult));
-    if (Status added = runtime.loop().addTimer(*watchTimer, [this](const service::TimerTick&) { watchWriters(); });
+    if (Status added = runtime.loop().addTimer(*watchTimer, [this](const service::TimerTick&) {
+          watchWriters();
+          watchNetwork();
+        });
         !added)
       return added.error();
 
@@ -180,7 +193,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
           event.kind == can::BusEventKind::BusOff || event.kind == can::BusEventKind::Restarted) {
         runtime.log().warning("bus " + vehicle.buses[bus].name + ": " + std::string(can::busEventName(event.kind)));
       }
-    });
+    }, network.get());
     registerCounters();
     if (const std::string warning = thread->start(schedule.realtimePriority, schedule.sdmSpinNs); !warning.empty()) {
       runtime.log().warning(warning);
@@ -191,7 +204,58 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
     return {};
   }
 
+  /// The J1939 network citizen: diagnostics.json (DTCs by FSM state name: the FSM file
+  /// gives the order), the occurrence counts kept across restarts, the build version for SOFT.
+  Status openNetwork() {
+    std::vector<std::string> fsmStates;
+    if (!vehicle.fsmFile.empty()) {
+      auto machineResult = fsm::loadMachine(vehicle.fsmFile, vehicle, runtime.catalog());
+      if (!machineResult) return machineResult.error();
+      for (const fsm::State& state : machineResult->states) fsmStates.push_back(state.name);
+    }
+    auto diagnosticsResult = config::loadDiagnosticsConfig(vehicle, runtime.catalog(), &fsmStates);
+    if (!diagnosticsResult) return diagnosticsResult.error();
+    diagnostics = std::move(*diagnosticsResult);
+    auto networkResult =
+        Network::create(vehicle, diagnostics, fsmStates, runtime.catalog(), runtime.table(), *this, OPENVCU_VERSION);
+    if (!networkResult) return networkResult.error();
+    network = std::move(*networkResult);
+    if (!diagnostics.dtcs.empty()) {
+      config::DtcCountsLoad counts = config::loadDtcCounts(diagnostics.countsFile);
+      if (counts.rejected) {
+        fault("dtc_counts_rejected", ipc::FaultSeverity::Warning, true, counts.rejected->toString());
+      }
+      network->restoreCounts(counts.counts);
+      runtime.log().info(std::to_string(diagnostics.dtcs.size()) + " DTCs from " + diagnostics.file + ", " +
+                         std::to_string(counts.counts.size()) + " occurrence counts from " + diagnostics.countsFile);
+    }
+    return {};
+  }
+
+  /// Loop thread, every WATCH_PERIOD: the J1939 view at once after a change (else after
+  /// every beat), the occurrence counts when they changed, the network's log lines.
+  void watchNetwork() {
+    if (!network->active()) return;
+    for (const std::string& line : network->takeLog()) runtime.log().info(line);
+    if (network->takeChanged()) publishNetwork();
+    if (auto counts = network->takeCountsToSave()) {
+      if (Status saved = config::saveDtcCounts(diagnostics.countsFile, *counts); !saved) {
+        runtime.log().warning("DTC occurrence counts not saved: " + saved.error().toString());
+      }
+    }
+  }
+
+  void publishNetwork() {
+    for (ipc::J1939Network& view : network->snapshot()) runtime.events().publish(view);
+  }
+
   // ---- streams in (loop thread) -----------------------------------------------------------
+
+  void takeNetworkFrames(std::size_t bus) {
+    while (const auto maybeSample = buses[bus].networkIn->take()) {
+      (void)thread->post(NetworkFrame{bus, maybeSample->frame});
+    }
+  }
 
   void takeSendRequests(std::size_t bus) {
     while (const auto maybeSample = buses[bus].sendRequestsIn->take()) {
@@ -341,6 +405,26 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       return static_cast<std::int64_t>(scheduler->counters().sdmsEarly.load(std::memory_order_relaxed));
     });
     heartbeat.addCounterSource("writers_lost", [this] { return static_cast<std::int64_t>(writersLost); });
+    if (network->active()) {
+      auto add = [&](const std::string& name, std::atomic<std::uint64_t> NetworkCounters::*member) {
+        heartbeat.addCounterSource(name, [this, member] {
+          return static_cast<std::int64_t>((network->counters().*member).load(std::memory_order_relaxed));
+        });
+      };
+      add("j1939_claims_sent", &NetworkCounters::claimsSent);
+      add("j1939_contests_won", &NetworkCounters::contestsWon);
+      add("j1939_contests_lost", &NetworkCounters::contestsLost);
+      add("j1939_cannot_claim", &NetworkCounters::cannotClaim);
+      add("j1939_frames_held_by_claim", &NetworkCounters::framesHeldByClaim);
+      add("dm1_sent", &NetworkCounters::dm1Sent);
+      add("tp_started", &NetworkCounters::tpStarted);
+      add("tp_completed", &NetworkCounters::tpCompleted);
+      add("tp_failed", &NetworkCounters::tpFailed);
+      add("tp_refused", &NetworkCounters::tpRefused);
+      add("j1939_requests_answered", &NetworkCounters::requestsAnswered);
+      add("dtc_clears_accepted", &NetworkCounters::clearsAccepted);
+      add("dtc_clears_refused", &NetworkCounters::clearsRefused);
+    }
     for (std::size_t b = 0; b < buses.size(); ++b) {
       const std::string prefix = vehicle.buses[b].name + ".";
       heartbeat.addStatSource(prefix + "frames_sent", [this, b] {
@@ -353,7 +437,10 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       });
     }
     for (std::size_t s = 0; s < schedule.messages.size(); ++s) registerMessageCounters(s, scheduler->stats(s));
-    heartbeat.addBeatListener([this] { publishSchedule(); });
+    heartbeat.addBeatListener([this] {
+      publishSchedule();
+      if (network->active()) publishNetwork();
+    });
   }
 
   /// The live schedule (cycle, enabled, added per message) on the SCHEDULE channel, which

@@ -69,8 +69,8 @@ bool TxInbox::pop(TxCommand& command) noexcept {
 }
 
 TxThread::TxThread(Scheduler& scheduler, std::vector<can::Link*> links,
-                   std::function<void(std::size_t, const can::BusEvent&)> onBusEvent)
-    : m_scheduler(scheduler), m_links(std::move(links)), m_onBusEvent(std::move(onBusEvent)) {}
+                   std::function<void(std::size_t, const can::BusEvent&)> onBusEvent, Network* network)
+    : m_scheduler(scheduler), m_network(network), m_links(std::move(links)), m_onBusEvent(std::move(onBusEvent)) {}
 
 TxThread::~TxThread() { stop(); }
 
@@ -117,7 +117,11 @@ void TxThread::apply(TxCommand& command, std::int64_t nowNs) noexcept {
         if constexpr (std::is_same_v<Change, SendOnce>) {
           m_scheduler.sendOnce(change.bus, change.frame);
         } else if constexpr (std::is_same_v<Change, AnswerRequest>) {
-          m_scheduler.answerRequest(change.bus, change.request);
+          if (m_network == nullptr || !m_network->answerRequest(change.bus, change.request, nowNs)) {
+            m_scheduler.answerRequest(change.bus, change.request);
+          }
+        } else if constexpr (std::is_same_v<Change, NetworkFrame>) {
+          if (m_network != nullptr) m_network->onFrame(change.bus, change.frame, nowNs);
         } else if constexpr (std::is_same_v<Change, SetCycle>) {
           m_scheduler.setCycle(change.scheduled, change.cycleNs, nowNs);
         } else if constexpr (std::is_same_v<Change, SetEnabled>) {
@@ -168,12 +172,14 @@ void TxThread::run() noexcept {
   // The timer slack of a normal thread (50 us) would land in every period: ask for 1 ns.
   ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   m_nextServiceNs = clock::monotonicNs();
+  if (m_network != nullptr) m_network->start(m_nextServiceNs);  // the claims before the first scheduled frame
   while (!m_stopping.load(std::memory_order_acquire)) {
     const std::uint32_t seen = m_wake.load(std::memory_order_acquire);
     std::int64_t now = clock::monotonicNs();
     TxCommand command;
     while (m_inbox.pop(command)) apply(command, now);
     m_scheduler.run(now);
+    if (m_network != nullptr) m_network->run(now);
     now = clock::monotonicNs();
     const std::int64_t sdmNs = m_scheduler.nextDataDeadlineNs();
     // the link housekeeping (draining the links' receive queues, their events) waits while an
@@ -181,8 +187,9 @@ void TxThread::run() noexcept {
     const bool sdmSoon = sdmNs != INT64_MAX && sdmNs - now <= m_sdmSpinNs;
     if (now >= m_nextServiceNs && !sdmSoon) service(now);
     const std::int64_t serviceNs = sdmSoon ? INT64_MAX : m_nextServiceNs;
-    const WaitPlan plan =
-        planWait(clock::monotonicNs(), std::min(m_scheduler.nextDeadlineNs(), serviceNs), sdmNs, m_sdmSpinNs);
+    const std::int64_t networkNs = m_network != nullptr ? m_network->nextDeadlineNs() : INT64_MAX;
+    const WaitPlan plan = planWait(clock::monotonicNs(), std::min({m_scheduler.nextDeadlineNs(), serviceNs, networkNs}),
+                                   sdmNs, m_sdmSpinNs);
     if (plan.kind == WaitPlan::Kind::Sleep) {
       m_sleeping.store(true, std::memory_order_seq_cst);
       // a post between the load of `seen` and here changed the word: the wait returns at once

@@ -30,6 +30,7 @@
 #include "openvcu/can/frame.hpp"
 #include "openvcu/can/link.hpp"
 #include "openvcu/j1939/request.hpp"
+#include "network.hpp"
 #include "scheduler.hpp"
 
 namespace openvcu::cantx {
@@ -43,6 +44,11 @@ struct SendOnce {
 struct AnswerRequest {
   std::size_t bus{};
   j1939::Request request{};
+};
+/// A frame of the "net" stream (J1939 claims, TP answers to us): Network::onFrame.
+struct NetworkFrame {
+  std::size_t bus{};
+  can::Frame frame{};
 };
 /// ScheduleCycle: Scheduler::setCycle (index into Schedule::messages).
 struct SetCycle {
@@ -65,7 +71,7 @@ struct AddMessage {
   PreparedMessage message;
 };
 
-using TxCommand = std::variant<SendOnce, AnswerRequest, SetCycle, SetEnabled, SetDefault, AddMessage>;
+using TxCommand = std::variant<SendOnce, AnswerRequest, SetCycle, SetEnabled, SetDefault, AddMessage, NetworkFrame>;
 static_assert(std::is_nothrow_move_assignable_v<TxCommand>);
 
 /// How the transmit thread waits for its next deadline (planWait).
@@ -112,8 +118,10 @@ class TxThread {
   /// `links[bus]` send the scheduler's frames (the caller's port forwards to them); the
   /// thread also services them every 100 ms (reopening, bus events), which it reports
   /// through `onBusEvent` (called on the transmit thread).
+  /// `network` (may be null): the J1939 network citizen (network.hpp), started on the
+  /// thread; it answers the requests it owns, the scheduler the rest.
   TxThread(Scheduler& scheduler, std::vector<can::Link*> links,
-           std::function<void(std::size_t bus, const can::BusEvent&)> onBusEvent);
+           std::function<void(std::size_t bus, const can::BusEvent&)> onBusEvent, Network* network = nullptr);
   ~TxThread();
   TxThread(const TxThread&) = delete;
   TxThread& operator=(const TxThread&) = delete;
@@ -142,6 +150,7 @@ class TxThread {
   void spinUntil(std::int64_t deadlineNs) noexcept;
 
   Scheduler& m_scheduler;
+  Network* m_network{};
   std::vector<can::Link*> m_links;
   std::function<void(std::size_t, const can::BusEvent&)> m_onBusEvent;
   TxInbox m_inbox;

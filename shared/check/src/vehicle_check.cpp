@@ -11,6 +11,7 @@
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/diagnostics.hpp"
 #include "openvcu/config/json.hpp"
+#include "openvcu/j1939/address_claim.hpp"
 #include "openvcu/j1939/acknowledgement.hpp"
 #include "openvcu/j1939/dm1.hpp"
 #include "openvcu/j1939/id.hpp"
@@ -48,8 +49,6 @@ std::string listNames(const std::vector<std::string>& names) {
 
 namespace {
 
-/// J1939 PGN 60928 Address Claimed (SAE J1939-81), 0xEE00.
-constexpr std::uint32_t PGN_ADDRESS_CLAIMED = 0xEE00;
 
 /// A received message vcu-can-rx handles itself (transport, requests, acknowledgements,
 /// address claims, J1939-76 headers, DM1 when its decoding is on): not "unused".
@@ -58,7 +57,7 @@ bool protocolMessage(const dbc::Message& message, const VehicleFiles& files) {
   const std::uint32_t pgn = j1939::Id::fromCanId(message.id).pgn();
   if (pgn == j1939::PGN_DM1) return files.receive && files.receive->dm1;
   return pgn == j1939::PGN_TP_CM || pgn == j1939::PGN_TP_DT || pgn == j1939::PGN_REQUEST ||
-         pgn == j1939::PGN_ACKNOWLEDGEMENT || pgn == PGN_ADDRESS_CLAIMED || pgn == j1939::PGN_SAFETY_HEADER;
+         pgn == j1939::PGN_ACKNOWLEDGEMENT || pgn == j1939::PGN_ADDRESS_CLAIMED || pgn == j1939::PGN_SAFETY_HEADER;
 }
 
 /// Loads every file the checks read; a note per file that does not load.
