@@ -1,10 +1,10 @@
 // Issue #24: the NAME <-> address table of the other nodes on a bus.
-#include "openvcu/j1939/address_table.hpp"
-
 #include <doctest/doctest.h>
 
 #include <cstdint>
 #include <vector>
+
+#include "openvcu/j1939/address_table.hpp"
 
 using namespace openvcu::j1939;
 
