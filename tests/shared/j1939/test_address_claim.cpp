@@ -147,7 +147,7 @@ TEST_CASE("claimer ignores its own claim looped back by the bus") {
   CHECK(sut.address() == VCU_ADDRESS);
 }
 
-TEST_CASE("claimer defends its address against a lower-priority NAME; the 250 ms window keeps running") {
+TEST_CASE("claimer defends its address against a lower-priority NAME and the 250 ms window keeps running") {
   RecordingSink sink;
   AddressClaimer sut(VCU_CONFIG);
   sut.start(T0_NS, sink);
@@ -399,7 +399,7 @@ TEST_CASE("claimer drops a node that sends Cannot Claim from its table") {
   CHECK(sut.address() == VCU_ADDRESS);
 }
 
-TEST_CASE("claimer started again claims its preferred address again; counters stay") {
+TEST_CASE("claimer started again claims its preferred address again and keeps its counters") {
   RecordingSink sink;
   AddressClaimer sut({OUR_NAME_FIXED, VCU_ADDRESS});
   sut.start(T0_NS, sink);
