@@ -1,9 +1,9 @@
 #include "bus_j1939.hpp"
 
-#include "openvcu/j1939/address_table.hpp"
-
 #include <algorithm>
 #include <cmath>
+
+#include "openvcu/j1939/address_table.hpp"
 
 namespace openvcu::config {
 namespace {
@@ -39,9 +39,9 @@ std::optional<std::uint32_t> wholeNumber(JsonChecker& check, const Json& object,
 /// The "name" object's fields into `name` (fields in error stay 0).
 void loadName(JsonChecker& check, const Json& object, const std::string& path, j1939::Name& name) {
   if (!check.isObject(object, path)) return;
-  check.onlyKeys(object, path, {"identityNumber", "manufacturerCode", "ecuInstance", "functionInstance", "function",
-                                "vehicleSystem", "vehicleSystemInstance", "industryGroup", "arbitraryAddressCapable",
-                                "comment"});
+  check.onlyKeys(object, path,
+                 {"identityNumber", "manufacturerCode", "ecuInstance", "functionInstance", "function", "vehicleSystem",
+                  "vehicleSystemInstance", "industryGroup", "arbitraryAddressCapable", "comment"});
   auto field = [&](std::string_view key, std::uint32_t max, bool required, std::string_view reason) {
     return wholeNumber(check, object, path, key, max, required, reason).value_or(0);
   };

@@ -1,12 +1,12 @@
 #pragma once
 // Private to shared/config: reads a bus' "j1939" object (vehicle.cpp's bus loop calls it).
 
-#include "openvcu/config/bus_j1939.hpp"
-#include "openvcu/config/json.hpp"
-
 #include <cstdint>
 #include <optional>
 #include <string>
+
+#include "openvcu/config/bus_j1939.hpp"
+#include "openvcu/config/json.hpp"
 
 namespace openvcu::config {
 

@@ -4,10 +4,14 @@ namespace openvcu::j1939 {
 
 std::string_view claimStateName(ClaimState state) noexcept {
   switch (state) {
-    case ClaimState::Idle: return "Idle";
-    case ClaimState::Claiming: return "Claiming";
-    case ClaimState::Claimed: return "Claimed";
-    case ClaimState::CannotClaim: return "CannotClaim";
+    case ClaimState::Idle:
+      return "Idle";
+    case ClaimState::Claiming:
+      return "Claiming";
+    case ClaimState::Claimed:
+      return "Claimed";
+    case ClaimState::CannotClaim:
+      return "CannotClaim";
   }
   return "Unknown";
 }
@@ -57,7 +61,8 @@ void AddressClaimer::onRequestForAddressClaimed(std::uint8_t destination, std::i
   poll(nowNs, sink);
   const bool global = destination == GLOBAL_ADDRESS;
   switch (m_state) {
-    case ClaimState::Idle: return;
+    case ClaimState::Idle:
+      return;
     case ClaimState::Claiming:
     case ClaimState::Claimed:
       if (!global && destination != m_address) return;

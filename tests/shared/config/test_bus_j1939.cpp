@@ -1,12 +1,12 @@
 // Issue #24: a bus' "j1939" object in vehicle.json (this VCU's NAME, preferred address,
 // address range) and every refusal with its JSON path.
-#include "config_fixture.hpp"
-#include "openvcu/config/vehicle.hpp"
-
 #include <doctest/doctest.h>
 
 #include <fstream>
 #include <string>
+
+#include "config_fixture.hpp"
+#include "openvcu/config/vehicle.hpp"
 
 using namespace openvcu;
 using namespace openvcu::config;
@@ -21,7 +21,8 @@ constexpr std::uint64_t GOOD_NAME_VALUE = 0xB002800000000001u;
 
 std::string withJ1939(const std::string& j1939) {
   return R"({"instance": "t", "node": "VCU", "dbc": "small.dbc", "buses": [
-            {"name": "vehicle", "link": "sim:vehicle", "messages": "all", "j1939": )" + j1939 + "}]}";
+            {"name": "vehicle", "link": "sim:vehicle", "messages": "all", "j1939": )" +
+         j1939 + "}]}";
 }
 
 std::string withName(const std::string& name) {
@@ -30,10 +31,9 @@ std::string withName(const std::string& name) {
 
 /// Appends NmStationAddress 33 for the node VCU to the copied small.dbc.
 void giveVcuAnAddress(const TempConfig& file) {
-  std::ofstream(file.dir() + "/small.dbc", std::ios::app)
-      << "BA_DEF_ BU_  \"NmStationAddress\" INT 0 255;\n"
-         "BA_DEF_DEF_  \"NmStationAddress\" 254;\n"
-         "BA_ \"NmStationAddress\" BU_ VCU 33;\n";
+  std::ofstream(file.dir() + "/small.dbc", std::ios::app) << "BA_DEF_ BU_  \"NmStationAddress\" INT 0 255;\n"
+                                                             "BA_DEF_DEF_  \"NmStationAddress\" 254;\n"
+                                                             "BA_ \"NmStationAddress\" BU_ VCU 33;\n";
 }
 
 std::string firstError(const std::string& json) {
@@ -108,9 +108,10 @@ TEST_CASE("#24 NAME fields beyond their width are refused with the path and the 
   CHECK(firstError(withName(R"({"identityNumber": 2097152, "manufacturerCode": 0, "function": 128, "vehicleSystem": 1,
                                 "industryGroup": 3, "arbitraryAddressCapable": true})")) ==
         "vehicle.json: /buses/0/j1939/name/identityNumber: must be a whole number 0..2097151 (21 bits)");
-  CHECK(firstError(withName(R"({"identityNumber": 1, "manufacturerCode": 2048, "function": 128, "vehicleSystem": 1,
+  CHECK(
+      firstError(withName(R"({"identityNumber": 1, "manufacturerCode": 2048, "function": 128, "vehicleSystem": 1,
                                 "industryGroup": 3, "arbitraryAddressCapable": true})")) ==
-        "vehicle.json: /buses/0/j1939/name/manufacturerCode: must be a whole number 0..2047 (11 bits, assigned by SAE)");
+      "vehicle.json: /buses/0/j1939/name/manufacturerCode: must be a whole number 0..2047 (11 bits, assigned by SAE)");
   CHECK(firstError(withName(R"({"identityNumber": 1, "manufacturerCode": 0, "function": 128, "vehicleSystem": 1,
                                 "industryGroup": 8, "arbitraryAddressCapable": true})")) ==
         "vehicle.json: /buses/0/j1939/name/industryGroup: must be a whole number 0..7 (3 bits)");
@@ -142,12 +143,14 @@ TEST_CASE("#24 a NAME missing a required field or with a wrong type is refused")
                                 "industryGroup": 3, "arbitraryAddressCapable": true})")) ==
         "vehicle.json: /buses/0/j1939/name/identityNumber: must be a number, not a string");
   CHECK(firstError(withName("[]")) == "vehicle.json: /buses/0/j1939/name: must be an object, not an array");
-  CHECK(firstError(withJ1939(R"({"preferredAddress": 33})")) == "vehicle.json: /buses/0/j1939/name: missing (required)");
+  CHECK(firstError(withJ1939(R"({"preferredAddress": 33})")) ==
+        "vehicle.json: /buses/0/j1939/name: missing (required)");
 }
 
 TEST_CASE("#24 unknown keys in the j1939 object and its NAME are refused with a suggestion") {
   CHECK(firstError(withJ1939(std::string(R"({"name": )") + GOOD_NAME + R"(, "prefferedAddress": 33})")) ==
-        "vehicle.json: /buses/0/j1939/prefferedAddress: unknown key 'prefferedAddress'; did you mean 'preferredAddress'?");
+        "vehicle.json: /buses/0/j1939/prefferedAddress: unknown key 'prefferedAddress'; did you mean "
+        "'preferredAddress'?");
   CHECK(firstError(withName(R"({"identityNumber": 1, "manufacturerCode": 0, "function": 1, "vehicleSystem": 1,
                                 "industryGroup": 3, "arbitraryAddressCapable": true, "ecuInstanse": 1})")) ==
         "vehicle.json: /buses/0/j1939/name/ecuInstanse: unknown key 'ecuInstanse'; did you mean 'ecuInstance'?");
@@ -157,11 +160,13 @@ TEST_CASE("#24 unknown keys in the j1939 object and its NAME are refused with a 
 TEST_CASE("#24 preferred address and address range outside 0..253 or reversed are refused") {
   const std::string name = std::string(R"({"name": )") + GOOD_NAME;
   CHECK(firstError(withJ1939(name + R"(, "preferredAddress": 254})")) ==
-        "vehicle.json: /buses/0/j1939/preferredAddress: must be a whole number 0..253 (254 is the null address, 255 global)");
+        "vehicle.json: /buses/0/j1939/preferredAddress: must be a whole number 0..253 (254 is the null address, 255 "
+        "global)");
   CHECK(firstError(withJ1939(name + R"(, "preferredAddress": 33, "addressRange": [200, 100]})")) ==
         "vehicle.json: /buses/0/j1939/addressRange: the first address 200 is above the last 100");
   CHECK(firstError(withJ1939(name + R"(, "preferredAddress": 33, "addressRange": [128, 255]})")) ==
-        "vehicle.json: /buses/0/j1939/addressRange/1: must be a whole number 0..253 (254 is the null address, 255 global)");
+        "vehicle.json: /buses/0/j1939/addressRange/1: must be a whole number 0..253 (254 is the null address, 255 "
+        "global)");
   CHECK(firstError(withJ1939(name + R"(, "preferredAddress": 33, "addressRange": [128]})")) ==
         "vehicle.json: /buses/0/j1939/addressRange: must be [first, last], two addresses 0..253");
   CHECK(firstError(withJ1939(name + R"(, "preferredAddress": 33, "claim": "yes"})")) ==

@@ -1,6 +1,4 @@
 // Issue #24: J1939-81 address claim, every case on a set clock.
-#include "openvcu/j1939/address_claim.hpp"
-
 #include <doctest/doctest.h>
 
 #include <array>
@@ -9,6 +7,8 @@
 #include <set>
 #include <string>
 #include <vector>
+
+#include "openvcu/j1939/address_claim.hpp"
 
 using namespace openvcu::j1939;
 
@@ -23,9 +23,9 @@ template <>
 struct doctest::StringMaker<ClaimFrame> {
   static doctest::String convert(const ClaimFrame& frame) {
     char text[48];
-    std::snprintf(text, sizeof text, "%08X %02X %02X %02X %02X %02X %02X %02X %02X",
-                  static_cast<unsigned>(frame.canId), frame.data[0], frame.data[1], frame.data[2],
-                  frame.data[3], frame.data[4], frame.data[5], frame.data[6], frame.data[7]);
+    std::snprintf(text, sizeof text, "%08X %02X %02X %02X %02X %02X %02X %02X %02X", static_cast<unsigned>(frame.canId),
+                  frame.data[0], frame.data[1], frame.data[2], frame.data[3], frame.data[4], frame.data[5],
+                  frame.data[6], frame.data[7]);
     return text;
   }
 };
@@ -35,8 +35,8 @@ namespace {
 constexpr std::int64_t MS = 1'000'000;
 constexpr std::int64_t T0_NS = 10'000 * MS;
 
-constexpr std::uint8_t VCU_ADDRESS = 0x21;    // HHEA's VCU: transmits right after its claim
-constexpr std::uint8_t RANGE_FIRST = 0x80;    // 128
+constexpr std::uint8_t VCU_ADDRESS = 0x21;  // HHEA's VCU: transmits right after its claim
+constexpr std::uint8_t RANGE_FIRST = 0x80;  // 128
 constexpr std::uint8_t RANGE_SECOND = 0x81;
 constexpr std::uint8_t RANGE_THIRD = 0x82;
 constexpr std::uint8_t VIC_ADDRESS = 0xF3;
@@ -44,13 +44,12 @@ constexpr std::uint8_t OTHER_ADDRESS = 0x40;
 
 // AAC, construction, skid steer loader, main controller, identity 0x100.
 constexpr Name OUR_NAME = Name::fromValue(0xB002800000000100u);
-constexpr Name OUR_NAME_FIXED = Name::fromValue(0x3002800000000100u);  // the same, not AAC
+constexpr Name OUR_NAME_FIXED = Name::fromValue(0x3002800000000100u);   // the same, not AAC
 constexpr Name HIGHER_PRIORITY = Name::fromValue(0x1000000000000001u);  // lower value: wins
 constexpr Name LOWER_PRIORITY = Name::fromValue(0xF000000000000001u);   // higher value: loses
 constexpr Name THIRD_NODE = Name::fromValue(0x2000000000000002u);
 
-constexpr AddressClaimerConfig VCU_CONFIG{OUR_NAME, VCU_ADDRESS, DEFAULT_CLAIM_RANGE_FIRST,
-                                          DEFAULT_CLAIM_RANGE_LAST};
+constexpr AddressClaimerConfig VCU_CONFIG{OUR_NAME, VCU_ADDRESS, DEFAULT_CLAIM_RANGE_FIRST, DEFAULT_CLAIM_RANGE_LAST};
 
 struct AddressChange {
   std::uint8_t oldAddress{};
@@ -148,7 +147,7 @@ TEST_CASE("claimer ignores its own claim looped back by the bus") {
   CHECK(sut.address() == VCU_ADDRESS);
 }
 
-TEST_CASE("claimer defends its address against a lower-priority NAME; the 250 ms window keeps running") {
+TEST_CASE("claimer defends its address against a lower-priority NAME and the 250 ms window keeps running") {
   RecordingSink sink;
   AddressClaimer sut(VCU_CONFIG);
   sut.start(T0_NS, sink);
@@ -400,7 +399,7 @@ TEST_CASE("claimer drops a node that sends Cannot Claim from its table") {
   CHECK(sut.address() == VCU_ADDRESS);
 }
 
-TEST_CASE("claimer started again claims its preferred address again; counters stay") {
+TEST_CASE("claimer started again claims its preferred address again and keeps its counters") {
   RecordingSink sink;
   AddressClaimer sut({OUR_NAME_FIXED, VCU_ADDRESS});
   sut.start(T0_NS, sink);
@@ -426,8 +425,8 @@ TEST_CASE("parseAddressClaimed reads the source and NAME of PGN 60928 frames onl
   CHECK(*maybeSut == AddressClaimed{VCU_ADDRESS, OUR_NAME});
   CHECK(parseAddressClaimed(0x18EEFFFEu, true, bytes) == AddressClaimed{NULL_ADDRESS, OUR_NAME});
   CHECK(parseAddressClaimed(0x18EEF321u, true, bytes) == AddressClaimed{VCU_ADDRESS, OUR_NAME});  // to one address
-  CHECK_FALSE(parseAddressClaimed(0x18EEFF21u, false, bytes));  // standard frame
-  CHECK_FALSE(parseAddressClaimed(0x18EFFF21u, true, bytes));   // PGN 0xEF00
-  CHECK_FALSE(parseAddressClaimed(0x19EEFF21u, true, bytes));   // data page 1: PGN 0x1EE00
+  CHECK_FALSE(parseAddressClaimed(0x18EEFF21u, false, bytes));                                    // standard frame
+  CHECK_FALSE(parseAddressClaimed(0x18EFFF21u, true, bytes));                                     // PGN 0xEF00
+  CHECK_FALSE(parseAddressClaimed(0x19EEFF21u, true, bytes));  // data page 1: PGN 0x1EE00
   CHECK_FALSE(parseAddressClaimed(0x18EEFF21u, true, shortPayload));
 }

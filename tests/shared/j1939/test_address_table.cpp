@@ -1,10 +1,10 @@
 // Issue #24: the NAME <-> address table of the other nodes on a bus.
-#include "openvcu/j1939/address_table.hpp"
-
 #include <doctest/doctest.h>
 
 #include <cstdint>
 #include <vector>
+
+#include "openvcu/j1939/address_table.hpp"
 
 using namespace openvcu::j1939;
 
@@ -43,7 +43,7 @@ TEST_CASE("address table moves a NAME seen at a new address and frees the old on
   CHECK(sut.addressOf(NODE_A) == SECOND_ADDRESS);
 }
 
-TEST_CASE("address table gives an address to the latest claimer; the one before is gone") {
+TEST_CASE("address table gives an address to the latest claimer and drops the one before") {
   AddressTable sut;
   sut.onClaim(FIRST_ADDRESS, NODE_A, T0_NS);
 

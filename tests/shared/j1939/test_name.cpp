@@ -1,10 +1,10 @@
 // Issue #24: the J1939-81 NAME, its 64-bit value, its 8 bytes and its priority rule.
-#include "openvcu/j1939/name.hpp"
-
 #include <doctest/doctest.h>
 
 #include <array>
 #include <cstdint>
+
+#include "openvcu/j1939/name.hpp"
 
 using namespace openvcu::j1939;
 

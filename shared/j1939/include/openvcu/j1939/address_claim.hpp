@@ -17,20 +17,21 @@
 //                                            else (or the range is full): Cannot Claim
 //     a higher NAME claims our address    -> our claim again (defended)
 
-#include "openvcu/j1939/address_table.hpp"
-#include "openvcu/j1939/id.hpp"
-#include "openvcu/j1939/name.hpp"
-
 #include <cstdint>
 #include <optional>
 #include <span>
 #include <string_view>
 
+#include "openvcu/j1939/address_table.hpp"
+#include "openvcu/j1939/id.hpp"
+#include "openvcu/j1939/name.hpp"
+
 namespace openvcu::j1939 {
 
-inline constexpr std::uint32_t PGN_ADDRESS_CLAIMED = 0xEE00;    ///< SAE J1939-81 PGN 60928 Address Claimed / Cannot Claim
-inline constexpr std::uint32_t PGN_COMMANDED_ADDRESS = 0xFED8;  ///< SAE J1939-81 PGN 65240 Commanded Address (not handled)
-inline constexpr std::uint8_t ADDRESS_CLAIM_PRIORITY = 6;       ///< J1939-81 default priority of Address Claimed
+inline constexpr std::uint32_t PGN_ADDRESS_CLAIMED = 0xEE00;  ///< SAE J1939-81 PGN 60928 Address Claimed / Cannot Claim
+inline constexpr std::uint32_t PGN_COMMANDED_ADDRESS =
+    0xFED8;                                                ///< SAE J1939-81 PGN 65240 Commanded Address (not handled)
+inline constexpr std::uint8_t ADDRESS_CLAIM_PRIORITY = 6;  ///< J1939-81 default priority of Address Claimed
 /// J1939-81: a CA whose address is 128..247 waits 250 ms after its claim before other traffic.
 inline constexpr std::int64_t ADDRESS_CLAIM_WAIT_NS = 250'000'000;
 /// J1939-81: Cannot Claim in answer to a Request waits 0.6 ms x a pseudo-random 0..255, 0..153 ms.
@@ -74,8 +75,8 @@ struct AddressClaimed {
 /// (J1939-81 sends it to global; some nodes answer a Request to the requester).
 /// 0x18EEFF21 01 00 00 00 00 80 02 B0 -> {0x21, NAME 0xB002800000000001}.
 /// @note thread-safe and real-time safe.
-[[nodiscard]] constexpr std::optional<AddressClaimed> parseAddressClaimed(
-    std::uint32_t canId, bool extended, std::span<const std::uint8_t> data) noexcept {
+[[nodiscard]] constexpr std::optional<AddressClaimed> parseAddressClaimed(std::uint32_t canId, bool extended,
+                                                                          std::span<const std::uint8_t> data) noexcept {
   if (!extended) return std::nullopt;
   const Id id = Id::fromCanId(canId);
   if (id.pgn() != PGN_ADDRESS_CLAIMED) return std::nullopt;
@@ -169,8 +170,7 @@ class AddressClaimer {
   void start(std::int64_t nowNs, ClaimSink& sink) noexcept;
 
   /// An Address Claimed seen on the bus, from `sourceAddress` (NULL_ADDRESS: Cannot Claim).
-  void onAddressClaimed(std::uint8_t sourceAddress, const Name& name, std::int64_t nowNs,
-                        ClaimSink& sink) noexcept;
+  void onAddressClaimed(std::uint8_t sourceAddress, const Name& name, std::int64_t nowNs, ClaimSink& sink) noexcept;
 
   /// A Request for Address Claimed to `destination`. To global or to our address it is
   /// answered with our claim at once; without an address (CannotClaim), a request to global
@@ -211,7 +211,7 @@ class AddressClaimer {
   ClaimCounters m_counters;
   ClaimState m_state{ClaimState::Idle};
   std::uint8_t m_address{NULL_ADDRESS};
-  std::int64_t m_windowEndNs{};        ///< Claiming: end of the 250 ms window
+  std::int64_t m_windowEndNs{};                    ///< Claiming: end of the 250 ms window
   std::optional<std::int64_t> m_cannotClaimDueNs;  ///< a delayed Cannot Claim
 };
 

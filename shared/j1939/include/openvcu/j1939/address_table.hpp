@@ -7,17 +7,17 @@
 //   onClaim(0x81, B)   -> 0x81: B          (B took the address; A is gone from the table)
 //   onClaim(0xFE, B)   -> empty            (B sent Cannot Claim: it has no address)
 
-#include "openvcu/j1939/id.hpp"
-#include "openvcu/j1939/name.hpp"
-
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 
+#include "openvcu/j1939/id.hpp"
+#include "openvcu/j1939/name.hpp"
+
 namespace openvcu::j1939 {
 
-inline constexpr std::size_t ADDRESS_COUNT = 256;  ///< 0..255, of which 0..253 can be claimed
+inline constexpr std::size_t ADDRESS_COUNT = 256;            ///< 0..255, of which 0..253 can be claimed
 inline constexpr std::uint8_t MAX_CLAIMABLE_ADDRESS = 0xFD;  ///< 253: 254 is null, 255 global
 
 /// One known node.

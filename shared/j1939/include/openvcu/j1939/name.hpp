@@ -28,35 +28,34 @@ namespace openvcu::j1939 {
 
 inline constexpr std::size_t NAME_LENGTH = 8;  ///< the Address Claimed payload, 8 bytes
 
-inline constexpr std::uint8_t NAME_MAX_INDUSTRY_GROUP = 0x7;             ///< 3 bits, 7
-inline constexpr std::uint8_t NAME_MAX_VEHICLE_SYSTEM_INSTANCE = 0xF;    ///< 4 bits, 15
-inline constexpr std::uint8_t NAME_MAX_VEHICLE_SYSTEM = 0x7F;            ///< 7 bits, 127
-inline constexpr std::uint8_t NAME_MAX_FUNCTION = 0xFF;                  ///< 8 bits, 255
-inline constexpr std::uint8_t NAME_MAX_FUNCTION_INSTANCE = 0x1F;         ///< 5 bits, 31
-inline constexpr std::uint8_t NAME_MAX_ECU_INSTANCE = 0x7;               ///< 3 bits, 7
-inline constexpr std::uint16_t NAME_MAX_MANUFACTURER_CODE = 0x7FF;       ///< 11 bits, 2047
-inline constexpr std::uint32_t NAME_MAX_IDENTITY_NUMBER = 0x1FFFFF;      ///< 21 bits, 2097151
+inline constexpr std::uint8_t NAME_MAX_INDUSTRY_GROUP = 0x7;           ///< 3 bits, 7
+inline constexpr std::uint8_t NAME_MAX_VEHICLE_SYSTEM_INSTANCE = 0xF;  ///< 4 bits, 15
+inline constexpr std::uint8_t NAME_MAX_VEHICLE_SYSTEM = 0x7F;          ///< 7 bits, 127
+inline constexpr std::uint8_t NAME_MAX_FUNCTION = 0xFF;                ///< 8 bits, 255
+inline constexpr std::uint8_t NAME_MAX_FUNCTION_INSTANCE = 0x1F;       ///< 5 bits, 31
+inline constexpr std::uint8_t NAME_MAX_ECU_INSTANCE = 0x7;             ///< 3 bits, 7
+inline constexpr std::uint16_t NAME_MAX_MANUFACTURER_CODE = 0x7FF;     ///< 11 bits, 2047
+inline constexpr std::uint32_t NAME_MAX_IDENTITY_NUMBER = 0x1FFFFF;    ///< 21 bits, 2097151
 
 using NamePayload = std::array<std::uint8_t, NAME_LENGTH>;
 
 /// The NAME's fields. toValue() keeps the low bits of each field that fit its width;
 /// fits() says whether every field fits (a configuration checks it before use).
 struct Name {
-  bool arbitraryAddressCapable{};      ///< 1 bit
-  std::uint8_t industryGroup{};        ///< 3 bits
-  std::uint8_t vehicleSystemInstance{};///< 4 bits
-  std::uint8_t vehicleSystem{};        ///< 7 bits
-  bool reserved{};                     ///< 1 bit, 0 when sent by us
-  std::uint8_t function{};             ///< 8 bits
-  std::uint8_t functionInstance{};     ///< 5 bits
-  std::uint8_t ecuInstance{};          ///< 3 bits
-  std::uint16_t manufacturerCode{};    ///< 11 bits
-  std::uint32_t identityNumber{};      ///< 21 bits
+  bool arbitraryAddressCapable{};        ///< 1 bit
+  std::uint8_t industryGroup{};          ///< 3 bits
+  std::uint8_t vehicleSystemInstance{};  ///< 4 bits
+  std::uint8_t vehicleSystem{};          ///< 7 bits
+  bool reserved{};                       ///< 1 bit, 0 when sent by us
+  std::uint8_t function{};               ///< 8 bits
+  std::uint8_t functionInstance{};       ///< 5 bits
+  std::uint8_t ecuInstance{};            ///< 3 bits
+  std::uint16_t manufacturerCode{};      ///< 11 bits
+  std::uint32_t identityNumber{};        ///< 21 bits
 
   /// Every field within its width.
   [[nodiscard]] constexpr bool fits() const noexcept {
-    return industryGroup <= NAME_MAX_INDUSTRY_GROUP &&
-           vehicleSystemInstance <= NAME_MAX_VEHICLE_SYSTEM_INSTANCE &&
+    return industryGroup <= NAME_MAX_INDUSTRY_GROUP && vehicleSystemInstance <= NAME_MAX_VEHICLE_SYSTEM_INSTANCE &&
            vehicleSystem <= NAME_MAX_VEHICLE_SYSTEM && functionInstance <= NAME_MAX_FUNCTION_INSTANCE &&
            ecuInstance <= NAME_MAX_ECU_INSTANCE && manufacturerCode <= NAME_MAX_MANUFACTURER_CODE &&
            identityNumber <= NAME_MAX_IDENTITY_NUMBER;
@@ -68,8 +67,7 @@ struct Name {
            (static_cast<std::uint64_t>(industryGroup & NAME_MAX_INDUSTRY_GROUP) << 60) |
            (static_cast<std::uint64_t>(vehicleSystemInstance & NAME_MAX_VEHICLE_SYSTEM_INSTANCE) << 56) |
            (static_cast<std::uint64_t>(vehicleSystem & NAME_MAX_VEHICLE_SYSTEM) << 49) |
-           (static_cast<std::uint64_t>(reserved) << 48) |
-           (static_cast<std::uint64_t>(function) << 40) |
+           (static_cast<std::uint64_t>(reserved) << 48) | (static_cast<std::uint64_t>(function) << 40) |
            (static_cast<std::uint64_t>(functionInstance & NAME_MAX_FUNCTION_INSTANCE) << 35) |
            (static_cast<std::uint64_t>(ecuInstance & NAME_MAX_ECU_INSTANCE) << 32) |
            (static_cast<std::uint64_t>(manufacturerCode & NAME_MAX_MANUFACTURER_CODE) << 21) |
@@ -93,9 +91,7 @@ struct Name {
   }
 
   /// Equal when the 64-bit values are equal (fields are compared as sent).
-  friend constexpr bool operator==(const Name& a, const Name& b) noexcept {
-    return a.toValue() == b.toValue();
-  }
+  friend constexpr bool operator==(const Name& a, const Name& b) noexcept { return a.toValue() == b.toValue(); }
 };
 
 /// J1939-81 priority rule: `a` wins an address contest against `b` when its 64-bit NAME is
