@@ -320,9 +320,9 @@ ExitCode runJ1939Request(const J1939RequestOptions& options, Streams streams) {
     reportError(streams.err, initResult.error().message);
     return ExitCode::Failure;
   }
-  // The rx subscription first: RouDi connects the ports of one process in the order they
-  // were created, so once can-tx is connected to the send publisher below, this
-  // subscription is connected too and sees the answer.
+  // The rx subscription first: RouDi connects a new subscription in its first discovery
+  // pass, and can-tx's subscription to the send publisher below takes at least that pass,
+  // so once can-tx is connected this subscription is too and sees the answer.
   const ipc::FrameTopic rxTopic{config.instance, bus->name, ipc::FrameStream::Received};
   auto subscriberResult = ipc::FrameSubscriber::create(rxTopic);
   if (!subscriberResult) {
