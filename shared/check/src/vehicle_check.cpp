@@ -1,6 +1,6 @@
 // The whole-vehicle checks (vehicle_check.hpp): loading the files, unused signals, FSM
-// conditions on signals nobody writes, the simulation's J1939-76 checks; the bus checks are
-// in bus_checks.cpp.
+// conditions on signals nobody writes, the simulation's J1939-76 checks, diagnostics.json
+// against the FSM and the catalog; the bus checks are in bus_checks.cpp.
 #include "openvcu/check/vehicle_check.hpp"
 
 #include <algorithm>
@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/config/diagnostics.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/j1939/acknowledgement.hpp"
 #include "openvcu/j1939/dm1.hpp"
@@ -91,6 +92,15 @@ VehicleFiles loadFiles(const config::VehicleConfig& vehicle, const signals::Cata
       skipped(vehicle.simulationFile);
     }
   }
+  if (!vehicle.diagnosticsFile.empty()) {
+    std::vector<std::string> states;
+    if (files.machine) {
+      for (const fsm::State& state : files.machine->states) states.push_back(state.name);
+    }
+    if (auto loaded = config::loadDiagnosticsConfig(vehicle, catalog, files.machine ? &states : nullptr, &out)) {
+      files.diagnostics = std::move(*loaded);
+    }
+  }
   if (const std::string dashboard = config::dashboardBeside(vehicle.path); !dashboard.empty()) {
     if (auto loaded = config::loadDashboardConfig(dashboard, catalog)) {
       files.dashboard = std::move(*loaded);
@@ -151,6 +161,9 @@ std::vector<bool> readSignals(const config::VehicleConfig& vehicle, const signal
     for (const config::DashboardItem& item : dashboard.items) mark(item.key);
   }
   if (files.simulation) mark(files.simulation->wakeSignal);
+  if (files.diagnostics) {
+    for (const config::DtcConfig& dtc : files.diagnostics->dtcs) mark(dtc.signal);
+  }
   if (files.schedule) {
     for (const schedule::SendGroup& group : files.schedule->groups) used[group.signal] = true;
     for (const schedule::SafeValue& safe : files.schedule->safeValues) used[safe.signal] = true;
@@ -177,7 +190,8 @@ void checkUnusedSignals(const config::VehicleConfig& vehicle, const signals::Cat
   // A file that does not load reads nothing here: counting would blame signals it may read.
   const bool complete = files.schedule && files.receive && (vehicle.fsmFile.empty() || files.machine) &&
                         (vehicle.simulationFile.empty() || files.simulation) &&
-                        (config::dashboardBeside(vehicle.path).empty() || files.dashboard);
+                        (config::dashboardBeside(vehicle.path).empty() || files.dashboard) &&
+                        (vehicle.diagnosticsFile.empty() || files.diagnostics);
   if (!complete) return;
   const std::vector<bool> used = readSignals(vehicle, catalog, files);
   for (std::size_t b = 0; b < vehicle.buses.size(); ++b) {
@@ -207,7 +221,7 @@ void checkUnusedSignals(const config::VehicleConfig& vehicle, const signals::Cat
     if (unused == 0) continue;
     std::string text = "bus '" + bus.name + "': " + std::to_string(unused) + " of " + std::to_string(total) +
                        " received signals are read by no file of the vehicle (FSM, dashboard, schedule, receive, "
-                       "simulation, GPIO map)";
+                       "simulation, diagnostics, GPIO map)";
     if (!unusedMessages.empty()) {
       text += "; " + std::to_string(unusedMessages.size()) + " of its " + std::to_string(receivedMessages) +
               " received messages " + (unusedMessages.size() == 1 ? "has" : "have") +
@@ -301,6 +315,28 @@ void checkSimulationMessages(const config::VehicleConfig& vehicle, const Vehicle
   }
 }
 
+/// A warning per FSM state whose entry raises a fault that no DTC of diagnostics.json maps
+/// (the file's own errors and warnings come from loadFiles()).
+void checkUnmappedFaultStates(const config::VehicleConfig& vehicle, const VehicleFiles& files,
+                              std::vector<Error>& out) {
+  if (!files.diagnostics || !files.machine) return;
+  for (std::size_t i = 0; i < files.machine->states.size(); ++i) {
+    const fsm::State& state = files.machine->states[i];
+    const auto raise = std::find_if(state.entry.begin(), state.entry.end(),
+                                    [](const fsm::Action& action) { return action.kind == fsm::ActionKind::RaiseFault; });
+    if (raise == state.entry.end()) continue;
+    const auto& dtcs = files.diagnostics->dtcs;
+    const bool mapped = std::any_of(dtcs.begin(), dtcs.end(), [&](const config::DtcConfig& dtc) {
+      return dtc.source == config::DtcSource::FsmState && dtc.fsmState == state.name;
+    });
+    if (mapped) continue;
+    out.push_back(Error{"state '" + state.name + "' raises fault '" + raise->name + "' but no DTC of " +
+                            vehicle.diagnosticsFile + " has \"fsmState\": \"" + state.name + "\"",
+                        Location::json(files.machine->file, config::JsonChecker::join("/states", i)),
+                        Severity::Warning});
+  }
+}
+
 }  // namespace
 
 std::vector<Error> checkVehicle(const config::VehicleConfig& vehicle, const signals::Catalog& catalog) {
@@ -311,6 +347,7 @@ std::vector<Error> checkVehicle(const config::VehicleConfig& vehicle, const sign
   checkBusLoads(vehicle, files, out);
   checkAddresses(vehicle, files, out);
   checkSimulationMessages(vehicle, files, out);
+  checkUnmappedFaultStates(vehicle, files, out);
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "openvcu/config/dashboard.hpp"
+#include "openvcu/config/diagnostics.hpp"
 #include "openvcu/config/receive.hpp"
 #include "openvcu/config/simulation.hpp"
 #include "openvcu/config/vehicle.hpp"
@@ -25,6 +26,9 @@ struct VehicleFiles {
   std::optional<config::ReceiveConfig> receive;
   std::optional<config::SimConfig> simulation;
   std::optional<config::DashboardConfig> dashboard;
+  /// diagnostics.json: no per-file check of `vcu check` loads it, so loadFiles() reports its
+  /// loader's errors and warnings itself (with the FSM's state names when the FSM loads).
+  std::optional<config::DiagnosticsConfig> diagnostics;
 };
 
 /// "74.0 %".

@@ -1,5 +1,7 @@
 #include "openvcu/config/vehicle.hpp"
 
+#include "bus_j1939.hpp"
+#include "openvcu/config/catalog.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/dbc/parser.hpp"
@@ -112,7 +114,7 @@ class Loader {
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
     m_check.onlyKeys(root, "", {"instance", "node", "dbc", "buses", "fsm", "schedule", "gpio", "simulation",
-                                "receive", "internalSignals", "lcm", "commandGroup", "comment"});
+                                "receive", "diagnostics", "internalSignals", "lcm", "commandGroup", "comment"});
     instance(root);
     dbcFiles(root);
     node(root);
@@ -187,12 +189,16 @@ class Loader {
     if (!list) return;
     if (list->empty()) m_check.error("/buses", "at least one bus is needed");
     std::unordered_map<std::size_t, std::string> owner;  // message index -> bus
+    std::optional<std::uint8_t> vcuAddress;  // the default J1939 preferredAddress
+    if (const dbc::Node* self = m_config.database.findNode(m_config.node)) {
+      vcuAddress = nodeAddress(m_config.database, *self);
+    }
     for (std::size_t i = 0; i < list->size(); ++i) {
       const std::string path = JsonChecker::join("/buses", i);
       const Json& item = (*list)[i];
       if (!m_check.isObject(item, path)) continue;
       m_check.onlyKeys(item, path, {"name", "link", "bitrate", "dataBitrate", "fd", "filter", "replay", "messages",
-                                      "comment"});
+                                      "j1939", "comment"});
       BusConfig bus;
       if (auto name = m_check.string(item, path, "name")) {
         if (!validInstanceName(*name)) m_check.error(path + "/name", "bus names are letters, digits, '-', '_'");
@@ -236,6 +242,7 @@ class Loader {
       }
       replay(item, path, bus);
       messages(item, path, bus, owner);
+      loadBusJ1939(item, path, vcuAddress, m_check, bus.j1939);
       m_config.buses.push_back(std::move(bus));
     }
   }
@@ -311,7 +318,8 @@ class Loader {
                                                                  {"schedule", &m_config.scheduleFile},
                                                                  {"gpio", &m_config.gpioFile},
                                                                  {"simulation", &m_config.simulationFile},
-                                                                 {"receive", &m_config.receiveFile}};
+                                                                 {"receive", &m_config.receiveFile},
+                                                                 {"diagnostics", &m_config.diagnosticsFile}};
     for (const auto& [key, target] : entries) {
       const auto file = m_check.string(root, "", key, false);
       if (!file) continue;

@@ -61,6 +61,7 @@ class VehicleFolder {
   std::string dashboard;   ///< empty: no dashboard.json
   std::string schedule;    ///< empty: the schedule's defaults
   std::string simulation;  ///< empty: no simulation file
+  std::string diagnostics; ///< empty: no diagnostics.json
   std::string busMessages{"\"all\""};
   std::string internalSignals{R"([{"name": "operator.Start"}, {"name": "mode.Eco"}])"};
 
@@ -107,11 +108,13 @@ class VehicleFolder {
                           internalSignals + R"(, "fsm": "fsm.json")";
     if (!schedule.empty()) vehicle += R"(, "schedule": "schedule.json")";
     if (!simulation.empty()) vehicle += R"(, "simulation": "simulation.json")";
+    if (!diagnostics.empty()) vehicle += R"(, "diagnostics": "diagnostics.json")";
     write("vehicle.json", vehicle + "}");
     write("fsm.json", fsm);
     if (!dashboard.empty()) write("dashboard.json", dashboard);
     if (!schedule.empty()) write("schedule.json", schedule);
     if (!simulation.empty()) write("simulation.json", simulation);
+    if (!diagnostics.empty()) write("diagnostics.json", diagnostics);
   }
 
   [[nodiscard]] std::string path() const { return (m_dir / "vehicle.json").string(); }
@@ -322,4 +325,59 @@ TEST_CASE("the shipped HHEA vehicle has no whole-vehicle error (#22)") {
   const auto diagnostics = check::checkVehicle(*vehicle, *catalog);
   MESSAGE(all(diagnostics));
   CHECK_MESSAGE(withSeverity(diagnostics, Severity::Error).empty(), all(diagnostics));
+}
+
+TEST_CASE("a DTC on a state the FSM does not have is an error at its JSON path (#24)") {
+  VehicleFolder sut;
+  sut.diagnostics = R"({"dtcs": [{"name": "run", "fsmState": "Runing", "spn": 520192, "fmi": 31}]})";
+  const auto diagnostics = sut.check();
+  REQUIRE_MESSAGE(diagnostics.size() == 1, all(diagnostics));
+  CHECK(diagnostics.front().severity == Severity::Error);
+  CHECK(diagnostics.front().location.file == sut.file("diagnostics.json"));
+  CHECK(diagnostics.front().location.jsonPath == "/dtcs/0/fsmState");
+  CHECK(contains(diagnostics.front().message, "has no state 'Runing'; did you mean 'Running'?"));
+}
+
+TEST_CASE("an FSM state raising a fault that no DTC maps is a warning at the state (#24)") {
+  VehicleFolder sut;
+  sut.fsm = R"({"initialState": "Standby", "states": [
+    {"name": "Standby", "transitions": [{"condition": {"BMS.BMS_Status.Mode": 2}, "nextState": "Fault"},
+                                        {"condition": {"internal.operator.Start": 1}, "nextState": "Hot"}]},
+    {"name": "Fault", "entry": [{"raise": "bms_fault", "severity": "error", "text": "BMS fault"}]},
+    {"name": "Hot", "entry": [{"raise": "hot", "severity": "warning", "text": "too hot"}]}]})";
+  sut.diagnostics = R"({"dtcs": [{"name": "bms", "fsmState": "Fault", "spn": 520192, "fmi": 12, "lamps": ["red"]}]})";
+  const auto warnings = withSeverity(sut.check(), Severity::Warning);
+  std::vector<Error> unmapped;
+  std::copy_if(warnings.begin(), warnings.end(), std::back_inserter(unmapped),
+               [](const Error& e) { return contains(e.message, "no DTC"); });
+  REQUIRE_MESSAGE(unmapped.size() == 1, all(warnings));
+  CHECK(unmapped.front().location.file == sut.file("fsm.json"));
+  CHECK(unmapped.front().location.jsonPath == "/states/2");
+  CHECK(contains(unmapped.front().message, "state 'Hot' raises fault 'hot'"));
+}
+
+TEST_CASE("the shipped HHEA diagnostics map every FSM state that raises a fault (#24)") {
+  const std::string path = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
+  auto vehicle = config::loadVehicleConfig(path);
+  REQUIRE_MESSAGE(vehicle.ok(), vehicle.error().toString());
+  REQUIRE_FALSE(vehicle->diagnosticsFile.empty());
+  auto catalog = config::buildCatalog(*vehicle);
+  REQUIRE(catalog.ok());
+  const auto diagnostics = check::checkVehicle(*vehicle, *catalog);
+  for (const Error& diagnostic : diagnostics) {
+    CHECK_MESSAGE(diagnostic.location.file != vehicle->diagnosticsFile, diagnostic.toString());
+    CHECK_MESSAGE(!contains(diagnostic.message, "no DTC"), diagnostic.toString());
+  }
+}
+
+TEST_CASE("a signal a DTC of diagnostics.json reads is not 'read by no file' (#24)") {
+  VehicleFolder sut;
+  sut.dashboard = R"({"items": [{"key": "BMS.BMS_Status.SOC"}, {"key": "INV.INV_Status.Speed"}]})";
+  const auto withoutDtc = sut.check();
+  REQUIRE_MESSAGE(withoutDtc.size() == 1, all(withoutDtc));  // BMS_Temps.Temp is read by no file
+  CHECK(contains(withoutDtc.front().message, "BMS_Temps"));
+  sut.diagnostics = R"({"dtcs": [{"name": "hot", "signal": "BMS.BMS_Temps.Temp", "activeWhen": {"gt": 90},
+                                  "spn": 520192, "fmi": 0, "lamps": ["amber"]}]})";
+  const auto withDtc = sut.check();
+  CHECK_MESSAGE(withDtc.empty(), all(withDtc));
 }

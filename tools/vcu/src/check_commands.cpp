@@ -149,7 +149,7 @@ std::vector<std::string> namedFiles(const std::string& vehiclePath) {
   auto json = config::readJsonFile(vehiclePath);
   if (!json || !json->is_object()) return files;
   const fs::path directory = fs::path(vehiclePath).parent_path();
-  for (const char* key : {"fsm", "schedule", "simulation", "receive"}) {
+  for (const char* key : {"fsm", "schedule", "simulation", "receive", "diagnostics"}) {
     const auto it = json->find(key);
     if (it == json->end() || !it->is_string()) continue;
     const fs::path file(it->get<std::string>());
@@ -264,6 +264,8 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
           dashboard, [&] { return config::loadDashboardConfig(dashboard, stack->catalog); }, tally, options.quiet,
           streams.err);
     }
+    // diagnostics.json is loaded by the whole-vehicle check (it needs the FSM's states)
+    if (!vehicle.diagnosticsFile.empty()) tally.add(vehicle.diagnosticsFile);
     // The files together (docs/config.md, "Whole-vehicle checks"), as every service does at start.
     for (const Error& diagnostic : check::checkVehicle(vehicle, stack->catalog)) {
       tally.report(diagnostic, options.quiet, streams.err);

@@ -12,7 +12,8 @@
 // What is checked (each diagnostic names the file and the JSON path or DBC line):
 //   - unused signals: per bus one warning counting the received DBC signals no file of the
 //     vehicle reads (FSM conditions and copies, dashboard, schedule, receive forwarding and
-//     J1939-76 checks, simulation), naming the first messages none of whose signals is read;
+//     J1939-76 checks, simulation, diagnostics), naming the first messages none of whose
+//     signals is read;
 //   - FSM conditions on signals nobody writes (catalog ownership, FSM actions, GPIO inputs,
 //     operator switches, the schedule, can-rx's DM1 decoding): a warning per signal;
 //   - expected bus load per bus: the schedule's cyclic frames plus every other node's cyclic
@@ -25,7 +26,10 @@
 //     message's, is an error; two J1939 messages with one PGN, destination and source are
 //     an error from two nodes and a warning from one (priority-only twins; the VCU's own
 //     are can-tx's safety-identity warnings);
-//   - a simulation J1939-76 check on a message no configured bus carries: an error.
+//   - a simulation J1939-76 check on a message no configured bus carries: an error;
+//   - diagnostics.json: its loader's errors and warnings with the FSM's state names (a DTC's
+//     "fsmState" must name one) and the catalog, and a warning per FSM state whose entry
+//     raises a fault that no DTC maps.
 // Messages the schedule, receive or simulation file names that are not in the DBC are the
 // loaders' errors (with file and JSON path); these checks do not repeat them. A file that
 // does not load is left out of the checks that need it, with one note saying so.

@@ -8,18 +8,20 @@
 //     "dbc": ["hhea.dbc"],
 //     "buses": [{"name": "vehicle", "link": "sim:vehicle", "bitrate": 500000, "messages": "all"}],
 //     "fsm": "fsm.json", "schedule": "schedule.json", "gpio": "gpio.json", "simulation": "simulation.json",
-//     "receive": "receive.json",
+//     "receive": "receive.json", "diagnostics": "diagnostics.json",
 //     "internalSignals": [{"name": "operator.Start", "min": 0, "max": 1, "values": {"0": "Stop", "1": "Start"}}],
 //     "lcm": "udpm://239.255.76.67:7667?ttl=0"
 //   }
 // Reference: docs/config.md.
 
 #include "openvcu/can/link.hpp"
+#include "openvcu/config/bus_j1939.hpp"
 #include "openvcu/config/gpio.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/dbc/model.hpp"
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -58,6 +60,7 @@ struct BusConfig {
   BusFilter filter{BusFilter::Dbc};
   ReplaySettings replay;
   std::vector<std::size_t> messages;     ///< indices into VehicleConfig::database.messages
+  std::optional<BusJ1939> j1939;         ///< this VCU's J1939-81 NAME and address claim here
 
   /// The link settings this bus gives every service that opens it (no filters: the
   /// receiver adds its own).
@@ -89,6 +92,7 @@ struct VehicleConfig {
   std::string gpioFile;
   std::string simulationFile;
   std::string receiveFile;     ///< can-rx's receive settings (receive.json); empty: defaults
+  std::string diagnosticsFile; ///< the VCU's own DTCs and identification (diagnostics.json); empty: none
   std::vector<InternalSignal> internalSignals;
   GpioMap gpio;                ///< loaded from gpioFile; empty when not configured
   std::string lcmUrl{DEFAULT_LCM_URL};

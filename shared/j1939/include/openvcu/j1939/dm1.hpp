@@ -28,6 +28,8 @@ namespace openvcu::j1939 {
 
 inline constexpr std::uint32_t PGN_DM1 = 0xFECA;  ///< SAE J1939-73 PGN 65226 DM1 active DTCs
 inline constexpr std::uint32_t PGN_DM2 = 0xFECB;  ///< SAE J1939-73 PGN 65227 DM2 previously active DTCs
+inline constexpr std::uint32_t PGN_DM3 = 0xFECC;  ///< SAE J1939-73 PGN 65228 DM3 clear previously active DTCs
+inline constexpr std::uint32_t PGN_DM11 = 0xFED3; ///< SAE J1939-73 PGN 65235 DM11 clear active DTCs
 inline constexpr std::size_t DM1_LAMP_BYTES = 2;  ///< lamp status and lamp flash
 inline constexpr std::size_t DM1_DTC_BYTES = 4;   ///< one DTC record
 inline constexpr std::size_t DM1_MIN_LENGTH = DM1_LAMP_BYTES + DM1_DTC_BYTES;  ///< 6
