@@ -1,8 +1,8 @@
 // `vcu j1939` against the sandbox (issue 24). The test stands in for the services: it
 // publishes vcu-can-tx's J1939 view on LCM, takes the Request from can-tx's send stream
 // and answers on can-rx's rx stream, as a node on the bus would. The configuration is
-// tests/data/integration's with a DBC whose nodes have J1939 addresses (VCU 0x27, BMS 0x21),
-// written into the sandbox's /tmp.
+// tests/data/integration's with a DBC whose nodes have J1939 addresses (VCU 0x27, BMS 0x21)
+// and a "j1939" object on the bus (preferred address 0x28), written into the sandbox's /tmp.
 
 #include <unistd.h>
 
@@ -26,7 +26,8 @@ constexpr std::uint64_t BMS_NAME = 0x8000A00000200007;  // identity 7, manufactu
 constexpr auto ANSWER_TIMEOUT = std::chrono::milliseconds(5000);
 
 /// small.dbc with NmStationAddress for both nodes, and a vehicle.json on it (instance itest,
-/// sim:vehicle); returns the vehicle.json path.
+/// sim:vehicle with a "j1939" object: VCU_NAME, preferred address 0x28); returns the
+/// vehicle.json path.
 std::string writeJ1939Config() {
   const fs::path folder = fs::temp_directory_path() / ("vcu-j1939-" + std::to_string(::getpid()));
   fs::create_directories(folder);
@@ -54,7 +55,10 @@ VAL_ 2566844961 Mode 0 "Off" 1 "Normal" 2 "Fault" ;
   "instance": "itest",
   "node": "VCU",
   "dbc": "j1939.dbc",
-  "buses": [{"name": "vehicle", "link": "sim:vehicle", "bitrate": 250000, "messages": "all"}]
+  "buses": [{"name": "vehicle", "link": "sim:vehicle", "bitrate": 250000, "messages": "all",
+             "j1939": {"name": {"identityNumber": 1, "manufacturerCode": 250, "function": 130,
+                                "vehicleSystem": 0, "industryGroup": 2, "arbitraryAddressCapable": true},
+                       "preferredAddress": 40}}]
 })";
   return (folder / "vehicle.json").string();
 }
@@ -243,18 +247,18 @@ TEST_CASE("vcu j1939 request sends the Request through can-tx and decodes the si
   CHECK_MESSAGE(!contains(output, "09 09"), output);
 }
 
-TEST_CASE("vcu j1939 request from the DBC node's address reassembles a BAM answer and splits identification fields") {
+TEST_CASE("vcu j1939 request from the bus's preferred address reassembles a BAM answer and splits identification fields") {
   SKIP_UNLESS_ISOLATED();
   harness::Harness sut;
   REQUIRE_STATUS(sut.startRoudi());
   const std::string config = writeJ1939Config();
   BusPeer peer;
-  // No --from and no J1939 view: the VCU's NmStationAddress (0x27) after 1.2 s of listening.
+  // No --from and no J1939 view: the bus's j1939.preferredAddress (0x28) after 1.2 s of listening.
   harness::Process& vcu = startVcu(sut, {"j1939", "request", "65259", "--to", "0x21"}, config);
 
   const auto request = peer.nextRequest(ANSWER_TIMEOUT);
   REQUIRE_MESSAGE(request, vcu.output());
-  CHECK(request->id == 0x18EA2127u);
+  CHECK(request->id == 0x18EA2128u);
   // Component Identification, 20 bytes "ACME*VCU1*SN4242*U7*" by BAM: 3 packets.
   peer.answer({extendedFrame(0x1CECFF21, {0x20, 20, 0, 3, 0xFF, 0xEB, 0xFE, 0x00}),
                extendedFrame(0x1CEBFF21, {1, 'A', 'C', 'M', 'E', '*', 'V', 'C'}),

@@ -1,4 +1,4 @@
-// `vcu j1939` without a stack (issue 24): the NAME decoder, the PGN and address parsers,
+// `vcu j1939` without a stack (issue 24): the PGN and address parsers,
 // and the argument errors, all answered before any IPC. The commands against a stack are
 // in tests/integration/test_j1939_commands.cpp.
 
@@ -15,26 +15,6 @@ namespace {
 const std::string CONFIG = std::string(OPENVCU_SOURCE_DIR) + "/tests/data/integration/vehicle.json";
 
 }  // namespace
-
-TEST_CASE("decodeJ1939Name splits a NAME into its J1939-81 fields") {
-  // industry group 2, AAC, function 130, manufacturer 250, identity 1; ECU instance 5,
-  // function instance 3, vehicle system 0x7F, vehicle system instance 9
-  constexpr std::uint64_t NAME = 0xA9FE821D1F400001;
-
-  const J1939NameFields sut = decodeJ1939Name(NAME);
-
-  CHECK(sut.identityNumber == 1);
-  CHECK(sut.manufacturerCode == 250);
-  CHECK(sut.ecuInstance == 5);
-  CHECK(sut.functionInstance == 3);
-  CHECK(sut.function == 130);
-  CHECK(sut.vehicleSystem == 0x7F);
-  CHECK(sut.vehicleSystemInstance == 9);
-  CHECK(sut.industryGroup == 2);
-  CHECK(sut.arbitraryAddressCapable);
-  CHECK_FALSE(decodeJ1939Name(0x7FFFFFFFFFFFFFFF).arbitraryAddressCapable);
-  CHECK(decodeJ1939Name(0x7FFFFFFFFFFFFFFF).industryGroup == 7);
-}
 
 TEST_CASE("parsePgn and parseJ1939Address take decimal and 0x hex within range and nothing else") {
   CHECK(parsePgn("65242") == 65242u);

@@ -19,6 +19,7 @@
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/j1939/dm1.hpp"
 #include "openvcu/j1939/id.hpp"
+#include "openvcu/j1939/name.hpp"
 #include "text_table.hpp"
 
 namespace openvcu::cli {
@@ -38,8 +39,9 @@ constexpr const char* SHOW_FOOTER =
     "address); the VCU's own DTCs (J1939-73: name, SPN, FMI, occurrence count, active in DM1\n"
     "or previously active in DM2) and the DM1 lamps (protect, amber warning, red stop,\n"
     "malfunction).\n"
-    "It stops when every bus of the configuration was heard, or 1.2 s after the first bus\n"
-    "(can-tx sends all buses each second), or after --timeout seconds (default 3).\n"
+    "It stops when every bus with a \"j1939\" object in the configuration was heard (every\n"
+    "bus when none has one), or 1.2 s after the first bus (can-tx sends all buses each\n"
+    "second), or after --timeout seconds (default 3).\n"
     "--bus B waits for that bus only. --json prints one JSON document:\n"
     "  {\"instance\": \"hhea\", \"buses\": [{\"bus\": \"vehicle\", \"claimState\": \"claimed\", ...}]}\n"
     "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
@@ -80,7 +82,7 @@ void appendLampsJson(std::string& out, std::uint8_t lamps) {
 }
 
 std::string nameFieldsText(std::uint64_t name) {
-  const J1939NameFields fields = decodeJ1939Name(name);
+  const j1939::Name fields = j1939::Name::fromValue(name);
   return "identity number " + std::to_string(fields.identityNumber) + ", manufacturer code " +
          std::to_string(fields.manufacturerCode) + ", ECU instance " + std::to_string(fields.ecuInstance) +
          ", function instance " + std::to_string(fields.functionInstance) + ", function " +
@@ -91,7 +93,7 @@ std::string nameFieldsText(std::uint64_t name) {
 }
 
 void appendNameFieldsJson(std::string& out, std::uint64_t name) {
-  const J1939NameFields fields = decodeJ1939Name(name);
+  const j1939::Name fields = j1939::Name::fromValue(name);
   out += "{\"identityNumber\": " + std::to_string(fields.identityNumber) +
          ", \"manufacturerCode\": " + std::to_string(fields.manufacturerCode) +
          ", \"ecuInstance\": " + std::to_string(fields.ecuInstance) +
@@ -190,21 +192,6 @@ void addShowOptions(CLI::App& command, J1939ShowOptions& options) {
 
 }  // namespace
 
-J1939NameFields decodeJ1939Name(std::uint64_t name) noexcept {
-  const auto bits = [name](int first, int count) { return (name >> first) & ((std::uint64_t{1} << count) - 1); };
-  J1939NameFields fields;
-  fields.identityNumber = static_cast<std::uint32_t>(bits(0, 21));
-  fields.manufacturerCode = static_cast<std::uint16_t>(bits(21, 11));
-  fields.ecuInstance = static_cast<std::uint8_t>(bits(32, 3));
-  fields.functionInstance = static_cast<std::uint8_t>(bits(35, 5));
-  fields.function = static_cast<std::uint8_t>(bits(40, 8));
-  fields.vehicleSystem = static_cast<std::uint8_t>(bits(49, 7));
-  fields.vehicleSystemInstance = static_cast<std::uint8_t>(bits(56, 4));
-  fields.industryGroup = static_cast<std::uint8_t>(bits(60, 3));
-  fields.arbitraryAddressCapable = bits(63, 1) != 0;
-  return fields;
-}
-
 namespace {
 
 /// An unsigned number, decimal or 0x hex, at most `maximum`; else empty.
@@ -273,8 +260,8 @@ ExitCode runJ1939Show(const J1939ShowOptions& options, Streams streams) {
     return ExitCode::Failure;
   }
   ipc::EventBus& events = *eventsResult;
-  // The configuration does not say yet which buses run J1939 (no "j1939" object in
-  // BusConfig): the buses are those heard, every configured bus at most.
+  // Every view heard is shown (can-tx may publish a bus without a claim: its DTCs); the
+  // wait ends once each bus with a "j1939" object was heard (every bus when none has one).
   std::map<std::string, ipc::J1939Network> latest;  // by bus, sorted for the output
   auto subscribed = events.onJ1939Network([&](const ipc::J1939Network& network) {
     if (!options.bus.empty() && network.bus != options.bus) return;
@@ -286,11 +273,25 @@ ExitCode runJ1939Show(const J1939ShowOptions& options, Streams streams) {
     reportError(streams.err, subscribed.error().message);
     return ExitCode::Failure;
   }
-  const std::size_t wanted = options.bus.empty() ? config.buses.size() : 1;
+  std::set<std::string> expected;
+  for (const config::BusConfig& bus : config.buses) {
+    if (bus.j1939 && options.bus.empty()) expected.insert(bus.name);
+  }
+  if (!options.bus.empty()) {
+    expected.insert(options.bus);
+  } else if (expected.empty()) {
+    for (const config::BusConfig& bus : config.buses) expected.insert(bus.name);
+  }
+  const auto allHeard = [&] {
+    for (const std::string& bus : expected) {
+      if (latest.count(bus) == 0) return false;
+    }
+    return true;
+  };
   auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
                                                          std::chrono::duration<double>(options.timeoutSeconds));
   bool firstHeard = false;
-  while (latest.size() < wanted) {
+  while (!allHeard()) {
     const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) break;
     if (events.handle(left) == ipc::HandleResult::Failed) break;

@@ -2,8 +2,8 @@
 // `vcu j1939`: the J1939 networks of a running stack (issue 24).
 //
 //   vcu j1939                       vcu-can-tx's view of each bus (LCM OPENVCU_<INSTANCE>_J1939):
-//   bus vehicle: claimed address 0x27 (39), NAME 0xA00082001F400001
-//     ...  the NAME's fields, the other nodes (with their DBC node), the VCU's DTCs and lamps
+//   bus vehicle: claimed, address 0x27 (39), NAME 0xA00082001F400001
+//     ...  the NAME's fields (j1939::Name), the other nodes (with their DBC node), the VCU's DTCs and lamps
 //
 //   vcu j1939 request 65242 --to 0x21   a J1939 Request through can-tx ("send" stream), the
 //   PGN 0x0FEDA (65242) from 0x21 (33) BMS, 9 bytes: 02 31 2E 30 ...  answer from can-rx's "rx"
@@ -39,22 +39,6 @@ struct J1939RequestOptions {
   std::string from;  ///< source address; empty: the VCU's (J1939 view, else the DBC node's)
   double timeoutSeconds{DEFAULT_J1939_REQUEST_TIMEOUT_SECONDS};
 };
-
-/// A 64-bit NAME's fields (SAE J1939-81 bit layout, bit 0 = least significant).
-struct J1939NameFields {
-  std::uint32_t identityNumber{};          ///< bits 0-20
-  std::uint16_t manufacturerCode{};        ///< bits 21-31
-  std::uint8_t ecuInstance{};              ///< bits 32-34
-  std::uint8_t functionInstance{};         ///< bits 35-39
-  std::uint8_t function{};                 ///< bits 40-47
-  std::uint8_t vehicleSystem{};            ///< bits 49-55 (bit 48 is reserved)
-  std::uint8_t vehicleSystemInstance{};    ///< bits 56-59
-  std::uint8_t industryGroup{};            ///< bits 60-62
-  bool arbitraryAddressCapable{};          ///< bit 63
-};
-
-/// 0xA00082001F400001 -> {identity 1, manufacturer 250, function 130, industry group 2, AAC yes, ...}.
-[[nodiscard]] J1939NameFields decodeJ1939Name(std::uint64_t name) noexcept;
 
 /// A PGN, decimal ("65242") or hex ("0xFEDA"), 0..0x3FFFF (18 bits); else empty.
 [[nodiscard]] std::optional<std::uint32_t> parsePgn(std::string_view text) noexcept;

@@ -52,8 +52,9 @@ constexpr const char* REQUEST_FOOTER =
     "first) for PGN to address ADDR (--to; 255 = global) on bus --bus (default: the\n"
     "configuration's only bus) through vcu-can-tx (the bus's send stream, as 'vcu send'),\n"
     "from the VCU's address: --from, else the claimed address in vcu-can-tx's J1939 view\n"
-    "of the bus (listened to for up to 1.2 s), else the NmStationAddress of the\n"
-    "configuration's node in the DBC. PGN and addresses: decimal or 0x hex.\n"
+    "of the bus (listened to for up to 1.2 s), else the bus's j1939.preferredAddress, else\n"
+    "the NmStationAddress of the configuration's node in the DBC. PGN and addresses:\n"
+    "decimal or 0x hex.\n"
     "It then listens to the frames vcu-can-rx received on that bus (rx stream, subscribed\n"
     "before the request goes out) for --timeout seconds (default 2) and prints:\n"
     "- a frame of that PGN from ADDR, or a transport-protocol transfer of it (BAM, or\n"
@@ -310,11 +311,12 @@ ExitCode runJ1939Request(const J1939RequestOptions& options, Streams streams) {
     if (bus == nullptr) return ExitCode::Failure;
   }
   if (!maybeFrom) maybeFrom = addressFromView(config, bus->name);
+  if (!maybeFrom && bus->j1939) maybeFrom = bus->j1939->preferredAddress;
   if (!maybeFrom) maybeFrom = nodeAddressOf(config);
   if (!maybeFrom) {
     reportError(streams.err, "no source address: vcu-can-tx's J1939 view of bus '" + bus->name +
-                                 "' names no claimed address and DBC node '" + config.node +
-                                 "' has no NmStationAddress; give --from");
+                                 "' names no claimed address, the bus has no \"j1939\" object and DBC node '" +
+                                 config.node + "' has no NmStationAddress; give --from");
     return ExitCode::Failure;
   }
   const std::uint8_t from = *maybeFrom;
