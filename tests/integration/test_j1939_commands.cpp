@@ -187,8 +187,9 @@ TEST_CASE("vcu j1939 --json prints can-tx's view: claim, NAME fields, nodes with
   CHECK(bus["nodes"][0]["dbcNode"] == "BMS");
   CHECK(bus["nodes"][1]["dbcNode"].is_null());
   REQUIRE(bus["dtcs"].size() == 2);
-  CHECK(bus["dtcs"][0] == nlohmann::json::parse(
-                              R"({"name": "contactor_weld", "spn": 4000, "fmi": 7, "occurrences": 2, "active": true})"));
+  CHECK(
+      bus["dtcs"][0] ==
+      nlohmann::json::parse(R"({"name": "contactor_weld", "spn": 4000, "fmi": 7, "occurrences": 2, "active": true})"));
   CHECK(bus["dtcs"][1]["active"] == false);
   CHECK(bus["lamps"]["amberWarning"] == "On");
   CHECK(bus["lamps"]["redStop"] == "Off");
@@ -213,8 +214,9 @@ TEST_CASE("vcu j1939 prints the view as text and, without one, exits 1 saying wh
   CHECK_MESSAGE(contains(output, "contactor_weld     4000    7    2            active"), output);
   CHECK_MESSAGE(contains(output, "precharge_timeout  520200  14   1            previously active"), output);
   CHECK_MESSAGE(silent.exitCode() == 1, silent.describe());
-  CHECK_MESSAGE(contains(silent.err, "no J1939 view from vcu-can-tx within 0.3 s on OPENVCU_ITEST_J1939: is it "
-                                     "running, does vehicle.json give a bus a \"j1939\" object?"),
+  CHECK_MESSAGE(contains(silent.err,
+                         "no J1939 view from vcu-can-tx within 0.3 s on OPENVCU_ITEST_J1939: is it "
+                         "running, does vehicle.json give a bus a \"j1939\" object?"),
                 silent.err);
 }
 
@@ -241,13 +243,15 @@ TEST_CASE("vcu j1939 request sends the Request through can-tx and decodes the si
   REQUIRE_MESSAGE(exit, vcu.output());
   CHECK_MESSAGE(exit->code == 0, vcu.output());
   const std::string output = fullOutput(vcu);
-  CHECK_MESSAGE(contains(output, "PGN 0x0FEF2 (65266) from 0x21 (33) BMS, 8 bytes: 01 02 03 04 05 06 07 08\n"
-                                 "  Status: SOC=0.5 %, Mode=2 \"Fault\"\n"),
+  CHECK_MESSAGE(contains(output,
+                         "PGN 0x0FEF2 (65266) from 0x21 (33) BMS, 8 bytes: 01 02 03 04 05 06 07 08\n"
+                         "  Status: SOC=0.5 %, Mode=2 \"Fault\"\n"),
                 output);
   CHECK_MESSAGE(!contains(output, "09 09"), output);
 }
 
-TEST_CASE("vcu j1939 request from the bus's preferred address reassembles a BAM answer and splits identification fields") {
+TEST_CASE(
+    "vcu j1939 request from the bus's preferred address reassembles a BAM answer and splits identification fields") {
   SKIP_UNLESS_ISOLATED();
   harness::Harness sut;
   REQUIRE_STATUS(sut.startRoudi());
@@ -269,10 +273,11 @@ TEST_CASE("vcu j1939 request from the bus's preferred address reassembles a BAM 
   REQUIRE_MESSAGE(exit, vcu.output());
   CHECK_MESSAGE(exit->code == 0, vcu.output());
   const std::string output = fullOutput(vcu);
-  CHECK_MESSAGE(contains(output, "PGN 0x0FEEB (65259) from 0x21 (33) BMS, 20 bytes by BAM: 41 43 4D 45 2A 56 43 55 "
-                                 "31 2A 53 4E 34 32 34 32 2A 55 37 2A\n"
-                                 "  component identification: make \"ACME\", model \"VCU1\", serial number "
-                                 "\"SN4242\", unit number \"U7\"\n"),
+  CHECK_MESSAGE(contains(output,
+                         "PGN 0x0FEEB (65259) from 0x21 (33) BMS, 20 bytes by BAM: 41 43 4D 45 2A 56 43 55 "
+                         "31 2A 53 4E 34 32 34 32 2A 55 37 2A\n"
+                         "  component identification: make \"ACME\", model \"VCU1\", serial number "
+                         "\"SN4242\", unit number \"U7\"\n"),
                 output);
 }
 
@@ -287,16 +292,16 @@ TEST_CASE("vcu j1939 request prints a NACK and exits 1, and says so when nothing
   REQUIRE_MESSAGE(peer.nextRequest(ANSWER_TIMEOUT), vcu.output());
   peer.answer({extendedFrame(0x18E8FF21, {0x01, 0xFF, 0xFF, 0xFF, 0xF9, 0xDA, 0xFE, 0x00})});
   const auto exit = vcu.waitForExit(ANSWER_TIMEOUT);
-  const auto silent =
-      sut.run({VCU, "j1939", "request", "65242", "--to", "0x22", "--from", "0xF9", "--timeout", "0.3", "--config",
-               config});
+  const auto silent = sut.run(
+      {VCU, "j1939", "request", "65242", "--to", "0x22", "--from", "0xF9", "--timeout", "0.3", "--config", config});
 
   REQUIRE_MESSAGE(exit, vcu.output());
   const std::string output = fullOutput(vcu);
   CHECK_MESSAGE(exit->code == 1, output);
   CHECK_MESSAGE(contains(output, "NACK from 0x21 (33) BMS for PGN 0x0FEDA (65242)\n"), output);
   CHECK_MESSAGE(silent.exitCode() == 1, silent.describe());
-  CHECK_MESSAGE(contains(silent.err, "vcu: error: no answer to the request for PGN 0x0FEDA (65242) to 0x22 (34) "
-                                     "from 0xF9 (249) within 0.3 s on openvcu/itest.vehicle/rx"),
+  CHECK_MESSAGE(contains(silent.err,
+                         "vcu: error: no answer to the request for PGN 0x0FEDA (65242) to 0x22 (34) "
+                         "from 0xF9 (249) within 0.3 s on openvcu/itest.vehicle/rx"),
                 silent.err);
 }

@@ -173,8 +173,8 @@ void appendNetworkJson(std::string& out, const ipc::J1939Network& network, const
     out += i == 0 ? "{\"name\": " : ", {\"name\": ";
     appendJsonString(out, dtc.name);
     out += ", \"spn\": " + std::to_string(dtc.spn) + ", \"fmi\": " + std::to_string(dtc.fmi) +
-           ", \"occurrences\": " + std::to_string(dtc.occurrences) + ", \"active\": " +
-           (dtc.active ? "true" : "false") + "}";
+           ", \"occurrences\": " + std::to_string(dtc.occurrences) +
+           ", \"active\": " + (dtc.active ? "true" : "false") + "}";
   }
   out += "], \"lamps\": ";
   appendLampsJson(out, network.lamps);
@@ -210,7 +210,9 @@ std::optional<std::uint32_t> parseUnsigned(std::string_view text, std::uint32_t 
 
 }  // namespace
 
-std::optional<std::uint32_t> parsePgn(std::string_view text) noexcept { return parseUnsigned(text, j1939::PGN_MASK); }
+std::optional<std::uint32_t> parsePgn(std::string_view text) noexcept {
+  return parseUnsigned(text, j1939::PGN_MASK);
+}
 
 std::optional<std::uint8_t> parseJ1939Address(std::string_view text) noexcept {
   const auto value = parseUnsigned(text, 0xFF);

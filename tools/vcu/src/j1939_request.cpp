@@ -184,7 +184,7 @@ class AnswerDecoder {
     for (const j1939::Dtc& dtc : maybeDm->activeDtcs()) {
       out += "    SPN " + std::to_string(dtc.spn) + " FMI " + std::to_string(dtc.fmi) + " occurrences " +
              (dtc.occurrenceCount == j1939::DTC_MAX_OCCURRENCE_COUNT ? std::string("n/a")
-                                                                      : std::to_string(dtc.occurrenceCount)) +
+                                                                     : std::to_string(dtc.occurrenceCount)) +
              "\n";
     }
   }
@@ -202,7 +202,8 @@ class AnswerDecoder {
       out += signal.displayName + "=";
       appendNumber(out, value.physical, false);
       const std::string* valueText = nullptr;
-      if (value.kind == dbc::RawKind::Unsigned) valueText = signal.describe(static_cast<std::int64_t>(value.rawUnsigned));
+      if (value.kind == dbc::RawKind::Unsigned)
+        valueText = signal.describe(static_cast<std::int64_t>(value.rawUnsigned));
       if (value.kind == dbc::RawKind::Signed) valueText = signal.describe(value.rawSigned);
       if (valueText != nullptr) {
         out += " \"" + *valueText + "\"";
@@ -301,8 +302,8 @@ ExitCode runJ1939Request(const J1939RequestOptions& options, Streams streams) {
   const config::BusConfig* bus = nullptr;
   if (options.bus.empty()) {
     if (config.buses.size() != 1) {
-      reportError(streams.err, config.path + " has " + std::to_string(config.buses.size()) +
-                                   " buses: name one with --bus");
+      reportError(streams.err,
+                  config.path + " has " + std::to_string(config.buses.size()) + " buses: name one with --bus");
       return ExitCode::Usage;
     }
     bus = &config.buses.front();
@@ -397,8 +398,8 @@ ExitCode runJ1939Request(const J1939RequestOptions& options, Streams streams) {
       if (!frame.extended() || (frame.flags & (can::FLAG_ERROR | can::FLAG_RTR)) != 0) continue;
       const j1939::Id id = j1939::Id::fromCanId(frame.id);
       if (id.pgn() == pgn && fromPeer(id.sourceAddress)) {
-        out += pgnText(pgn) + " from " + addressText(config, id.sourceAddress) + ", " +
-               std::to_string(frame.length) + " bytes: " + hexBytes(frame.payload()) + "\n";
+        out += pgnText(pgn) + " from " + addressText(config, id.sourceAddress) + ", " + std::to_string(frame.length) +
+               " bytes: " + hexBytes(frame.payload()) + "\n";
         out += decoder.decode(frame.id, pgn, frame.payload());
         ++dataAnswers;
         ++answers;
@@ -421,10 +422,9 @@ ExitCode runJ1939Request(const J1939RequestOptions& options, Streams streams) {
         out += pgnText(pgn) + " from " + addressText(config, message.source) + ", " +
                std::to_string(message.data.size()) + " bytes by " + (message.broadcast ? "BAM" : "RTS/CTS") + ": " +
                hexBytes(message.data) + "\n";
-        out += decoder.decode(j1939::Id::fromPgn(pgn, j1939::REQUEST_DEFAULT_PRIORITY, message.source,
-                                                 message.destination)
-                                  .toCanId(),
-                              pgn, message.data);
+        out += decoder.decode(
+            j1939::Id::fromPgn(pgn, j1939::REQUEST_DEFAULT_PRIORITY, message.source, message.destination).toCanId(),
+            pgn, message.data);
         ++dataAnswers;
         ++answers;
       }
