@@ -11,6 +11,7 @@
 #include "fsm_commands.hpp"
 #include "gpio_commands.hpp"
 #include "init_command.hpp"
+#include "j1939_commands.hpp"
 #include "record_commands.hpp"
 #include "sim_commands.hpp"
 #include "top_commands.hpp"
@@ -52,11 +53,15 @@ std::string commandPath(const CLI::App* app) {
   return parent.empty() ? app->get_name() : parent + ' ' + app->get_name();
 }
 
-/// The innermost command given that has subcommands but none was chosen, or nullptr.
+/// The innermost command given that has subcommands but none was chosen, or nullptr. A
+/// command that also runs alone (`vcu j1939` shows) says so with require_subcommand(0, 1).
 const CLI::App* commandWithoutSubcommand(const CLI::App& app) {
   if (app.get_subcommands({}).empty()) return nullptr;  // a leaf command: it ran
   const auto chosen = app.get_subcommands();
-  if (chosen.empty()) return &app;
+  if (chosen.empty()) {
+    const bool runsAlone = app.get_require_subcommand_min() == 0 && app.get_require_subcommand_max() == 1;
+    return runsAlone ? nullptr : &app;
+  }
   return commandWithoutSubcommand(*chosen.front());
 }
 
@@ -83,6 +88,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerCheckCommands(app, context);
     registerTraceCommands(app, context);
     registerInitCommand(app, context);
+    registerJ1939Commands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);
