@@ -318,8 +318,17 @@ TEST_CASE("network: a cleared fault is in DM2 with count 1 and an accepted DM3 c
   REQUIRE(crash != saved->end());
   CHECK(crash->occurrenceCount == 1);
   CHECK_FALSE(f.sut->takeCountsToSave());
+  f.port.frames.clear();
   f.enterState(f.fsmStates.front());
-  f.runUntil(START + 200 * MS);
+  f.runUntil(START + 1000 * MS);  // the on-change DM1 at START counts for this period
+  const auto onChange = f.port.withId(DM1_FROM_21);
+  REQUIRE(onChange.size() == 1);
+  const auto cleared = j1939::decodeDm1(bytes(onChange[0]));
+  CHECK((!cleared || cleared->dtcCount == 0));
+  const auto view = f.sut->snapshot();
+  REQUIRE(view.size() == 1);
+  REQUIRE(view[0].dtcs.size() == 1);
+  CHECK(view[0].dtcs[0] == ipc::J1939Dtc{"crash", CRASH_SPN, CRASH_FMI, 1, false});
   f.port.frames.clear();
   CHECK(f.request(j1939::PGN_DM2, TOOL, true));
   auto dm2s = f.port.withId(DM2_FROM_21);
@@ -460,4 +469,25 @@ TEST_CASE("network: the snapshot shows the claim and the nodes seen and the DTCs
   CHECK(view[0].dtcs[0] == ipc::J1939Dtc{"crash", CRASH_SPN, CRASH_FMI, 1, true});
   CHECK((view[0].lamps & 0x30) == 0x10);  // red stop on
   CHECK(f.sut->takeChanged());
+}
+
+TEST_CASE("network: restored occurrence counts continue when the fault comes back") {
+  Fixture f;
+  const j1939::Dtc restored[] = {{CRASH_SPN, CRASH_FMI, 4, false}};
+  f.create();
+  f.sut->restoreCounts(restored);
+  f.enterState("Crash");
+  f.sut->start(f.now);
+  f.runAt(START);
+  const auto dm1s = f.port.withId(DM1_FROM_21);
+  REQUIRE(dm1s.size() == 1);
+  const auto dm1 = j1939::decodeDm1(bytes(dm1s[0]));
+  REQUIRE(dm1);
+  REQUIRE(dm1->dtcCount == 1);
+  CHECK(dm1->dtcs[0].occurrenceCount == 5);
+  const auto saved = f.sut->takeCountsToSave();
+  REQUIRE(saved);
+  const auto crash = std::find_if(saved->begin(), saved->end(), [](const j1939::Dtc& dtc) { return dtc.spn == CRASH_SPN; });
+  REQUIRE(crash != saved->end());
+  CHECK(crash->occurrenceCount == 5);
 }
