@@ -491,3 +491,48 @@ TEST_CASE("network: restored occurrence counts continue when the fault comes bac
   REQUIRE(crash != saved->end());
   CHECK(crash->occurrenceCount == 5);
 }
+
+TEST_CASE("network: a destination-specific request for a one-frame PDU2 answer is answered to global") {
+  Fixture f;
+  f.enterState("Crash");
+  f.start();
+  f.runAt(START);
+  f.port.frames.clear();
+  CHECK(f.request(j1939::PGN_DM1, TOOL, false));
+  const auto dm1s = f.port.withId(DM1_FROM_21);  // PDU2 has no destination address
+  REQUIRE(dm1s.size() == 1);
+  const auto dm1 = j1939::decodeDm1(bytes(dm1s[0]));
+  REQUIRE(dm1);
+  CHECK(dm1->contains(CRASH_SPN, CRASH_FMI));
+  CHECK(f.port.frames.size() == 1);
+}
+
+TEST_CASE("network: answers after a lost contest leave from the new address") {
+  Fixture f;
+  f.start();
+  f.runAt(START + 300 * MS);
+  f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME), f.now);
+  const std::uint8_t moved = static_cast<std::uint8_t>(f.port.frames.back().frame.id & 0xFFu);
+  REQUIRE(moved != 0x21);
+  f.runUntil(f.now + 300 * MS);
+  f.port.frames.clear();
+  CHECK(f.request(j1939::PGN_SOFTWARE_IDENTIFICATION, TOOL, true));
+  CHECK(f.port.withId(BAM_CM_FROM_21).empty());
+  CHECK(f.port.withId(0x1CECFF00u | moved).size() == 1);
+}
+
+TEST_CASE("network: Cannot Claim ends a transport session in progress") {
+  Fixture f;
+  f.vehicle.buses[f.bus].j1939->name.arbitraryAddressCapable = false;
+  f.start();
+  f.runAt(START + 300 * MS);
+  CHECK(f.request(j1939::PGN_ECU_IDENTIFICATION, TOOL, false));
+  REQUIRE(f.port.withId(0x1CECF921u).size() == 1);
+  f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME), f.now);
+  f.runUntil(f.now + 200 * MS);
+  CHECK(f.sut->counters().tpFailed.load() == 1);
+  CHECK(f.sut->counters().tpCompleted.load() == 0);
+  const auto view = f.sut->snapshot();
+  REQUIRE(view.size() == 1);
+  CHECK(view[0].address == j1939::NULL_ADDRESS);
+}
