@@ -92,7 +92,7 @@ struct NetworkImpl {
   std::vector<DtcCondition> conditions;
   std::vector<std::uint8_t> activeScratch;  ///< bool per DTC, reused by evaluate()
   std::int64_t nextEvaluationNs{};
-  std::int64_t nowNs{};  ///< the time of the call in progress (the claim sink has none)
+  std::int64_t callNs{};  ///< the time of the call in progress (the claim sink has none)
   std::vector<std::uint8_t> software, ecu, component;  ///< identification payloads, built once
   std::array<std::uint8_t, j1939::DM1_MAX_LENGTH> dmScratch{};
   NetworkCounters counters;
@@ -124,23 +124,25 @@ struct NetworkImpl {
   }
 
   /// A PDU2 message of any length from `bus`'s address: one frame up to 8 bytes (padded
-  /// with FF), else TP: BAM to global, RTS/CTS to `destination`.
-  void sendMessage(NetworkBus& bus, std::uint32_t pgn, std::uint8_t priority, std::span<const std::uint8_t> data,
+  /// with FF; PDU2 has no destination address, so it goes to all), else TP: BAM to global,
+  /// RTS/CTS to `destination`. false when nothing left: no address, or TP refused it.
+  bool sendMessage(NetworkBus& bus, std::uint32_t pgn, std::uint8_t priority, std::span<const std::uint8_t> data,
                    std::uint8_t destination, std::int64_t nowNs) noexcept {
-    if (!bus.mayTransmit() || bus.address() >= j1939::NULL_ADDRESS) return;
+    if (!bus.mayTransmit() || bus.address() >= j1939::NULL_ADDRESS) return false;
     if (data.size() <= 8) {
       std::array<std::uint8_t, 8> padded{};
       padded.fill(0xFF);
       std::copy(data.begin(), data.end(), padded.begin());
       sendRaw(bus.bus, j1939::Id::fromPgn(pgn, priority, bus.address(), destination).toCanId(), padded);
-      return;
+      return true;
     }
     const j1939::TpSendStatus status = bus.tp->send(pgn, destination, j1939::TP_CM_PRIORITY, data, nowNs, bus);
     if (status == j1939::TpSendStatus::Started || status == j1939::TpSendStatus::Queued) {
       counters.tpStarted.fetch_add(1, std::memory_order_relaxed);
-    } else {
-      counters.tpRefused.fetch_add(1, std::memory_order_relaxed);
+      return true;
     }
+    counters.tpRefused.fetch_add(1, std::memory_order_relaxed);
+    return false;
   }
 
   void acknowledge(NetworkBus& bus, j1939::AckControl control, const j1939::Request& request) noexcept {
@@ -184,10 +186,12 @@ struct NetworkImpl {
     const std::size_t length = dtcs->encodeDm1(dmScratch);
     for (auto& bus : buses) {
       if (onlyBus && bus->bus != *onlyBus) continue;
-      sendMessage(*bus, j1939::PGN_DM1, DM_PRIORITY, std::span<const std::uint8_t>(dmScratch.data(), length),
-                  destination, nowNs);
+      // counted per bus it left on: a bus without an address (Cannot Claim) sends none
+      if (sendMessage(*bus, j1939::PGN_DM1, DM_PRIORITY, std::span<const std::uint8_t>(dmScratch.data(), length),
+                      destination, nowNs)) {
+        counters.dm1Sent.fetch_add(1, std::memory_order_relaxed);
+      }
     }
-    counters.dm1Sent.fetch_add(1, std::memory_order_relaxed);
   }
 
   // ---- the view for OPENVCU_<I>_J1939 ------------------------------------------------------
@@ -269,7 +273,7 @@ void NetworkBus::send(const j1939::ClaimFrame& frame) noexcept {
 }
 
 void NetworkBus::addressChanged(std::uint8_t oldAddress, std::uint8_t newAddress, j1939::ClaimState state) noexcept {
-  tp->setOwnAddress(newAddress < j1939::NULL_ADDRESS ? newAddress : j1939::NULL_ADDRESS, owner->nowNs, *this);
+  tp->setOwnAddress(newAddress < j1939::NULL_ADDRESS ? newAddress : j1939::NULL_ADDRESS, owner->callNs, *this);
   owner->markChanged(false);
   if (oldAddress != newAddress) {
     owner->note("bus '" + name + "': J1939 address " + hexByte(oldAddress) + " -> " + hexByte(newAddress) + " (" +
@@ -382,7 +386,7 @@ void Network::restoreCounts(std::span<const j1939::Dtc> counts) noexcept {
 }
 
 void Network::start(std::int64_t nowNs) noexcept {
-  m_impl->nowNs = nowNs;
+  m_impl->callNs = nowNs;
   for (auto& bus : m_impl->buses) {
     if (bus->claimer) bus->claimer->start(nowNs, *bus);
   }
@@ -392,7 +396,7 @@ void Network::start(std::int64_t nowNs) noexcept {
 
 void Network::run(std::int64_t nowNs) noexcept {
   NetworkImpl& impl = *m_impl;
-  impl.nowNs = nowNs;
+  impl.callNs = nowNs;
   for (auto& bus : impl.buses) {
     if (bus->claimer) {
       const auto deadline = bus->claimer->nextDeadlineNs();
@@ -431,7 +435,7 @@ std::int64_t Network::nextDeadlineNs() const noexcept {
 void Network::onFrame(std::size_t busIndex, const can::Frame& frame, std::int64_t nowNs) noexcept {
   NetworkBus* bus = m_impl->busOf(busIndex);
   if (bus == nullptr || !frame.extended()) return;
-  m_impl->nowNs = nowNs;
+  m_impl->callNs = nowNs;
   if (const auto claimed = j1939::parseAddressClaimed(frame.id, true, frame.payload())) {
     if (bus->claimer) {
       const j1939::ClaimCounters before = bus->claimer->counters();
@@ -450,7 +454,7 @@ bool Network::answerRequest(std::size_t busIndex, const j1939::Request& request,
   NetworkImpl& impl = *m_impl;
   NetworkBus* bus = impl.busOf(busIndex);
   if (bus == nullptr) return false;
-  impl.nowNs = nowNs;
+  impl.callNs = nowNs;
   // A PDU2 answer goes to global for a global request; a long one to the requester by RTS/CTS.
   const std::uint8_t destination = request.global ? j1939::GLOBAL_ADDRESS : request.requester;
   auto answered = [&] {

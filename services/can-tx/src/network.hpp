@@ -47,7 +47,7 @@ struct NetworkCounters {
   std::atomic<std::uint64_t> contestsLost{};
   std::atomic<std::uint64_t> cannotClaim{};        ///< Cannot Claim frames sent
   std::atomic<std::uint64_t> framesHeldByClaim{};  ///< frames not sent: no address on their bus
-  std::atomic<std::uint64_t> dm1Sent{};
+  std::atomic<std::uint64_t> dm1Sent{};            ///< DM1s that left, one per bus (none while a bus has no address)
   std::atomic<std::uint64_t> tpStarted{};
   std::atomic<std::uint64_t> tpCompleted{};
   std::atomic<std::uint64_t> tpFailed{};           ///< aborted, timed out, ended by an address change

@@ -251,6 +251,10 @@ TEST_CASE("network: a NAME that is not arbitrary-address capable sends Cannot Cl
   const auto view = f.sut->snapshot();
   REQUIRE(view.size() == 1);
   CHECK(view[0].claimState == ipc::ClaimState::CannotClaim);
+  const auto dm1Before = f.sut->counters().dm1Sent.load();
+  f.runUntil(f.now + 2000 * MS);
+  CHECK(f.port.frames.empty());  // no DM1 either
+  CHECK(f.sut->counters().dm1Sent.load() == dm1Before);
 }
 
 TEST_CASE("network: an FSM fault state raises its DTC in a DM1 once per second") {
@@ -273,6 +277,7 @@ TEST_CASE("network: an FSM fault state raises its DTC in a DM1 once per second")
   CHECK(f.port.withId(DM1_FROM_21).size() == 2);
   f.runUntil(START + 3000 * MS);
   CHECK(f.port.withId(DM1_FROM_21).size() == 4);
+  CHECK(f.sut->counters().dm1Sent.load() == 4);
 }
 
 TEST_CASE("network: two active DTCs go out by BAM with TP.DT packets 50 ms apart") {
