@@ -541,3 +541,16 @@ TEST_CASE("network: Cannot Claim ends a transport session in progress") {
   REQUIRE(view.size() == 1);
   CHECK(view[0].address == j1939::NULL_ADDRESS);
 }
+
+TEST_CASE("network: the log names the address change after a lost contest") {
+  Fixture f;
+  f.start();
+  f.runAt(START + 300 * MS);
+  (void)f.sut->takeLog();
+  f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME), f.now);
+  const auto lines = f.sut->takeLog();
+  REQUIRE(lines.size() == 1);
+  CHECK(lines[0].find("0x21 -> 0x") != std::string::npos);
+  CHECK(lines[0].find(f.vehicle.buses[f.bus].name) != std::string::npos);
+  CHECK(f.sut->takeLog().empty());
+}
