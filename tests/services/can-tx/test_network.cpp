@@ -3,8 +3,6 @@
 // identification answers and TP sending (issue 24).
 
 #include <doctest/doctest.h>
-
-#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +17,7 @@
 #include "openvcu/j1939/address_claim.hpp"
 #include "openvcu/j1939/dm1.hpp"
 #include "openvcu/j1939/dm_encode.hpp"
+#include "vehicle_fixture.hpp"
 
 using namespace openvcu;
 
@@ -27,20 +26,20 @@ namespace {
 constexpr std::int64_t MS = 1'000'000;
 constexpr std::int64_t START = 5'000 * MS;
 const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
-constexpr std::uint64_t OUR_NAME = 0xB002800000000001u;          // config/hhea/vehicle.json
+constexpr std::uint64_t OUR_NAME = 0xB002800000000001u;              // config/hhea/vehicle.json
 constexpr std::uint64_t HIGHER_PRIORITY_NAME = 0x0000000000000010u;  // lower value wins
 constexpr std::uint64_t LOWER_PRIORITY_NAME = 0xFFFFFFFFFFFFFFF0u;
 constexpr std::uint8_t TOOL = 0xF9;  // a service tool's address
 constexpr std::uint32_t CLAIM_FROM_21 = 0x18EEFF21;
-constexpr std::uint32_t DM1_FROM_21 = 0x18FECA21;      // priority 6, PGN 65226
-constexpr std::uint32_t DM2_FROM_21 = 0x18FECB21;      // priority 6, PGN 65227
-constexpr std::uint32_t BAM_CM_FROM_21 = 0x1CECFF21;   // TP.CM, priority 7, to global
-constexpr std::uint32_t BAM_DT_FROM_21 = 0x1CEBFF21;   // TP.DT, priority 7, to global
+constexpr std::uint32_t DM1_FROM_21 = 0x18FECA21;     // priority 6, PGN 65226
+constexpr std::uint32_t DM2_FROM_21 = 0x18FECB21;     // priority 6, PGN 65227
+constexpr std::uint32_t BAM_CM_FROM_21 = 0x1CECFF21;  // TP.CM, priority 7, to global
+constexpr std::uint32_t BAM_DT_FROM_21 = 0x1CEBFF21;  // TP.DT, priority 7, to global
 constexpr std::uint32_t ACK_FROM_21 = 0x18E8FF21;
-constexpr std::uint32_t SCHEDULED = 0x0CFF0021;        // a proprietary frame from the preferred address
+constexpr std::uint32_t SCHEDULED = 0x0CFF0021;  // a proprietary frame from the preferred address
 constexpr std::uint32_t CRASH_SPN = 520199;
 constexpr std::uint8_t CRASH_FMI = 31;
-constexpr std::uint32_t KEEP_ALIVE_SPN = 520300;       // the signal DTC the tests add
+constexpr std::uint32_t KEEP_ALIVE_SPN = 520300;  // the signal DTC the tests add
 constexpr std::uint8_t KEEP_ALIVE_FMI = 31;
 
 struct Sent {
@@ -63,7 +62,9 @@ struct Recorder final : cantx::TxPort {
   }
 };
 
-std::vector<std::uint8_t> bytes(const can::Frame& frame) { return {frame.data.begin(), frame.data.begin() + frame.length}; }
+std::vector<std::uint8_t> bytes(const can::Frame& frame) {
+  return {frame.data.begin(), frame.data.begin() + frame.length};
+}
 
 std::vector<std::uint8_t> nameBytes(std::uint64_t name) {
   std::vector<std::uint8_t> out;
@@ -87,7 +88,8 @@ can::Frame claimFrame(std::uint8_t address, std::uint64_t name) {
 /// The payload of a TP session: the TP.DT packets with `dtId`, in order, cut to `size`.
 std::vector<std::uint8_t> reassemble(const std::vector<can::Frame>& packets, std::size_t size) {
   std::vector<std::uint8_t> payload;
-  for (const can::Frame& packet : packets) payload.insert(payload.end(), packet.data.begin() + 1, packet.data.begin() + 8);
+  for (const can::Frame& packet : packets)
+    payload.insert(payload.end(), packet.data.begin() + 1, packet.data.begin() + 8);
   payload.resize(std::min(size, payload.size()));
   return payload;
 }
@@ -232,7 +234,8 @@ TEST_CASE("network: a lower-priority NAME claiming 0x21 is answered with our cla
   CHECK(f.port.frames[0].frame.id == SCHEDULED);
 }
 
-TEST_CASE("network: a NAME that is not arbitrary-address capable sends Cannot Claim when it loses and holds its frames") {
+TEST_CASE(
+    "network: a NAME that is not arbitrary-address capable sends Cannot Claim when it loses and holds its frames") {
   Fixture f;
   f.vehicle.buses[f.bus].j1939->name.arbitraryAddressCapable = false;
   f.start();
@@ -319,7 +322,8 @@ TEST_CASE("network: a cleared fault is in DM2 with count 1 and an accepted DM3 c
   f.runAt(START);
   auto saved = f.sut->takeCountsToSave();
   REQUIRE(saved);
-  const auto crash = std::find_if(saved->begin(), saved->end(), [](const j1939::Dtc& dtc) { return dtc.spn == CRASH_SPN; });
+  const auto crash =
+      std::find_if(saved->begin(), saved->end(), [](const j1939::Dtc& dtc) { return dtc.spn == CRASH_SPN; });
   REQUIRE(crash != saved->end());
   CHECK(crash->occurrenceCount == 1);
   CHECK_FALSE(f.sut->takeCountsToSave());
@@ -492,7 +496,8 @@ TEST_CASE("network: restored occurrence counts continue when the fault comes bac
   CHECK(dm1->dtcs[0].occurrenceCount == 5);
   const auto saved = f.sut->takeCountsToSave();
   REQUIRE(saved);
-  const auto crash = std::find_if(saved->begin(), saved->end(), [](const j1939::Dtc& dtc) { return dtc.spn == CRASH_SPN; });
+  const auto crash =
+      std::find_if(saved->begin(), saved->end(), [](const j1939::Dtc& dtc) { return dtc.spn == CRASH_SPN; });
   REQUIRE(crash != saved->end());
   CHECK(crash->occurrenceCount == 5);
 }
