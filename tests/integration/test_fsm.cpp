@@ -75,6 +75,7 @@ fs::path copyConfig(const std::string& machine) {
   std::ifstream in(HHEA_FOLDER / "vehicle.json");
   nlohmann::json vehicle = nlohmann::json::parse(in);
   vehicle["fsm"] = "fsm.json";
+  vehicle.erase("diagnostics");  // its DTCs name HHEA's fault states, which `machine` does not have
   writeFile(folder / "vehicle.json", vehicle.dump(2));
   writeFile(folder / "fsm.json", machine);
   return folder / "vehicle.json";
