@@ -21,6 +21,8 @@ namespace {
 constexpr std::int64_t MS = 1'000'000;
 /// The DTC conditions are read at every run(), and at least this often.
 constexpr std::int64_t DTC_EVALUATION_NS = 100 * MS;
+/// After a missed try-lock of the view, the next attempt (never a busy retry).
+constexpr std::int64_t VIEW_RETRY_NS = 10 * MS;
 constexpr std::uint8_t DM_PRIORITY = 6;  ///< J1939-73 default priority of DM1/DM2
 /// RTS byte 4: at most 8 packets per CTS window, so a window fits a CAN controller's
 /// transmit queue (SocketCAN's default txqueuelen is 10) when it goes out back to back.
@@ -101,6 +103,7 @@ struct NetworkImpl {
   std::vector<ipc::J1939Network> view;
   bool viewChanged{true};
   bool viewDirty{true};  ///< the transmit thread has something newer than `view`
+  std::int64_t viewRetryNs{};  ///< a missed try-lock (or no memory): publishView() again then
   bool countsDirty{};
   std::vector<j1939::Dtc> countsToSave;
   std::vector<std::string> log;  ///< reserved at create(); the transmit thread appends while it has room
@@ -206,6 +209,7 @@ struct NetworkImpl {
   /// copies may allocate.
   void publishView() noexcept {
     if (!viewDirty) return;
+    viewRetryNs = callNs + VIEW_RETRY_NS;
     std::unique_lock lock(viewLock, std::try_to_lock);
     if (!lock.owns_lock()) return;
     try {
@@ -428,7 +432,7 @@ std::int64_t Network::nextDeadlineNs() const noexcept {
     next = std::min(next, impl.nextEvaluationNs);
     next = std::min(next, std::max(impl.dtcs->nextDm1DueNs(), std::int64_t{0}));
   }
-  if (impl.viewDirty) next = std::min(next, impl.nextEvaluationNs);  // a missed try-lock: again soon
+  if (impl.viewDirty) next = std::min(next, impl.viewRetryNs);  // a missed try-lock: again soon
   return next;
 }
 
