@@ -74,6 +74,7 @@ struct NetworkBus final : j1939::ClaimSink, j1939::TpSendSink {
   std::unique_ptr<j1939::TpSender> tp;
   std::uint8_t preferred{j1939::NULL_ADDRESS};
   std::uint64_t nameValue{};
+  bool fd{};  ///< a CAN FD bus carries up to 64 bytes in one frame; a classic one needs TP above 8
 
   [[nodiscard]] std::uint8_t address() const noexcept { return claimer ? claimer->address() : preferred; }
   [[nodiscard]] bool mayTransmit() const noexcept { return !claimer || claimer->mayTransmit(); }
@@ -314,6 +315,7 @@ Result<std::unique_ptr<Network>> Network::create(const config::VehicleConfig& ve
     bus->name = busConfig.name;
     bus->preferred = busConfig.j1939->preferredAddress;
     bus->nameValue = busConfig.j1939->name.toValue();
+    bus->fd = busConfig.fd;
     if (busConfig.j1939->claim) bus->claimer.emplace(busConfig.j1939->claimerConfig());
     j1939::TpSenderConfig tpConfig;
     tpConfig.ownAddress = busConfig.j1939->claim ? j1939::NULL_ADDRESS : bus->preferred;
@@ -520,8 +522,11 @@ bool Network::answerRequest(std::size_t busIndex, const j1939::Request& request,
   }
 }
 
+void Network::setNow(std::int64_t nowNs) noexcept { m_impl->callNs = nowNs; }
+
 can::SendStatus Network::send(std::size_t busIndex, const can::Frame& frame) noexcept {
   NetworkBus* bus = m_impl->busOf(busIndex);
+  if (bus != nullptr && frame.extended() && frame.length > 8 && !bus->fd) return sendLong(*bus, frame);
   if (bus == nullptr || !bus->claimer) return m_impl->out.send(busIndex, frame);
   if (!bus->mayTransmit()) {
     m_impl->counters.framesHeldByClaim.fetch_add(1, std::memory_order_relaxed);
@@ -533,6 +538,22 @@ can::SendStatus Network::send(std::size_t busIndex, const can::Frame& frame) noe
   can::Frame moved = frame;
   moved.id = (frame.id & ~0xFFu) | bus->address();
   return m_impl->out.send(busIndex, moved);
+}
+
+can::SendStatus Network::sendLong(NetworkBus& bus, const can::Frame& frame) noexcept {
+  if (!bus.mayTransmit()) {
+    m_impl->counters.framesHeldByClaim.fetch_add(1, std::memory_order_relaxed);
+    return can::SendStatus::Down;
+  }
+  const j1939::Id id = j1939::Id::fromCanId(frame.id);
+  // The transport sender speaks from the VCU's address only: a long message of another
+  // source address cannot leave on a classic bus (the link refuses it as Invalid).
+  if (id.sourceAddress != bus.preferred) return m_impl->out.send(bus.bus, frame);
+  // false: refused (its destination's queue is full: a long message due faster than its
+  // transfer takes), so this frame was not sent
+  return m_impl->sendMessage(bus, id.pgn(), id.priority, frame.payload(), id.destination(), m_impl->callNs)
+             ? can::SendStatus::Sent
+             : can::SendStatus::Busy;
 }
 
 std::vector<ipc::J1939Network> Network::snapshot() const {

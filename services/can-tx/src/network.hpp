@@ -89,8 +89,14 @@ class Network final : public TxPort {
   /// identification); false for any other PGN (the scheduler answers it).
   bool answerRequest(std::size_t bus, const j1939::Request& request, std::int64_t nowNs) noexcept;
 
+  /// The transmit thread's time before it runs the scheduler and applies commands: the
+  /// time send() gives a transport session it starts.
+  void setNow(std::int64_t nowNs) noexcept;
   /// TxPort: a frame of the scheduler. Not sent (Down) while the VCU has no address on
-  /// the bus; a frame from the preferred address leaves from the claimed one.
+  /// the bus; a frame from the preferred address leaves from the claimed one. A J1939
+  /// message longer than 8 bytes on a classic bus with a "j1939" object leaves by the
+  /// transport protocol (BAM to global, RTS/CTS to its destination); Busy when its
+  /// destination's transfer queue is full.
   can::SendStatus send(std::size_t bus, const can::Frame& frame) noexcept override;
 
   /// The current view of every bus with a J1939 address, for OPENVCU_<I>_J1939 (copies
@@ -109,6 +115,7 @@ class Network final : public TxPort {
 
  private:
   explicit Network(std::unique_ptr<NetworkImpl> impl) noexcept;
+  can::SendStatus sendLong(NetworkBus& bus, const can::Frame& frame) noexcept;
   std::unique_ptr<NetworkImpl> m_impl;
 };
 

@@ -176,6 +176,7 @@ void TxThread::run() noexcept {
   while (!m_stopping.load(std::memory_order_acquire)) {
     const std::uint32_t seen = m_wake.load(std::memory_order_acquire);
     std::int64_t now = clock::monotonicNs();
+    if (m_network != nullptr) m_network->setNow(now);
     TxCommand command;
     while (m_inbox.pop(command)) apply(command, now);
     m_scheduler.run(now);

@@ -559,3 +559,23 @@ TEST_CASE("network: the log names the address change after a lost contest") {
   CHECK(lines[0].find(f.vehicle.buses[f.bus].name) != std::string::npos);
   CHECK(f.sut->takeLog().empty());
 }
+
+TEST_CASE("network: a scheduled message longer than 8 bytes leaves a classic bus by the transport protocol") {
+  Fixture f;
+  f.start();
+  f.port.frames.clear();
+  std::vector<std::uint8_t> payload(20);
+  for (std::size_t i = 0; i < payload.size(); ++i) payload[i] = static_cast<std::uint8_t>(0xA0 + i);
+  f.sut->setNow(f.now);
+  // PDU2 0xFF40 (proprietary B) from the preferred address: BAM to global, 3 packets
+  CHECK(f.sut->send(f.bus, extended(0x18FF4021, payload)) == can::SendStatus::Sent);
+  REQUIRE(f.port.withId(BAM_CM_FROM_21).size() == 1);
+  CHECK(bytes(f.port.withId(BAM_CM_FROM_21)[0]) == std::vector<std::uint8_t>{0x20, 20, 0, 3, 0xFF, 0x40, 0xFF, 0x00});
+  f.runUntil(f.now + 200 * MS);
+  CHECK(reassemble(f.port.withId(BAM_DT_FROM_21), payload.size()) == payload);
+  // a long message of another source address cannot go by TP from the VCU's address
+  f.port.frames.clear();
+  (void)f.sut->send(f.bus, extended(0x18FF40E5, payload));
+  REQUIRE(f.port.frames.size() == 1);
+  CHECK(f.port.frames[0].frame.id == 0x18FF40E5u);  // handed on as it is: the link refuses it
+}
