@@ -52,6 +52,11 @@ void J1939Peer::start(std::int64_t nowNs) noexcept {
   m_nowNs = nowNs;
   setOwn(m_config.address);
   queueClaim(m_address);
+  // J1939-81: a node that joins asks everyone for their claims (a global Request for
+  // Address Claimed), so the table also holds the nodes that claimed before it started.
+  const j1939::RequestFrame request = j1939::buildRequest(j1939::PGN_ADDRESS_CLAIMED, j1939::REQUEST_DEFAULT_PRIORITY,
+                                                          m_address, j1939::GLOBAL_ADDRESS);
+  queue(request.canId, request.payload);
 }
 
 std::int64_t J1939Peer::nextDueNs() const noexcept {

@@ -1,6 +1,7 @@
 #pragma once
 // The scripted J1939 peer of simulation.json's "j1939Peer" (config::SimPeerConfig): one more
-// node on a J1939 bus that claims its address at the start, runs its script (Address
+// node on a J1939 bus that claims its address at the start (and sends a global Request for
+// Address Claimed, so it learns who was there before it), runs its script (Address
 // Claimed for an address, Requests to the VCU), answers Requests for Address Claimed, keeps
 // a j1939::AddressTable from every claim it sees and receives the answers sent to it:
 // single frames, BAM and RTS/CTS (a j1939::TpReceiver at its current address; its CTS and
@@ -34,7 +35,8 @@ class J1939Peer final : private j1939::TpSink {
  public:
   J1939Peer(const config::SimPeerConfig& config, service::Logger& log);
 
-  /// The script's times count from `nowNs`; the peer's claim goes out at the next step().
+  /// The script's times count from `nowNs`; the peer's claim and its Request for Address
+  /// Claimed go out at the next step().
   void start(std::int64_t nowNs) noexcept;
   /// A frame received on bus `busIndex` (other buses are ignored).
   void receive(std::size_t busIndex, const can::Frame& frame, std::int64_t atNs) noexcept;
