@@ -1,7 +1,5 @@
 #include "ecu_sim_app.hpp"
 
-#include "openvcu/service/app_impl.hpp"
-
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -10,10 +8,11 @@
 #include <thread>
 #include <vector>
 
-#include "openvcu/core/clock.hpp"
-#include "openvcu/can_links/open_link.hpp"
 #include "generic_model.hpp"
 #include "j1939_peer.hpp"
+#include "openvcu/can_links/open_link.hpp"
+#include "openvcu/core/clock.hpp"
+#include "openvcu/service/app_impl.hpp"
 #include "vehicle_model.hpp"
 
 namespace openvcu::ecusim {
@@ -164,7 +163,8 @@ struct EcuSimAppImpl {
         while ((count = link->receive(batch)) > 0) {
           for (std::size_t i = 0; i < count; ++i) {
             receive(batch[i].frame, batch[i].monotonicNs);
-            if (peer) peer->receive(static_cast<std::size_t>(&link - links.data()), batch[i].frame, batch[i].monotonicNs);
+            if (peer)
+              peer->receive(static_cast<std::size_t>(&link - links.data()), batch[i].frame, batch[i].monotonicNs);
           }
           if (count < batch.size()) break;
         }

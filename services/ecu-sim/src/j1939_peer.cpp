@@ -43,7 +43,7 @@ J1939Peer::J1939Peer(const config::SimPeerConfig& config, service::Logger& log)
     : m_config(config),
       m_log(&log),
       m_tp(receiverConfig(config.address)),
-      m_answers(new std::atomic<std::int64_t>[config.requestedPgns.size()]{}),
+      m_answers(new std::atomic<std::int64_t>[config.requestedPgns.size()] {}),
       m_outstanding(new Outstanding[config.requestedPgns.size()]{}),
       m_address(config.address) {}
 
@@ -109,8 +109,8 @@ void J1939Peer::onClaim(std::uint8_t source, const j1939::Name& name, std::int64
   if (name == m_config.vcuName) {
     const std::int64_t address = source == j1939::NULL_ADDRESS ? -1 : source;
     if (vcuAddress.exchange(address, std::memory_order_relaxed) != address) {
-      m_log->info("j1939 peer: the VCU claimed " + (address < 0 ? std::string("no address (Cannot Claim)")
-                                                                 : hex(static_cast<std::uint32_t>(address))));
+      m_log->info("j1939 peer: the VCU claimed " +
+                  (address < 0 ? std::string("no address (Cannot Claim)") : hex(static_cast<std::uint32_t>(address))));
     }
   }
   if (source != m_address || m_address == j1939::NULL_ADDRESS) return;
@@ -118,8 +118,8 @@ void J1939Peer::onClaim(std::uint8_t source, const j1939::Name& name, std::int64
   if (j1939::hasPriorityOver(m_config.name, name)) {
     queueClaim(m_address);
   } else {
-    m_log->warning("j1939 peer: lost " + hex(m_address) + " to NAME " + hex(static_cast<std::uint32_t>(name.toValue() >> 32)) +
-                   "...; Cannot Claim");
+    m_log->warning("j1939 peer: lost " + hex(m_address) + " to NAME " +
+                   hex(static_cast<std::uint32_t>(name.toValue() >> 32)) + "...; Cannot Claim");
     setOwn(j1939::NULL_ADDRESS);
     queueClaim(j1939::NULL_ADDRESS);
   }
@@ -203,7 +203,9 @@ void J1939Peer::queue(std::uint32_t canId, std::span<const std::uint8_t> data) n
   std::copy_n(data.begin(), frame.length, frame.data.begin());
 }
 
-void J1939Peer::send(const j1939::TpFrame& frame) noexcept { queue(frame.canId, {frame.data.data(), frame.length}); }
+void J1939Peer::send(const j1939::TpFrame& frame) noexcept {
+  queue(frame.canId, {frame.data.data(), frame.length});
+}
 
 void J1939Peer::completed(const j1939::TpMessage& message) noexcept {
   tpCompleted.fetch_add(1, std::memory_order_relaxed);

@@ -50,9 +50,9 @@ class J1939Peer final : private j1939::TpSink {
   std::atomic<std::int64_t> vcuAddress{-1};  ///< the VCU's address as last claimed, -1 none
   std::atomic<std::int64_t> ownAddress{-1};  ///< the peer's address, -1 none (lost it)
   std::atomic<std::int64_t> requestsSent{};
-  std::atomic<std::int64_t> tpCompleted{};   ///< BAM and RTS/CTS messages received whole
-  std::atomic<std::int64_t> dm1Dtcs{-1};     ///< DTCs in the last DM1 from the VCU, -1 none
-  std::atomic<std::int64_t> nacks{};         ///< Acknowledgements (PGN 59392) to the peer
+  std::atomic<std::int64_t> tpCompleted{};  ///< BAM and RTS/CTS messages received whole
+  std::atomic<std::int64_t> dm1Dtcs{-1};    ///< DTCs in the last DM1 from the VCU, -1 none
+  std::atomic<std::int64_t> nacks{};        ///< Acknowledgements (PGN 59392) to the peer
   /// Answers by the config's requestedPgns index: messages of a requested PGN from the
   /// address the request went to, while that request is outstanding (one per request).
   [[nodiscard]] const config::SimPeerConfig& config() const noexcept { return m_config; }

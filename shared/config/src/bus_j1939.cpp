@@ -36,7 +36,6 @@ std::optional<std::uint32_t> wholeNumber(JsonChecker& check, const Json& object,
   return static_cast<std::uint32_t>(*value);
 }
 
-
 /// "addressRange": [first, last].
 void loadRange(JsonChecker& check, const Json& range, const std::string& path, BusJ1939& config) {
   if (!range.is_array() || range.size() != 2) {
@@ -95,7 +94,8 @@ void loadBusJ1939(const Json& bus, const std::string& busPath, std::optional<std
   check.onlyKeys(*object, path, {"name", "preferredAddress", "addressRange", "claim", "comment"});
   BusJ1939 config;
 
-  if (const Json* name = check.member(*object, path, "name", true)) loadJ1939Name(check, *name, path + "/name", config.name);
+  if (const Json* name = check.member(*object, path, "name", true))
+    loadJ1939Name(check, *name, path + "/name", config.name);
 
   if (object->contains("preferredAddress")) {
     config.preferredAddress = static_cast<std::uint8_t>(

@@ -25,8 +25,9 @@ class Loader {
 
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
-    m_check.onlyKeys(root, "", {"model", "tick", "safety", "comment", "battery", "loads", "timing", "wakeSignal",
-                                "rules", "follow", "integrate", "faults", "j1939Peer"});
+    m_check.onlyKeys(root, "",
+                     {"model", "tick", "safety", "comment", "battery", "loads", "timing", "wakeSignal", "rules",
+                      "follow", "integrate", "faults", "j1939Peer"});
     model(root);
     m_config.tickNs = duration(root, "", "tick", m_config.tickNs);
     if (m_config.tickNs < 1'000'000) m_check.error("/tick", "must be at least 1ms");

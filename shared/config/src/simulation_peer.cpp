@@ -28,8 +28,9 @@ void step(JsonChecker& check, const Json& item, const std::string& path, SimPeer
   if (!check.isObject(item, path)) return;
   check.onlyKeys(item, path, {"atMs", "claim", "request", "to", "comment"});
   SimPeerStep step;
-  step.atNs = static_cast<std::int64_t>(whole(check, item, path, "atMs", 0, 86'400'000, "ms after the start").value_or(0)) *
-              1'000'000;
+  step.atNs =
+      static_cast<std::int64_t>(whole(check, item, path, "atMs", 0, 86'400'000, "ms after the start").value_or(0)) *
+      1'000'000;
   const bool claim = item.contains("claim");
   const bool request = item.contains("request");
   if (claim == request) {
@@ -65,7 +66,8 @@ void step(JsonChecker& check, const Json& item, const std::string& path, SimPeer
 
 }  // namespace
 
-void loadSimPeer(const Json& root, JsonChecker& check, const VehicleConfig& vehicle, std::optional<SimPeerConfig>& out) {
+void loadSimPeer(const Json& root, JsonChecker& check, const VehicleConfig& vehicle,
+                 std::optional<SimPeerConfig>& out) {
   const Json* object = check.member(root, "", "j1939Peer", false);
   if (object == nullptr || !check.isObject(*object, "/j1939Peer")) return;
   const std::string path = "/j1939Peer";
@@ -84,12 +86,14 @@ void loadSimPeer(const Json& root, JsonChecker& check, const VehicleConfig& vehi
   }
   peer.address = static_cast<std::uint8_t>(
       whole(check, *object, path, "address", 0, j1939::MAX_CLAIMABLE_ADDRESS, ADDRESS_REASON).value_or(0));
-  if (const Json* name = check.member(*object, path, "name", true)) loadJ1939Name(check, *name, path + "/name", peer.name);
+  if (const Json* name = check.member(*object, path, "name", true))
+    loadJ1939Name(check, *name, path + "/name", peer.name);
   if (bus != vehicle.buses.end() && bus->j1939 && peer.name == peer.vcuName) {
     check.error(path + "/name", "is the VCU's own NAME on bus '" + peer.bus + "'");
   }
   if (const Json* script = check.array(*object, path, "script", false)) {
-    for (std::size_t i = 0; i < script->size(); ++i) step(check, (*script)[i], JsonChecker::join(path + "/script", i), peer);
+    for (std::size_t i = 0; i < script->size(); ++i)
+      step(check, (*script)[i], JsonChecker::join(path + "/script", i), peer);
   }
   std::stable_sort(peer.script.begin(), peer.script.end(),
                    [](const SimPeerStep& a, const SimPeerStep& b) { return a.atNs < b.atNs; });

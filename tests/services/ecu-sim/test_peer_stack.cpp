@@ -19,8 +19,8 @@ std::optional<long long> counter(const std::string& status, const std::string& n
   for (std::string line; std::getline(lines, line);) {
     if (!contains(line, "vcu-ecu-sim")) continue;
     std::smatch match;
-    if (std::regex_search(line, match, std::regex("(^|[ ,])" + std::regex_replace(name, std::regex("\\."), "\\.") +
-                                                  "=(-?[0-9]+)"))) {
+    if (std::regex_search(
+            line, match, std::regex("(^|[ ,])" + std::regex_replace(name, std::regex("\\."), "\\.") + "=(-?[0-9]+)"))) {
       return std::stoll(match[2].str());
     }
   }

@@ -32,12 +32,12 @@ struct SimPeerStep {
 };
 
 struct SimPeerConfig {
-  std::string bus;            ///< a bus of vehicle.json that has a "j1939" object
-  std::size_t busIndex{};     ///< into VehicleConfig::buses
-  std::uint8_t address{};     ///< claimed at the start, 0..253
-  j1939::Name name;           ///< the peer's NAME
-  j1939::Name vcuName;        ///< the VCU's NAME on that bus (its "j1939" object)
-  std::vector<SimPeerStep> script;  ///< sorted by atNs (file order among equal times)
+  std::string bus;                           ///< a bus of vehicle.json that has a "j1939" object
+  std::size_t busIndex{};                    ///< into VehicleConfig::buses
+  std::uint8_t address{};                    ///< claimed at the start, 0..253
+  j1939::Name name;                          ///< the peer's NAME
+  j1939::Name vcuName;                       ///< the VCU's NAME on that bus (its "j1939" object)
+  std::vector<SimPeerStep> script;           ///< sorted by atNs (file order among equal times)
   std::vector<std::uint32_t> requestedPgns;  ///< each PGN the script requests, once, in file order
 };
 
