@@ -1,7 +1,6 @@
 #include "ecu_sim_app.hpp"
 
-#include "openvcu/service/app_impl.hpp"
-
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <ctime>
@@ -9,9 +8,11 @@
 #include <thread>
 #include <vector>
 
-#include "openvcu/core/clock.hpp"
-#include "openvcu/can_links/open_link.hpp"
 #include "generic_model.hpp"
+#include "j1939_peer.hpp"
+#include "openvcu/can_links/open_link.hpp"
+#include "openvcu/core/clock.hpp"
+#include "openvcu/service/app_impl.hpp"
 #include "vehicle_model.hpp"
 
 namespace openvcu::ecusim {
@@ -35,6 +36,7 @@ struct EcuSimAppImpl {
   std::optional<VirtualBus> bus;
   std::optional<VehicleModel> model;      ///< "model": "hhea"
   std::optional<GenericModel> generic;    ///< "model": "generic"
+  std::optional<J1939Peer> peer;          ///< "j1939Peer"
   std::vector<std::unique_ptr<can::Link>> links;
   std::optional<signals::SignalIndex> wakeIndex;
   std::thread thread;
@@ -70,6 +72,7 @@ struct EcuSimAppImpl {
       if (!modelResult) return modelResult.error();
       generic.emplace(std::move(*modelResult));
     }
+    if (config.peer) peer.emplace(*config.peer, runtime.log());
     if (!config.wakeSignal.empty()) {
       wakeIndex = runtime.catalog().indexOf(config.wakeSignal);
       if (!wakeIndex) return Error{config.file + ": /wakeSignal: no signal '" + config.wakeSignal + "' in the catalog"};
@@ -152,12 +155,17 @@ struct EcuSimAppImpl {
     };
     std::int64_t nextTick = clock::monotonicNs();
     bus->start(nextTick);
+    if (peer) peer->start(nextTick);
     while (!stopping.load(std::memory_order_relaxed)) {
       const std::int64_t now = clock::monotonicNs();
       for (auto& link : links) {
         std::size_t count = 0;
         while ((count = link->receive(batch)) > 0) {
-          for (std::size_t i = 0; i < count; ++i) receive(batch[i].frame, batch[i].monotonicNs);
+          for (std::size_t i = 0; i < count; ++i) {
+            receive(batch[i].frame, batch[i].monotonicNs);
+            if (peer)
+              peer->receive(static_cast<std::size_t>(&link - links.data()), batch[i].frame, batch[i].monotonicNs);
+          }
           if (count < batch.size()) break;
         }
       }
@@ -182,8 +190,9 @@ struct EcuSimAppImpl {
       } else {
         bus->sendDue(now, send);
       }
+      if (peer) peer->step(now, send);
       mirror();
-      sleepUntil(std::min(nextTick, bus->nextDueNs()));
+      sleepUntil(std::min({nextTick, bus->nextDueNs(), peer ? peer->nextDueNs() : NEVER}));
     }
   }
 
@@ -260,6 +269,22 @@ struct EcuSimAppImpl {
     put(faultsActive, mask);
   }
 
+  /// The scripted peer's counters (services/ecu-sim/README.md, "The scripted J1939 peer").
+  void registerPeerCounters() {
+    const auto add = [this](std::string name, std::atomic<std::int64_t>& value) {
+      runtime.heartbeat().addCounterSource(std::move(name), [&value] { return value.load(std::memory_order_relaxed); });
+    };
+    add("peer_claims_seen", peer->claimsSeen);
+    add("peer_vcu_address", peer->vcuAddress);
+    add("peer_address", peer->ownAddress);
+    add("peer_requests_sent", peer->requestsSent);
+    add("peer_tp_completed", peer->tpCompleted);
+    add("peer_dm1_dtcs", peer->dm1Dtcs);
+    add("peer_acknowledgements", peer->nacks);
+    const std::vector<std::uint32_t>& pgns = peer->config().requestedPgns;
+    for (std::size_t i = 0; i < pgns.size(); ++i) add("peer_answers." + std::to_string(pgns[i]), peer->answers(i));
+  }
+
   void registerCounters() {
     const auto add = [this](const char* name, std::atomic<std::int64_t>& value) {
       runtime.heartbeat().addCounterSource(name, [&value] { return value.load(std::memory_order_relaxed); });
@@ -267,6 +292,7 @@ struct EcuSimAppImpl {
     add("frames_sent", sent);
     add("frames_received", received);
     add("send_failures", sendFailures);
+    if (peer) registerPeerCounters();
     if (generic) {
       add("faults_active", faultsActive);  // bit i: the file's fault i (file order)
       if (generic->checksPairs()) {

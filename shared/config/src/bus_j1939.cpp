@@ -36,31 +36,6 @@ std::optional<std::uint32_t> wholeNumber(JsonChecker& check, const Json& object,
   return static_cast<std::uint32_t>(*value);
 }
 
-/// The "name" object's fields into `name` (fields in error stay 0).
-void loadName(JsonChecker& check, const Json& object, const std::string& path, j1939::Name& name) {
-  if (!check.isObject(object, path)) return;
-  check.onlyKeys(object, path,
-                 {"identityNumber", "manufacturerCode", "ecuInstance", "functionInstance", "function", "vehicleSystem",
-                  "vehicleSystemInstance", "industryGroup", "arbitraryAddressCapable", "comment"});
-  auto field = [&](std::string_view key, std::uint32_t max, bool required, std::string_view reason) {
-    return wholeNumber(check, object, path, key, max, required, reason).value_or(0);
-  };
-  name.identityNumber = field("identityNumber", j1939::NAME_MAX_IDENTITY_NUMBER, true, "21 bits");
-  name.manufacturerCode = static_cast<std::uint16_t>(
-      field("manufacturerCode", j1939::NAME_MAX_MANUFACTURER_CODE, true, "11 bits, assigned by SAE"));
-  name.ecuInstance = static_cast<std::uint8_t>(field("ecuInstance", j1939::NAME_MAX_ECU_INSTANCE, false, "3 bits"));
-  name.functionInstance =
-      static_cast<std::uint8_t>(field("functionInstance", j1939::NAME_MAX_FUNCTION_INSTANCE, false, "5 bits"));
-  name.function = static_cast<std::uint8_t>(field("function", j1939::NAME_MAX_FUNCTION, true, "8 bits"));
-  name.vehicleSystem =
-      static_cast<std::uint8_t>(field("vehicleSystem", j1939::NAME_MAX_VEHICLE_SYSTEM, true, "7 bits"));
-  name.vehicleSystemInstance = static_cast<std::uint8_t>(
-      field("vehicleSystemInstance", j1939::NAME_MAX_VEHICLE_SYSTEM_INSTANCE, false, "4 bits"));
-  name.industryGroup =
-      static_cast<std::uint8_t>(field("industryGroup", j1939::NAME_MAX_INDUSTRY_GROUP, true, "3 bits"));
-  name.arbitraryAddressCapable = check.boolean(object, path, "arbitraryAddressCapable").value_or(false);
-}
-
 /// "addressRange": [first, last].
 void loadRange(JsonChecker& check, const Json& range, const std::string& path, BusJ1939& config) {
   if (!range.is_array() || range.size() != 2) {
@@ -85,6 +60,30 @@ void loadRange(JsonChecker& check, const Json& range, const std::string& path, B
 
 }  // namespace
 
+void loadJ1939Name(JsonChecker& check, const Json& object, const std::string& path, j1939::Name& name) {
+  if (!check.isObject(object, path)) return;
+  check.onlyKeys(object, path,
+                 {"identityNumber", "manufacturerCode", "ecuInstance", "functionInstance", "function", "vehicleSystem",
+                  "vehicleSystemInstance", "industryGroup", "arbitraryAddressCapable", "comment"});
+  auto field = [&](std::string_view key, std::uint32_t max, bool required, std::string_view reason) {
+    return wholeNumber(check, object, path, key, max, required, reason).value_or(0);
+  };
+  name.identityNumber = field("identityNumber", j1939::NAME_MAX_IDENTITY_NUMBER, true, "21 bits");
+  name.manufacturerCode = static_cast<std::uint16_t>(
+      field("manufacturerCode", j1939::NAME_MAX_MANUFACTURER_CODE, true, "11 bits, assigned by SAE"));
+  name.ecuInstance = static_cast<std::uint8_t>(field("ecuInstance", j1939::NAME_MAX_ECU_INSTANCE, false, "3 bits"));
+  name.functionInstance =
+      static_cast<std::uint8_t>(field("functionInstance", j1939::NAME_MAX_FUNCTION_INSTANCE, false, "5 bits"));
+  name.function = static_cast<std::uint8_t>(field("function", j1939::NAME_MAX_FUNCTION, true, "8 bits"));
+  name.vehicleSystem =
+      static_cast<std::uint8_t>(field("vehicleSystem", j1939::NAME_MAX_VEHICLE_SYSTEM, true, "7 bits"));
+  name.vehicleSystemInstance = static_cast<std::uint8_t>(
+      field("vehicleSystemInstance", j1939::NAME_MAX_VEHICLE_SYSTEM_INSTANCE, false, "4 bits"));
+  name.industryGroup =
+      static_cast<std::uint8_t>(field("industryGroup", j1939::NAME_MAX_INDUSTRY_GROUP, true, "3 bits"));
+  name.arbitraryAddressCapable = check.boolean(object, path, "arbitraryAddressCapable").value_or(false);
+}
+
 void loadBusJ1939(const Json& bus, const std::string& busPath, std::optional<std::uint8_t> nodeAddress,
                   JsonChecker& check, std::optional<BusJ1939>& out) {
   const Json* object = check.member(bus, busPath, "j1939", false);
@@ -95,7 +94,8 @@ void loadBusJ1939(const Json& bus, const std::string& busPath, std::optional<std
   check.onlyKeys(*object, path, {"name", "preferredAddress", "addressRange", "claim", "comment"});
   BusJ1939 config;
 
-  if (const Json* name = check.member(*object, path, "name", true)) loadName(check, *name, path + "/name", config.name);
+  if (const Json* name = check.member(*object, path, "name", true))
+    loadJ1939Name(check, *name, path + "/name", config.name);
 
   if (object->contains("preferredAddress")) {
     config.preferredAddress = static_cast<std::uint8_t>(

@@ -17,4 +17,8 @@ namespace openvcu::config {
 void loadBusJ1939(const Json& bus, const std::string& busPath, std::optional<std::uint8_t> nodeAddress,
                   JsonChecker& check, std::optional<BusJ1939>& out);
 
+/// The fields of a J1939 "name" object at `path` into `name` (fields in error stay 0); also
+/// read by simulation.json's "j1939Peer" (simulation_peer.cpp).
+void loadJ1939Name(JsonChecker& check, const Json& object, const std::string& path, j1939::Name& name);
+
 }  // namespace openvcu::config

@@ -3,6 +3,7 @@
 #include <span>
 
 #include "openvcu/config/json.hpp"
+#include "simulation_peer_loader.hpp"
 #include "simulation_rules_loader.hpp"
 
 namespace openvcu::config {
@@ -24,8 +25,9 @@ class Loader {
 
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
-    m_check.onlyKeys(root, "", {"model", "tick", "safety", "comment", "battery", "loads", "timing", "wakeSignal",
-                                "rules", "follow", "integrate", "faults"});
+    m_check.onlyKeys(root, "",
+                     {"model", "tick", "safety", "comment", "battery", "loads", "timing", "wakeSignal", "rules",
+                      "follow", "integrate", "faults", "j1939Peer"});
     model(root);
     m_config.tickNs = duration(root, "", "tick", m_config.tickNs);
     if (m_config.tickNs < 1'000'000) m_check.error("/tick", "must be at least 1ms");
@@ -45,6 +47,7 @@ class Loader {
       timing(root);
     }
     safety(root);
+    loadSimPeer(root, m_check, m_vehicle, m_config.peer);
     if (!hhea) loadSimRules(root, m_check, m_vehicle, !m_config.safety.empty(), m_config.rules);
   }
 

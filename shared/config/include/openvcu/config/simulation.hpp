@@ -6,15 +6,18 @@
 //           of simulation_rules.hpp;
 //   "hhea": the HHEA node models with the battery, the loads, the timing of the simulated
 //           nodes and the wake signal below (keys refused under "generic").
-// Both: the model tick and the J1939-76 pairs the simulator checks. Every key optional
+// Both: the model tick, the J1939-76 pairs the simulator checks and a scripted J1939 peer
+// ("j1939Peer", simulation_peer.hpp). Every key optional
 // (defaults below); unknown keys, keys of the other model and bad values are errors with
 // file and JSON path. Reference: services/ecu-sim/README.md.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "openvcu/config/simulation_peer.hpp"
 #include "openvcu/config/simulation_rules.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
@@ -64,6 +67,7 @@ struct SimConfig {
   std::string wakeSignal;  ///< when set, the VIC also needs this table key (bus plane) = 1 to wake (the Cl15 relay)
   std::vector<SafetyCheckConfig> safety;
   SimRules rules;  ///< the generic model's rules, follow, integrate and faults
+  std::optional<SimPeerConfig> peer;  ///< "j1939Peer": a scripted J1939 node (either model)
 };
 
 /// Loads `path` (empty: the defaults, i.e. the generic model without pairs).
