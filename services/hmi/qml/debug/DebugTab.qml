@@ -5,8 +5,9 @@ import OpenVcu.Models
 import OpenVcu.Hmi
 
 // Log (filter by service and level, export), FSM transitions, active faults with reset,
-// service health with restart, system figures, reboot/shutdown after confirmation, and
-// Record (vcu record into the data folder; Analyse hands the logs to the Trace tab).
+// the J1939 networks (J1939Page), service health with restart, system figures,
+// reboot/shutdown after confirmation, and Record (vcu record into the data folder; Analyse
+// hands the logs to the Trace tab).
 ColumnLayout {
     id: debugTab
     property var health
@@ -23,7 +24,7 @@ ColumnLayout {
         id: pages
         Layout.fillWidth: true
         Repeater {
-            model: ["Log", "Transitions", "Faults (" + faults.activeCount + ")", "Services", "Record"]
+            model: ["Log", "Transitions", "Faults (" + faults.activeCount + ")", "Services", "Record", "J1939"]
             TabButton { text: modelData; font.pixelSize: Theme.fontSmall; implicitHeight: 40 }
         }
     }
@@ -149,6 +150,11 @@ ColumnLayout {
             anchors.fill: parent
             visible: pages.currentIndex === 4
             onAnalyse: (logs) => debugTab.analyse(logs)
+        }
+
+        J1939Page {
+            anchors.fill: parent
+            visible: pages.currentIndex === 5
         }
     }
 
