@@ -24,8 +24,13 @@ ColumnLayout {
         id: pages
         Layout.fillWidth: true
         Repeater {
-            model: ["Log", "Transitions", "Faults (" + faults.activeCount + ")", "Services", "Record", "J1939"]
-            TabButton { text: modelData; font.pixelSize: Theme.fontSmall; implicitHeight: 40 }
+            // a fixed list: a model rebuilt on each new fault count recreated the buttons and
+            // sent the operator back to the first page
+            model: ["Log", "Transitions", "Faults", "Services", "Record", "J1939"]
+            TabButton {
+                text: modelData === "Faults" ? "Faults (" + faults.activeCount + ")" : modelData
+                font.pixelSize: Theme.fontSmall; implicitHeight: 40
+            }
         }
     }
     // pages as plain Items (see CanDataTab.qml: nested StackLayouts crashed in Qt 6.4.2)
