@@ -56,7 +56,6 @@ ColumnLayout {
                     text: kind === J1939Model.Claim ? "NAME " + nodeName : nodeName
                     color: kind === J1939Model.Dtc && active ? Theme.bad : Theme.text
                     font.pixelSize: kind === J1939Model.Claim ? Theme.font : Theme.fontSmall
-                    font.family: kind === J1939Model.Dtc ? "" : "monospace"
                     Layout.fillWidth: true
                     elide: Text.ElideRight
                 }
