@@ -12,6 +12,7 @@
 #include "common/status_list_model.hpp"
 #include "dashboard/dashboard_models.hpp"
 #include "debug/fault_model.hpp"
+#include "debug/j1939_model.hpp"
 #include "debug/log_model.hpp"
 #include "header/fsm_model.hpp"
 #include "header/health_model.hpp"
@@ -75,6 +76,8 @@ TEST_CASE("every list model shows status and errorString, notified when the mode
   checkStatusProperties(health, statusChanged);
   ScheduleModel schedule;
   checkStatusProperties(schedule, statusChanged);
+  J1939Model j1939;
+  checkStatusProperties(j1939, statusChanged);
   OperatorModel operators;
   checkStatusProperties(operators, statusChanged);
   // these three notify status and errorString with the signal of their other properties

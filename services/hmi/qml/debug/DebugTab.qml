@@ -5,8 +5,9 @@ import OpenVcu.Models
 import OpenVcu.Hmi
 
 // Log (filter by service and level, export), FSM transitions, active faults with reset,
-// service health with restart, system figures, reboot/shutdown after confirmation, and
-// Record (vcu record into the data folder; Analyse hands the logs to the Trace tab).
+// the J1939 networks (J1939Page), service health with restart, system figures,
+// reboot/shutdown after confirmation, and Record (vcu record into the data folder; Analyse
+// hands the logs to the Trace tab).
 ColumnLayout {
     id: debugTab
     property var health
@@ -23,8 +24,13 @@ ColumnLayout {
         id: pages
         Layout.fillWidth: true
         Repeater {
-            model: ["Log", "Transitions", "Faults (" + faults.activeCount + ")", "Services", "Record"]
-            TabButton { text: modelData; font.pixelSize: Theme.fontSmall; implicitHeight: 40 }
+            // a fixed list: a model rebuilt on each new fault count recreated the buttons and
+            // sent the operator back to the first page
+            model: ["Log", "Transitions", "Faults", "Services", "Record", "J1939"]
+            TabButton {
+                text: modelData === "Faults" ? "Faults (" + faults.activeCount + ")" : modelData
+                font.pixelSize: Theme.fontSmall; implicitHeight: 40
+            }
         }
     }
     // pages as plain Items (see CanDataTab.qml: nested StackLayouts crashed in Qt 6.4.2)
@@ -149,6 +155,11 @@ ColumnLayout {
             anchors.fill: parent
             visible: pages.currentIndex === 4
             onAnalyse: (logs) => debugTab.analyse(logs)
+        }
+
+        J1939Page {
+            anchors.fill: parent
+            visible: pages.currentIndex === 5
         }
     }
 

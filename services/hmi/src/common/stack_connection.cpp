@@ -135,6 +135,7 @@ void StackConnection::openEvents() {
   bool subscribed =
       bus.onHeartbeat([this](const ipc::Heartbeat& beat) { Q_EMIT heartbeat(beat); }) &&
       bus.onSchedule([this](const ipc::TxSchedule& schedule) { Q_EMIT txSchedule(schedule); }) &&
+      bus.onJ1939Network([this](const ipc::J1939Network& network) { Q_EMIT j1939Network(network); }) &&
       bus.onLog([this](const ipc::LogRecord& record) { Q_EMIT logRecord(record); }) &&
       bus.onFsmTransition([this](const ipc::FsmTransition& transition) { Q_EMIT fsmTransition(transition); }) &&
       bus.onFault([this](const ipc::FaultEvent& event) { Q_EMIT fault(event); });

@@ -116,6 +116,8 @@ class StackConnection : public QObject {
   void heartbeat(const openvcu::ipc::Heartbeat& beat);
   /// vcu-can-tx's live transmit schedule, one part at a time.
   void txSchedule(const openvcu::ipc::TxSchedule& schedule);
+  /// vcu-can-tx's view of one J1939 network (one message per bus, each second and on change).
+  void j1939Network(const openvcu::ipc::J1939Network& network);
   void logRecord(const openvcu::ipc::LogRecord& record);
   void fsmTransition(const openvcu::ipc::FsmTransition& transition);
   void fault(const openvcu::ipc::FaultEvent& fault);

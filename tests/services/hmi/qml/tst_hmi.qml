@@ -139,6 +139,18 @@ Item {
             verify(findChild(screen, "statsError").text.indexOf("malformed") >= 0, findChild(screen, "statsError").text)
         }
 
+        function test_the_debug_tab_lists_the_configured_j1939_bus_before_can_tx_reports_it() {
+            const screen = createTemporaryObject(debugTab, root)
+            waitForRendering(screen)
+            mouseClick(findText(screen, "J1939", true))
+            const list = findChild(screen, "j1939List")
+            verify(list !== null && list.visible, "no J1939 page")
+            tryCompare(list, "count", 1)  // HHEA: the vehicle bus has a "j1939" object
+            waitForRendering(list)
+            verify(findText(list.contentItem, "bus vehicle", true) !== null, "the vehicle bus is not listed")
+            verify(findText(list.contentItem, "not heard from vcu-can-tx yet", false) !== null, "not marked as not heard")
+        }
+
         function test_the_debug_tab_offers_record_and_names_the_data_folder() {
             const screen = createTemporaryObject(debugTab, root)
             waitForRendering(screen)
