@@ -73,11 +73,18 @@ base_path, over_path, out_path = (os.path.abspath(p) for p in sys.argv[1:])
 def absolute(folder, value):
     return [absolute(folder, v) for v in value] if isinstance(value, list) else os.path.join(folder, value)
 config = json.load(open(base_path))
-for key in ("dbc", "schedule", "fsm", "gpio", "simulation", "receive"):
+for key in ("dbc", "schedule", "fsm", "gpio", "simulation", "receive", "diagnostics"):
     if key in config:
         config[key] = absolute(os.path.dirname(base_path), config[key])
 for key, value in json.load(open(over_path)).items():
     config[key] = absolute(os.path.dirname(over_path), value) if key in ("gpio", "receive") else value
+# the diagnostics as a copy beside the merged file, its DTC occurrence counts on the VM's
+# tmpfs: can-tx writes that file, and the source tree may be a read-only bind (/tmp clones)
+if "diagnostics" in config:
+    diagnostics = json.load(open(config["diagnostics"]))
+    diagnostics["countsFile"] = "/tmp/openvcu-dtc_counts.json"
+    config["diagnostics"] = os.path.join(os.path.dirname(out_path), "diagnostics.json")
+    json.dump(diagnostics, open(config["diagnostics"], "w"), indent=2)
 json.dump(config, open(out_path, "w"), indent=2)
 PYEOF
 
@@ -310,6 +317,64 @@ if grep -Eq 'EC21F3#10' "$OUT/tp_cm.txt" && grep -Eq 'ECF321#11' "$OUT/tp_cm.txt
   result j1939_tp_rts_cts PASS "kernel RTS (20 bytes, PGN EF00, F3 -> 21), can-rx CTS and EndOfMsgAck on the wire, vehicle.tp_completed $tp_before -> $tp_after"
 else
   result j1939_tp_rts_cts FAIL "$(tr '\n' ' ' < "$OUT/rts.txt"); TP.CM seen: $(tr '\n' '|' < "$OUT/tp_cm.txt"); tp_completed $tp_before -> $tp_after"
+fi
+
+# ---------------------------------------------------------------- 5d. the VCU's own J1939 to the kernel's can-j1939
+# tests/kernel/j1939_peer.py: another node made of kernel can-j1939 sockets, no project code.
+# The kernel only delivers a TP message it reassembled from a valid J1939-21 session.
+PEER=$HERE/j1939_peer.py
+DIAG=$OUT/diagnostics.json   # the merged copy (same DTCs and identification as config/hhea)
+# DM1: the FSM is still in "Contactor Fault" (3b); the line pulled up again adds the
+# line's own signal DTC: 2 DTCs -> 10 bytes -> BAM
+state_now=$(plane bus internal.fsm.state)
+echo pull-up > "$SIMSYS/sim_gpio27/pull"
+wait_for 5 plane_is bus internal.fault.Contactor 1
+out=$($PY "$PEER" dm1 --diagnostics "$DIAG" --state "Contactor Fault" --signal internal.fault.Contactor --timeout 4 2>&1)
+echo pull-down > "$SIMSYS/sim_gpio27/pull"
+if [[ $out == PASS* ]]; then result j1939_dm1_bam PASS "FSM state $state_now; ${out#PASS }"
+else result j1939_dm1_bam FAIL "FSM state $state_now (Contactor Fault = $CONTACTOR_FAULT); ${out#FAIL }"; fi
+# identification: ECU ID to the VCU (0x21) by RTS/CTS to 0xF9, SOFT to all by BAM
+out=$($PY "$PEER" request --diagnostics "$DIAG" --pgn 64965 --to 0x21 2>&1)
+if [[ $out == PASS* ]]; then result j1939_rts_cts_to_kernel PASS "${out#PASS }"
+else result j1939_rts_cts_to_kernel FAIL "${out#FAIL }"; fi
+out=$($PY "$PEER" request --diagnostics "$DIAG" --pgn 65242 --to 0xFF 2>&1)
+if [[ $out == PASS* ]]; then result j1939_bam_to_kernel PASS "${out#PASS }"
+else result j1939_bam_to_kernel FAIL "${out#FAIL }"; fi
+
+# Address claim (J1939-81), last of the checks on this stack: the VCU leaves 0x21.
+# The VCU's NAME and range from the merged configuration; the kernel's NAMEs one below
+# (higher priority) and one above (lower priority) the VCU's.
+read -r VCU_NAME LOW HIGH <<< "$($PY -c "import json,sys
+c=json.load(open(sys.argv[1])); j=[b for b in c['buses'] if b['name']=='vehicle'][0]['j1939']; n=j['name']
+v=(n['arbitraryAddressCapable'] and 1)<<63|n['industryGroup']<<60|n['vehicleSystemInstance']<<56|n['vehicleSystem']<<49|n['function']<<40|n['functionInstance']<<35|n['ecuInstance']<<32|n['manufacturerCode']<<21|n['identityNumber']
+r=j.get('addressRange',[128,247]); print(v, r[0], r[-1])" "$CFG" 2>&1)"
+out=$($PY "$PEER" claim --name $((VCU_NAME - 1)) --address 0x21 --vcu-name "$VCU_NAME" --expect yield --range "$LOW" "$HIGH" 2>&1)
+new=$(grep -o 'NEWADDR=[0-9A-F]*' <<< "$out" | cut -d= -f2)
+if [[ $out == PASS* && -n $new ]]; then
+  # the VCU's view (vcu j1939: every service's claim state, address and known nodes) and
+  # its cyclic frames from the new address
+  view_ok() {
+    "$VCU" j1939 --json --config "$CFG" > "$OUT/j1939-after-yield.json" 2>&1 || return 1
+    view=$($PY -c "import json,sys
+d=json.load(open(sys.argv[1])); b=[x for x in d['buses'] if x['bus']=='vehicle']; new=int(sys.argv[2],16)
+ok=b and all(x['claimState']=='claimed' and x['address']==new for x in b) and any(0x21 in [n['address'] for n in x['nodes']] for x in b)
+print(('OK ' if ok else 'BAD ')+' '.join('%s %s at %d, nodes %s' % (x.get('service'), x['claimState'], x['address'], [n['address'] for n in x['nodes']]) for x in b))" "$OUT/j1939-after-yield.json" "$new" 2>&1)
+    [[ $view == OK* ]]
+  }
+  wait_for 3 view_ok
+  candump -L -T 1500 "vcan0,000000$new:000000FF" > "$OUT/after-yield.txt" 2>&1
+  frames=$(grep -c "#" "$OUT/after-yield.txt")
+  if (( frames > 0 )) && [[ $view == OK* ]]; then
+    result j1939_address_yield PASS "${out#PASS }; vcu j1939: ${view#OK }; $frames VCU frames from SA $new in 1.5 s"
+  else
+    result j1939_address_yield FAIL "${out#PASS }; vcu j1939: $view; $frames VCU frames from SA $new in 1.5 s"
+  fi
+  out=$($PY "$PEER" claim --name $((VCU_NAME + 1)) --address "0x$new" --vcu-name "$VCU_NAME" --expect defend 2>&1)
+  if [[ $out == PASS* ]]; then result j1939_address_defend PASS "${out#PASS }"
+  else result j1939_address_defend FAIL "${out#FAIL }"; fi
+else
+  result j1939_address_yield FAIL "${out#FAIL }"
+  result j1939_address_defend FAIL "not run: the VCU did not yield"
 fi
 
 # ---------------------------------------------------------------- 4c. link down / up
