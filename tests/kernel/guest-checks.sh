@@ -76,8 +76,13 @@ config = json.load(open(base_path))
 for key in ("dbc", "schedule", "fsm", "gpio", "simulation", "receive", "diagnostics"):
     if key in config:
         config[key] = absolute(os.path.dirname(base_path), config[key])
+base_buses = {bus["name"]: bus for bus in config.get("buses", [])}
 for key, value in json.load(open(over_path)).items():
     config[key] = absolute(os.path.dirname(over_path), value) if key in ("gpio", "receive") else value
+# an overridden bus keeps the base bus' J1939 identity (NAME, preferred address, range)
+for bus in config.get("buses", []):
+    if "j1939" not in bus and "j1939" in base_buses.get(bus["name"], {}):
+        bus["j1939"] = base_buses[bus["name"]]["j1939"]
 # the diagnostics as a copy beside the merged file, its DTC occurrence counts on the VM's
 # tmpfs: can-tx writes that file, and the source tree may be a read-only bind (/tmp clones)
 if "diagnostics" in config:
@@ -323,6 +328,7 @@ fi
 # tests/kernel/j1939_peer.py: another node made of kernel can-j1939 sockets, no project code.
 # The kernel only delivers a TP message it reassembled from a valid J1939-21 session.
 PEER=$HERE/j1939_peer.py
+t "J1939: DM1, identification"
 DIAG=$OUT/diagnostics.json   # the merged copy (same DTCs and identification as config/hhea)
 # DM1: the FSM is still in "Contactor Fault" (3b); the line pulled up again adds the
 # line's own signal DTC: 2 DTCs -> 10 bytes -> BAM
@@ -343,12 +349,14 @@ else result j1939_bam_to_kernel FAIL "${out#FAIL }"; fi
 
 # Address claim (J1939-81), last of the checks on this stack: the VCU leaves 0x21.
 # The VCU's NAME and range from the merged configuration; the kernel's NAMEs one below
-# (higher priority) and one above (lower priority) the VCU's.
-read -r VCU_NAME LOW HIGH <<< "$($PY -c "import json,sys
+# (higher priority) and one above (lower priority) the VCU's (in python: bash arithmetic is
+# signed 64-bit).
+read -r VCU_NAME HIGHER_NAME LOWER_NAME LOW HIGH <<< "$($PY -c "import json,sys
 c=json.load(open(sys.argv[1])); j=[b for b in c['buses'] if b['name']=='vehicle'][0]['j1939']; n=j['name']
 v=(n['arbitraryAddressCapable'] and 1)<<63|n['industryGroup']<<60|n['vehicleSystemInstance']<<56|n['vehicleSystem']<<49|n['function']<<40|n['functionInstance']<<35|n['ecuInstance']<<32|n['manufacturerCode']<<21|n['identityNumber']
-r=j.get('addressRange',[128,247]); print(v, r[0], r[-1])" "$CFG" 2>&1)"
-out=$($PY "$PEER" claim --name $((VCU_NAME - 1)) --address 0x21 --vcu-name "$VCU_NAME" --expect yield --range "$LOW" "$HIGH" 2>&1)
+r=j.get('addressRange',[128,247]); print(hex(v), hex(v-1), hex(v+1), r[0], r[-1])" "$CFG" 2>&1)"
+t "J1939: address claim"
+out=$($PY "$PEER" claim --name "$HIGHER_NAME" --address 0x21 --vcu-name "$VCU_NAME" --expect yield --range "$LOW" "$HIGH" 2>&1 | tee "$OUT/claim-yield.txt")
 new=$(grep -o 'NEWADDR=[0-9A-F]*' <<< "$out" | cut -d= -f2)
 if [[ $out == PASS* && -n $new ]]; then
   # the VCU's view (vcu j1939: every service's claim state, address and known nodes) and
@@ -369,7 +377,7 @@ print(('OK ' if ok else 'BAD ')+' '.join('%s %s at %d, nodes %s' % (x.get('servi
   else
     result j1939_address_yield FAIL "${out#PASS }; vcu j1939: $view; $frames VCU frames from SA $new in 1.5 s"
   fi
-  out=$($PY "$PEER" claim --name $((VCU_NAME + 1)) --address "0x$new" --vcu-name "$VCU_NAME" --expect defend 2>&1)
+  out=$($PY "$PEER" claim --name "$LOWER_NAME" --address "0x$new" --vcu-name "$VCU_NAME" --expect defend 2>&1 | tee "$OUT/claim-defend.txt")
   if [[ $out == PASS* ]]; then result j1939_address_defend PASS "${out#PASS }"
   else result j1939_address_defend FAIL "${out#FAIL }"; fi
 else
