@@ -32,6 +32,9 @@ PGN_REQUEST = 0xEA00      # 59904 Request (J1939-21)
 PGN_CLAIM = 0xEE00        # 60928 Address Claimed (J1939-81)
 PGN_SOFT = 0xFEDA         # 65242 Software Identification
 PGN_ECUID = 0xFDC5        # 64965 ECU Identification
+# linux/can/j1939.h; Python's socket module may lack them
+SOL_CAN_J1939 = getattr(socket, "SOL_CAN_J1939", 100 + socket.CAN_J1939)   # SOL_CAN_BASE + CAN_J1939
+SO_J1939_PROMISC = getattr(socket, "SO_J1939_PROMISC", 2)
 PEER = 0xF9               # our address for the requests (a service tool's)
 
 
@@ -40,7 +43,7 @@ def j1939_socket(name=socket.J1939_NO_NAME, pgn=socket.J1939_NO_PGN, addr=socket
     s = socket.socket(socket.AF_CAN, socket.SOCK_DGRAM, socket.CAN_J1939)
     s.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
     if promisc:
-        s.setsockopt(socket.SOL_CAN_J1939, socket.SO_J1939_PROMISC, 1)
+        s.setsockopt(SOL_CAN_J1939, SO_J1939_PROMISC, 1)
     s.bind((IF, name, pgn, addr))
     return s
 
