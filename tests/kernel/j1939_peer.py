@@ -2,27 +2,29 @@
 """Another J1939 node on vcan0, made of the kernel's can-j1939 sockets (no project code):
 the VM test's independent view of the VCU as a J1939 network citizen (issue 24).
 
-  j1939_peer.py dm1 --diagnostics FILE --state NAME --signal KEY
-      receive the VCU's DM1 (PGN 0xFECA) as the kernel delivers it (a BAM reassembled by the
-      kernel when longer than 8 bytes) and find the DTCs that diagnostics.json maps to the FSM
-      state NAME and to the signal KEY (SPN and FMI read from the file, not hard-coded)
-  j1939_peer.py request --diagnostics FILE --pgn 64965|65242 --to ADDR [--version V]
-      a socket at 0xF9 sends a Request (PGN 0xEA00) for the PGN to ADDR (0xFF: global) and
-      receives the answer reassembled by the kernel (RTS/CTS to 0xF9, the kernel sends CTS and
-      EndOfMsgAck; BAM for a global request); the content must equal the '*'-terminated fields
-      of diagnostics.json's identification (SOFT: plus the field "openvcu VERSION" the service
-      appends; VERSION as given by --version, else any text without '*')
-  j1939_peer.py claim --name N --address A --vcu-name M --expect yield|defend [--range LO HI]
-      a kernel socket with NAME N claims address A (the kernel sends the Address Claimed when
-      the socket sends PGN 0xEE00 with its NAME); watches the Address Claimed messages of the
-      VCU's NAME M: yield = the VCU claims another address in LO..HI; defend = the VCU claims
-      A again and no other address
+  j1939_peer.py diag --diagnostics FILE --state NAME --signal KEY [--to ADDR] [--version V]
+    j1939_dm1_bam: receive the VCU's DM1 (PGN 0xFECA) as the kernel delivers it (a BAM the
+      kernel reassembled when longer than 8 bytes) with the DTCs diagnostics.json maps to the
+      FSM state NAME and to the signal KEY (SPN and FMI read from the file, not hard-coded)
+    j1939_rts_cts_to_kernel: a socket at 0xF9 requests (PGN 0xEA00) ECU Identification 64965
+      from ADDR (default 0x21): the answer comes by RTS/CTS to 0xF9 (the kernel sends CTS and
+      EndOfMsgAck) and must equal the '*'-terminated fields of diagnostics.json
+    j1939_bam_to_kernel: the same for Software Identification 65242 requested from all
+      (0xFF): by BAM; the field count, the configured fields and "openvcu VERSION" (the field
+      the service appends; VERSION as given, else any text without '*')
+  j1939_peer.py contest --vcu-name M [--address A] [--range LO HI]
+    j1939_address_yield: a kernel socket with NAME M-1 (higher priority) claims A (default
+      0x21; the kernel sends the Address Claimed when the socket sends PGN 0xEE00 with its
+      NAME): the VCU (NAME M) must claim another address in LO..HI and send from it
+    j1939_address_defend: a kernel socket with NAME M+1 (lower priority) claims that new
+      address: the VCU must claim it again and no other address
 
-Prints one line starting with PASS or FAIL, exit 0 on PASS, 1 on FAIL.
+Prints one line "CHECK PASS|FAIL detail" per check, exit 0 when all passed.
 """
 import argparse
 import json
 import socket
+import struct
 import sys
 import time
 
@@ -48,9 +50,9 @@ def j1939_socket(name=socket.J1939_NO_NAME, pgn=socket.J1939_NO_PGN, addr=socket
     return s
 
 
-def finish(ok, text):
-    print(("PASS " if ok else "FAIL ") + text, flush=True)
-    sys.exit(0 if ok else 1)
+def report(check, ok, text):
+    print("%s %s %s" % (check, "PASS" if ok else "FAIL", text), flush=True)
+    return ok
 
 
 def dtcs_of(payload):
@@ -69,7 +71,7 @@ def cmd_dm1(args):
     want = [(d["spn"], d["fmi"]) for d in dtcs
             if d.get("fsmState") == args.state or d.get("signal") == args.signal]
     if len(want) < 2:
-        finish(False, "diagnostics.json maps %s / %s to %d DTCs, want 2" % (args.state, args.signal, len(want)))
+        return False, ("diagnostics.json maps %s / %s to %d DTCs, want 2" % (args.state, args.signal, len(want)))
     s = j1939_socket(pgn=PGN_DM1)
     s.settimeout(0.5)
     end, seen = time.time() + args.timeout, []
@@ -81,9 +83,9 @@ def cmd_dm1(args):
         got = dtcs_of(data)
         seen.append("SA %02X %d bytes %s" % (sa, len(data), data.hex()))
         if sa == args.source and all(any(g[:2] == w for g in got) for w in want):
-            finish(len(data) > 8, "kernel delivered DM1 from SA %02X, %d bytes (%s), DTCs %s contain %s"
+            return len(data) > 8, ("kernel delivered DM1 from SA %02X, %d bytes (%s), DTCs %s contain %s"
                    % (sa, len(data), "BAM reassembled" if len(data) > 8 else "single frame: no BAM", got, want))
-    finish(False, "no DM1 with %s within %.0f s; seen: %s" % (want, args.timeout, " | ".join(seen[-4:]) or "none"))
+    return False, ("no DM1 with %s within %.0f s; seen: %s" % (want, args.timeout, " | ".join(seen[-4:]) or "none"))
 
 
 def cmd_request(args):
@@ -98,7 +100,7 @@ def cmd_request(args):
         fields = list(ident["software"])
         want = bytes([len(fields) + 1]) + "".join(f + "*" for f in fields).encode() + b"openvcu "
     else:
-        finish(False, "unsupported PGN %d" % args.pgn)
+        return False, "unsupported PGN %d" % pgn
     s = j1939_socket(pgn=args.pgn, addr=PEER)
     s.settimeout(args.timeout)
     s.sendto(bytes([args.pgn & 0xFF, args.pgn >> 8 & 0xFF, args.pgn >> 16 & 0xFF]),
@@ -117,10 +119,10 @@ def cmd_request(args):
             if data.startswith(want) and tail.endswith(b"*") and version and b"*" not in version:
                 want += version + b"*"
         how = "BAM" if args.to == 0xFF else "RTS/CTS to %02X" % PEER
-        finish(data == want and len(data) > 8,
+        return data == want and len(data) > 8, (
                "request PGN %d to %02X -> kernel delivered %d bytes from SA %02X (%s): %r%s"
                % (args.pgn, args.to, len(data), sa, how, data, "" if data == want else " != expected %r" % want))
-    finish(False, "no answer for PGN %d from %02X within %.0f s (want %r)" % (args.pgn, args.to, args.timeout, want))
+    return False, ("no answer for PGN %d from %02X within %.0f s (want %r)" % (args.pgn, args.to, args.timeout, want))
 
 
 def cmd_claim(args):
@@ -143,12 +145,57 @@ def cmd_claim(args):
     text = ", ".join("%02X at +%.2f s" % (sa, t) for t, sa in vcu_claims) or "none"
     if args.expect == "yield":
         moved = [sa for _, sa in vcu_claims if args.low <= sa <= args.high]
-        finish(bool(moved), "kernel NAME %016X claimed %02X: the VCU (NAME %016X) claimed %s%s"
+        return bool(moved), ("kernel NAME %016X claimed %02X: the VCU (NAME %016X) claimed %s%s"
                % (args.name, args.address, args.vcu_name, text, "; NEWADDR=%02X" % moved[0] if moved else ""))
     others = [sa for _, sa in vcu_claims if sa != args.address]
-    finish(args.address in [sa for _, sa in vcu_claims] and not others,
+    return args.address in [sa for _, sa in vcu_claims] and not others, (
            "kernel NAME %016X claimed %02X (lower priority): the VCU (NAME %016X) claimed %s"
            % (args.name, args.address, args.vcu_name, text))
+
+
+def frames_from(address, seconds):
+    """frames other than Address Claimed from ADDRESS on the wire (a raw CAN socket) in SECONDS"""
+    raw = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
+    raw.setsockopt(socket.SOL_CAN_RAW, socket.CAN_RAW_FILTER,
+                   struct.pack("=II", address | socket.CAN_EFF_FLAG, 0xFF | socket.CAN_EFF_FLAG))
+    raw.bind((IF,))
+    raw.settimeout(0.2)
+    end, ids = time.time() + seconds, {}
+    while time.time() < end:
+        try:
+            frame = raw.recv(72)
+        except socket.timeout:
+            continue
+        can_id = struct.unpack_from("=I", frame)[0] & socket.CAN_EFF_MASK
+        if (can_id >> 8) & 0xFF00 != PGN_CLAIM:
+            ids[can_id] = ids.get(can_id, 0) + 1
+    return ids
+
+
+def diag(args):
+    ok = report("j1939_dm1_bam", *cmd_dm1(argparse.Namespace(
+        diagnostics=args.diagnostics, state=args.state, signal=args.signal, source=args.to, timeout=4)))
+    for check, pgn, to in (("j1939_rts_cts_to_kernel", PGN_ECUID, args.to), ("j1939_bam_to_kernel", PGN_SOFT, 0xFF)):
+        ok &= report(check, *cmd_request(argparse.Namespace(
+            diagnostics=args.diagnostics, pgn=pgn, to=to, version=args.version, timeout=3)))
+    return ok
+
+
+def contest(args):
+    low, high = args.range
+    ok, text = cmd_claim(argparse.Namespace(name=args.vcu_name - 1, address=args.address, vcu_name=args.vcu_name,
+                                            expect="yield", low=low, high=high, timeout=2))
+    new = int(text.split("NEWADDR=")[1], 16) if ok else None
+    if new is not None:
+        ids = frames_from(new, 1.0)
+        ok = bool(ids)
+        text += "; %d frames from SA %02X in 1 s (%s)" % (
+            sum(ids.values()), new, " ".join("%08X" % i for i in sorted(ids)[:6]) + (" ..." if len(ids) > 6 else ""))
+    report("j1939_address_yield", ok, text)
+    if new is None:
+        return report("j1939_address_defend", False, "not run: the VCU did not yield")
+    return ok & report("j1939_address_defend", *cmd_claim(argparse.Namespace(
+        name=args.vcu_name + 1, address=new, vcu_name=args.vcu_name, expect="defend", low=low, high=high, timeout=2)))
 
 
 def number(text):
@@ -158,29 +205,19 @@ def number(text):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
-    d = sub.add_parser("dm1")
+    d = sub.add_parser("diag")
     d.add_argument("--diagnostics", required=True)
     d.add_argument("--state", required=True)
     d.add_argument("--signal", required=True)
-    d.add_argument("--source", type=number, default=0x21)
-    d.add_argument("--timeout", type=float, default=3)
-    r = sub.add_parser("request")
-    r.add_argument("--diagnostics", required=True)
-    r.add_argument("--pgn", type=number, required=True)
-    r.add_argument("--to", type=number, default=0x21)
-    r.add_argument("--version", default="")
-    r.add_argument("--timeout", type=float, default=3)
-    c = sub.add_parser("claim")
-    c.add_argument("--name", type=number, required=True)
-    c.add_argument("--address", type=number, required=True)
+    d.add_argument("--to", type=number, default=0x21)
+    d.add_argument("--version", default="")
+    c = sub.add_parser("contest")
     c.add_argument("--vcu-name", type=number, required=True)
-    c.add_argument("--expect", choices=("yield", "defend"), required=True)
+    c.add_argument("--address", type=number, default=0x21)
     c.add_argument("--range", type=number, nargs=2, default=(128, 247), metavar=("LO", "HI"))
-    c.add_argument("--timeout", type=float, default=2)
     args = p.parse_args()
-    if args.command == "claim":
-        args.low, args.high = args.range
-    {"dm1": cmd_dm1, "request": cmd_request, "claim": cmd_claim}[args.command](args)
+    ok = diag(args) if args.command == "diag" else contest(args)
+    sys.exit(0 if ok else 1)
 
 
 if __name__ == "__main__":
