@@ -73,11 +73,23 @@ base_path, over_path, out_path = (os.path.abspath(p) for p in sys.argv[1:])
 def absolute(folder, value):
     return [absolute(folder, v) for v in value] if isinstance(value, list) else os.path.join(folder, value)
 config = json.load(open(base_path))
-for key in ("dbc", "schedule", "fsm", "gpio", "simulation", "receive"):
+for key in ("dbc", "schedule", "fsm", "gpio", "simulation", "receive", "diagnostics"):
     if key in config:
         config[key] = absolute(os.path.dirname(base_path), config[key])
+base_buses = {bus["name"]: bus for bus in config.get("buses", [])}
 for key, value in json.load(open(over_path)).items():
     config[key] = absolute(os.path.dirname(over_path), value) if key in ("gpio", "receive") else value
+# an overridden bus keeps the base bus' J1939 identity (NAME, preferred address, range)
+for bus in config.get("buses", []):
+    if "j1939" not in bus and "j1939" in base_buses.get(bus["name"], {}):
+        bus["j1939"] = base_buses[bus["name"]]["j1939"]
+# the diagnostics as a copy beside the merged file, its DTC occurrence counts on the VM's
+# tmpfs: can-tx writes that file, and the source tree may be a read-only bind (/tmp clones)
+if "diagnostics" in config:
+    diagnostics = json.load(open(config["diagnostics"]))
+    diagnostics["countsFile"] = "/tmp/openvcu-dtc_counts.json"
+    config["diagnostics"] = os.path.join(os.path.dirname(out_path), "diagnostics.json")
+    json.dump(diagnostics, open(config["diagnostics"], "w"), indent=2)
 json.dump(config, open(out_path, "w"), indent=2)
 PYEOF
 
@@ -311,6 +323,52 @@ if grep -Eq 'EC21F3#10' "$OUT/tp_cm.txt" && grep -Eq 'ECF321#11' "$OUT/tp_cm.txt
 else
   result j1939_tp_rts_cts FAIL "$(tr '\n' ' ' < "$OUT/rts.txt"); TP.CM seen: $(tr '\n' '|' < "$OUT/tp_cm.txt"); tp_completed $tp_before -> $tp_after"
 fi
+
+# ---------------------------------------------------------------- 5d. the VCU's own J1939 to the kernel's can-j1939
+# tests/kernel/j1939_peer.py: another node made of kernel can-j1939 sockets, no project code;
+# one CHECK line per check (one python start each for 5d and 5e: process starts are slow here).
+# The kernel only delivers a TP message it reassembled from a valid J1939-21 session.
+PEER=$HERE/j1939_peer.py
+peer_results() { # file check...: one result per named check from the peer's lines
+  local check line
+  for check in "${@:2}"; do
+    line=$(grep -m1 "^$check \(PASS\|FAIL\) " "$1")
+    if [[ -z $line ]]; then result "$check" FAIL "no line from j1939_peer.py: $(tr '\n' '|' < "$1" | tail -c 600)"
+    else line=${line#"$check "}; result "$check" "${line%% *}" "${line#* }"; fi
+  done
+}
+# DM1: the FSM is still in "Contactor Fault" (3b); the line pulled up again adds the line's
+# own signal DTC: 2 DTCs -> 10 bytes -> BAM. Then ECU ID by RTS/CTS, SOFT by BAM.
+t "J1939: DM1 and identification to the kernel (FSM state $(plane bus internal.fsm.state), Contactor Fault = $CONTACTOR_FAULT)"
+echo pull-up > "$SIMSYS/sim_gpio27/pull"
+wait_for 5 plane_is bus internal.fault.Contactor 1
+$PY "$PEER" diag --diagnostics "$OUT/diagnostics.json" --state "Contactor Fault" --signal internal.fault.Contactor \
+    > "$OUT/j1939-diag.txt" 2>&1
+echo pull-down > "$SIMSYS/sim_gpio27/pull"
+peer_results "$OUT/j1939-diag.txt" j1939_dm1_bam j1939_rts_cts_to_kernel j1939_bam_to_kernel
+
+# ---------------------------------------------------------------- 5e. address claim against the kernel's can-j1939
+# Last on this stack: the VCU leaves 0x21. The VCU's NAME from the merged configuration
+# (bus "vehicle", "j1939" object; computed in python: bash arithmetic is signed 64-bit).
+t "J1939: address claim"
+read -r VCU_NAME LOW HIGH <<< "$($PY -c "import json,sys
+c=json.load(open(sys.argv[1])); j=[b for b in c['buses'] if b['name']=='vehicle'][0]['j1939']; n=j['name']
+v=(n['arbitraryAddressCapable'] and 1)<<63|n['industryGroup']<<60|n['vehicleSystemInstance']<<56|n['vehicleSystem']<<49|n['function']<<40|n['functionInstance']<<35|n['ecuInstance']<<32|n['manufacturerCode']<<21|n['identityNumber']
+r=j.get('addressRange',[128,247]); print(hex(v), r[0], r[-1])" "$CFG" 2>&1)"
+$PY "$PEER" contest --vcu-name "$VCU_NAME" --range "$LOW" "$HIGH" > "$OUT/j1939-contest.txt" 2>&1
+new=$(grep -o 'NEWADDR=[0-9A-F]*' "$OUT/j1939-contest.txt" | cut -d= -f2)
+# the VCU's own view (vcu j1939: can-tx claimed at the new address, a node at 0x21)
+view="not looked at: no new address"
+if [[ -n $new ]]; then
+  "$VCU" j1939 --json --config "$CFG" > "$OUT/j1939-after-contest.json" 2>&1
+  view=$($PY -c "import json,sys
+d=json.load(open(sys.argv[1])); b=[x for x in d['buses'] if x['bus']=='vehicle']; new=int(sys.argv[2],16)
+ok=b and all(x['claimState']=='claimed' and x['address']==new for x in b) and any(0x21 in [n['address'] for n in x['nodes']] for x in b)
+print(('OK ' if ok else 'BAD ')+' '.join('%s %s at %d, nodes %s' % (x.get('service'), x['claimState'], x['address'], [n['address'] for n in x['nodes']]) for x in b))" "$OUT/j1939-after-contest.json" "$new" 2>&1)
+fi
+if [[ $view != OK* ]]; then sed -i "s/^j1939_address_yield PASS /j1939_address_yield FAIL /" "$OUT/j1939-contest.txt"; fi
+sed -i "s|^\(j1939_address_yield [A-Z]* .*\)$|\1; vcu j1939: ${view//|/ }|" "$OUT/j1939-contest.txt"
+peer_results "$OUT/j1939-contest.txt" j1939_address_yield j1939_address_defend
 
 # ---------------------------------------------------------------- 4c. link down / up
 ip link set vcan0 down
