@@ -1,5 +1,7 @@
 #include "openvcu/j1939/transport.hpp"
 
+#include "tp_layout.hpp"
+
 #include <algorithm>
 #include <cassert>
 #include <limits>
@@ -7,50 +9,18 @@
 namespace openvcu::j1939 {
 namespace {
 
-// TP.CM byte offsets (J1939-21 counts from 1: byte 1 is CONTROL).
-constexpr std::size_t CONTROL = 0;
-constexpr std::size_t SIZE_LOW = 1;
-constexpr std::size_t SIZE_HIGH = 2;
-constexpr std::size_t PACKET_COUNT = 3;
-constexpr std::size_t PACKET_LIMIT = 4;  // RTS: max packets per CTS
-constexpr std::size_t CTS_COUNT = 1;
-constexpr std::size_t CTS_NEXT = 2;
-constexpr std::size_t ABORT_REASON = 1;
-constexpr std::size_t PGN_FIELD = 5;
+using namespace tp;
 
-constexpr std::uint8_t RESERVED = 0xFF;
 // Abort byte 2: bits 7..2 reserved (1), bits 1..0 the role of the sender (J1939-21 2022).
 constexpr std::uint8_t ABORT_ROLE_BYTE = 0xFC | TP_ABORT_ROLE_RESPONDER;
 // Addresses 0..253 may originate a session; 254 (null) and 255 (global) may not.
 constexpr std::size_t SOURCE_ADDRESSES = NULL_ADDRESS;
-
-using ControlData = std::array<std::uint8_t, TP_FRAME_LENGTH>;
-
-constexpr std::int64_t after(std::int64_t nowNs, std::int64_t delayNs) noexcept {
-  return nowNs > std::numeric_limits<std::int64_t>::max() - delayNs
-             ? std::numeric_limits<std::int64_t>::max()
-             : nowNs + delayNs;
-}
-
-constexpr std::uint8_t byteOf(std::uint32_t value, unsigned shift) noexcept {
-  return static_cast<std::uint8_t>((value >> shift) & 0xFFu);
-}
 
 // A CTS granting `count` packets from `nextPacket` on (count 0 holds the session open).
 constexpr ControlData clearToSend(std::uint8_t count, std::uint8_t nextPacket, std::uint32_t pgn) noexcept {
   return ControlData{TP_CM_CTS, count, nextPacket, RESERVED, RESERVED, byteOf(pgn, 0), byteOf(pgn, 8), byteOf(pgn, 16)};
 }
 
-constexpr std::uint32_t pgnField(std::span<const std::uint8_t> data) noexcept {
-  return static_cast<std::uint32_t>(data[PGN_FIELD]) |
-         (static_cast<std::uint32_t>(data[PGN_FIELD + 1]) << 8) |
-         (static_cast<std::uint32_t>(data[PGN_FIELD + 2]) << 16);
-}
-
-constexpr std::size_t packetsFor(std::size_t size) noexcept {
-  return (size + TP_BYTES_PER_PACKET - 1) / TP_BYTES_PER_PACKET;
-}
-static_assert(packetsFor(TP_MAX_MESSAGE_SIZE) == TP_MAX_PACKETS);
 static_assert(packetsFor(TP_MIN_MESSAGE_SIZE) == 2);
 
 // Reason to refuse an RTS or BAM announcing `size` bytes in `packets` packets, or None.

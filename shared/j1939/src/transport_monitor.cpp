@@ -1,41 +1,16 @@
 #include "openvcu/j1939/transport_monitor.hpp"
 
+#include "tp_layout.hpp"
+
 #include <algorithm>
 #include <limits>
 
 namespace openvcu::j1939 {
 namespace {
 
-// TP.CM byte offsets (J1939-21 counts from 1: byte 1 is the control byte).
-constexpr std::size_t CONTROL = 0;
-constexpr std::size_t SIZE_LOW = 1;
-constexpr std::size_t SIZE_HIGH = 2;
-constexpr std::size_t PACKET_COUNT = 3;
-constexpr std::size_t CTS_COUNT = 1;
-constexpr std::size_t CTS_NEXT = 2;
-constexpr std::size_t ABORT_REASON = 1;
-constexpr std::size_t ABORT_ROLE = 2;
-constexpr std::size_t PGN_FIELD = 5;
-constexpr std::uint8_t ABORT_ROLE_MASK = 0x03;
+using namespace tp;
+
 constexpr std::uint8_t ABORT_ROLE_ORIGINATOR = 0;
-
-constexpr std::int64_t after(std::int64_t nowNs, std::int64_t delayNs) noexcept {
-  return nowNs > std::numeric_limits<std::int64_t>::max() - delayNs ? std::numeric_limits<std::int64_t>::max()
-                                                                     : nowNs + delayNs;
-}
-
-constexpr std::uint32_t pgnField(std::span<const std::uint8_t> data) noexcept {
-  return static_cast<std::uint32_t>(data[PGN_FIELD]) | (static_cast<std::uint32_t>(data[PGN_FIELD + 1]) << 8) |
-         (static_cast<std::uint32_t>(data[PGN_FIELD + 2]) << 16);
-}
-
-constexpr std::size_t sizeField(std::span<const std::uint8_t> data) noexcept {
-  return static_cast<std::size_t>(data[SIZE_LOW]) | (static_cast<std::size_t>(data[SIZE_HIGH]) << 8);
-}
-
-constexpr std::size_t packetsFor(std::size_t size) noexcept {
-  return (size + TP_BYTES_PER_PACKET - 1) / TP_BYTES_PER_PACKET;
-}
 
 constexpr std::size_t keyOf(std::uint8_t source, std::uint8_t destination) noexcept {
   return static_cast<std::size_t>(source) * 256 + destination;

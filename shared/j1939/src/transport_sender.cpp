@@ -1,5 +1,7 @@
 #include "openvcu/j1939/transport_sender.hpp"
 
+#include "tp_layout.hpp"
+
 #include <algorithm>
 #include <cassert>
 #include <limits>
@@ -7,50 +9,16 @@
 namespace openvcu::j1939 {
 namespace {
 
-// TP.CM byte offsets (J1939-21 counts from 1: byte 1 is CONTROL).
-constexpr std::size_t CONTROL = 0;
-constexpr std::size_t SIZE_LOW = 1;
-constexpr std::size_t SIZE_HIGH = 2;
-constexpr std::size_t PACKET_COUNT = 3;
-constexpr std::size_t CTS_COUNT = 1;
-constexpr std::size_t CTS_NEXT = 2;
-constexpr std::size_t ABORT_REASON = 1;
-constexpr std::size_t ABORT_ROLE = 2;
-constexpr std::size_t PGN_FIELD = 5;
+using namespace tp;
 
-constexpr std::uint8_t RESERVED = 0xFF;
 constexpr std::uint8_t PADDING = 0xFF;  // J1939-21: unused bytes of the last TP.DT
 constexpr std::uint8_t MAX_PRIORITY = 7;
-constexpr std::uint8_t ABORT_ROLE_MASK = 0x03;
 // Abort byte 2: bits 7..2 reserved (1), bits 1..0 the role of the sender (J1939-21 2022).
 constexpr std::uint8_t ABORT_ROLE_BYTE = 0xFC | TP_ABORT_ROLE_ORIGINATOR;
 // One running session per destination: 0..253 and 255 (BAM).
 constexpr std::size_t MAX_SESSIONS = TP_MAX_PACKETS;
 // Keeps record indices below NO_SESSION; 4096 x 1785 bytes is already 7 MB.
 constexpr std::size_t MAX_QUEUE_CAPACITY = 4096;
-
-using ControlData = std::array<std::uint8_t, TP_FRAME_LENGTH>;
-
-constexpr std::int64_t after(std::int64_t nowNs, std::int64_t delayNs) noexcept {
-  return nowNs > std::numeric_limits<std::int64_t>::max() - delayNs
-             ? std::numeric_limits<std::int64_t>::max()
-             : nowNs + delayNs;
-}
-
-constexpr std::uint8_t byteOf(std::uint32_t value, unsigned shift) noexcept {
-  return static_cast<std::uint8_t>((value >> shift) & 0xFFu);
-}
-
-constexpr std::uint32_t pgnField(std::span<const std::uint8_t> data) noexcept {
-  return static_cast<std::uint32_t>(data[PGN_FIELD]) |
-         (static_cast<std::uint32_t>(data[PGN_FIELD + 1]) << 8) |
-         (static_cast<std::uint32_t>(data[PGN_FIELD + 2]) << 16);
-}
-
-constexpr std::size_t packetsFor(std::size_t size) noexcept {
-  return (size + TP_BYTES_PER_PACKET - 1) / TP_BYTES_PER_PACKET;
-}
-static_assert(packetsFor(TP_MAX_MESSAGE_SIZE) == TP_MAX_PACKETS);
 
 // RTS or BAM: control, size, packets, byte 4 (RTS: packets per CTS; BAM: reserved), PGN.
 constexpr ControlData announcement(std::uint8_t control, std::uint16_t size, std::uint8_t packets,
