@@ -12,6 +12,7 @@
 #include <system_error>
 #include <utility>
 
+#include "openvcu/core/output_file.hpp"
 #include "openvcu/config/diagnostics.hpp"
 #include "openvcu/config/json.hpp"
 
@@ -61,18 +62,6 @@ Result<std::vector<j1939::Dtc>> parseCounts(const Json& root, const std::string&
   return counts;
 }
 
-Status writeAll(int fd, std::string_view text) {
-  while (!text.empty()) {
-    const ssize_t written = ::write(fd, text.data(), text.size());
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      return Error{std::strerror(errno)};
-    }
-    text.remove_prefix(static_cast<std::size_t>(written));
-  }
-  return {};
-}
-
 }  // namespace
 
 DtcCountsLoad loadDtcCounts(const std::string& path) {
@@ -109,29 +98,7 @@ Status saveDtcCounts(const std::string& path, std::span<const j1939::Dtc> counts
   root["counts"] = std::move(list);
   const std::string text = root.dump(2) + "\n";
 
-  const std::filesystem::path target(path);
-  const std::string folder = target.parent_path().empty() ? "." : target.parent_path().string();
-  const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return Error{path + ": cannot write the DTC counts: " + std::strerror(errno)};
-  Status written = writeAll(fd, text);
-  if (written && ::fsync(fd) != 0) written = Error{std::strerror(errno)};
-  ::close(fd);
-  if (!written) {
-    ::unlink(temporary.c_str());
-    return Error{path + ": cannot write the DTC counts: " + written.error().message};
-  }
-  if (::rename(temporary.c_str(), path.c_str()) != 0) {
-    const int saved = errno;
-    ::unlink(temporary.c_str());
-    return Error{path + ": cannot replace the DTC counts: " + std::strerror(saved)};
-  }
-  const int dirFd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dirFd >= 0) {
-    ::fsync(dirFd);
-    ::close(dirFd);
-  }
-  return {};
+  return output::writeFileAtomically(path, text, "DTC counts");
 }
 
 }  // namespace openvcu::config

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "openvcu/core/output_file.hpp"
 #include "openvcu/config/json.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
 
@@ -18,19 +19,6 @@ constexpr std::int64_t NS_PER_MS = 1'000'000;
 
 using config::Json;
 using config::JsonChecker;
-
-Status writeAll(int fd, const std::string& text) {
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t written = ::write(fd, text.data() + done, text.size() - done);
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      return Error{std::strerror(errno)};
-    }
-    done += static_cast<std::size_t>(written);
-  }
-  return {};
-}
 
 }  // namespace
 
@@ -135,29 +123,7 @@ Status saveOverlay(const std::string& path, const Overlay& overlay) {
   root["overrides"] = std::move(overrides);
   const std::string text = root.dump(2) + "\n";
 
-  const std::filesystem::path target(path);
-  const std::string folder = target.parent_path().empty() ? "." : target.parent_path().string();
-  const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return Error{path + ": cannot write the overlay: " + std::strerror(errno)};
-  Status written = writeAll(fd, text);
-  if (written && ::fsync(fd) != 0) written = Error{std::strerror(errno)};
-  ::close(fd);
-  if (!written) {
-    ::unlink(temporary.c_str());
-    return Error{path + ": cannot write the overlay: " + written.error().message};
-  }
-  if (::rename(temporary.c_str(), path.c_str()) != 0) {
-    const int saved = errno;
-    ::unlink(temporary.c_str());
-    return Error{path + ": cannot replace the overlay: " + std::strerror(saved)};
-  }
-  const int dirFd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dirFd >= 0) {
-    ::fsync(dirFd);
-    ::close(dirFd);
-  }
-  return {};
+  return output::writeFileAtomically(path, text, "overlay");
 }
 
 }  // namespace openvcu::schedule
