@@ -76,6 +76,7 @@ struct BusSlot {
   std::string name;
   std::unique_ptr<j1939::TpReceiver> transport;
   std::unique_ptr<AddressMap> addresses;  ///< J1939-81 claims: the VCU's address, moved nodes' home addresses
+  j1939::AddressSet requestAddresses{};    ///< the addresses the VCU answers requests on, on this bus
   std::unique_ptr<can::BusLoadMeter> load;
   BusCounters counters;
   std::int32_t loadSlot{NO_SLOT};
@@ -155,7 +156,7 @@ struct ReceiverImpl {
         return;
       }
       if (pgn == j1939::PGN_REQUEST) {
-        if (const auto maybeRequest = j1939::parseRequest(frame.id, true, frame.payload(), ownAddress)) {
+        if (const auto maybeRequest = j1939::parseRequest(frame.id, true, frame.payload(), bus.requestAddresses)) {
           ++bus.counters.requests;
           outputs.request(busIndex, *maybeRequest, received.monotonicNs);
         }
@@ -233,16 +234,18 @@ struct ReceiverImpl {
 
   // ---- J1939-76 -------------------------------------------------------------------------
 
-  /// true when `frame` is the SHM of a configured group (then it is consumed here).
   /// J1939-81: follows the VCU's own address and moved nodes, and hands the claim to can-tx.
   void onAddressClaimed(std::size_t busIndex, std::uint8_t source, const can::ReceivedFrame& received) noexcept {
     BusSlot& bus = buses[busIndex];
     ++bus.counters.addressClaims;
+    const std::uint8_t before = bus.addresses->ownAddress();
     if (bus.addresses->onAddressClaimed(source, received.frame.payload())) {
       ++bus.counters.ownAddressChanges;
       const std::uint8_t address = bus.addresses->ownAddress();
       bus.transport->setOwnAddress(address);
-      if (address < j1939::NULL_ADDRESS) ownAddress[address] = true;
+      // requests to the address the VCU left are another node's now
+      if (before < j1939::NULL_ADDRESS) bus.requestAddresses[before] = false;
+      if (address < j1939::NULL_ADDRESS) bus.requestAddresses[address] = true;
     }
     outputs.network(busIndex, received);
   }
@@ -255,6 +258,7 @@ struct ReceiverImpl {
     return control == j1939::TP_CM_CTS || control == j1939::TP_CM_END_OF_MSG_ACK || control == j1939::TP_CM_ABORT;
   }
 
+  /// true when `frame` is the SHM of a configured group (then it is consumed here).
   bool checkSafetyHeader(const can::Frame& frame, std::int64_t nowNs) noexcept {
     for (SafetyState& group : safety) {
       if (group.headerCanId == frame.id) {
@@ -534,12 +538,11 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
     tpConfig.ownAddress = impl->tpAddress;
     tpConfig.maxPacketsPerCts = impl->receive.maxPacketsPerCts;
     const std::uint8_t ownAddress = busConfig.j1939 ? busConfig.j1939->preferredAddress : impl->tpAddress;
-    if (busConfig.j1939) {
-      tpConfig.ownAddress = ownAddress;
-      impl->ownAddress[ownAddress] = true;
-    }
+    if (busConfig.j1939) tpConfig.ownAddress = ownAddress;
     bus.transport = std::make_unique<j1939::TpReceiver>(tpConfig);
     bus.addresses = std::make_unique<AddressMap>(ownNameOf(busConfig), ownAddress);
+    bus.requestAddresses = impl->ownAddress;
+    bus.requestAddresses[ownAddress] = ownAddress < j1939::NULL_ADDRESS;
     bus.load = std::make_unique<can::BusLoadMeter>(busConfig.bitrate, busConfig.dataBitrate);
     bus.loadSlot = slotOf("internal.bus." + busConfig.name + ".load");
     bus.stateSlot = slotOf("internal.bus." + busConfig.name + ".state");

@@ -19,7 +19,8 @@ namespace openvcu::cantx {
 namespace {
 
 constexpr std::int64_t MS = 1'000'000;
-/// The DTC conditions are read at every run(), and at least this often.
+/// The DTC conditions are read at the first run() this long after the last reading (at the
+/// latest half of it later: the transmit thread wakes for them only when nothing else woke it).
 constexpr std::int64_t DTC_EVALUATION_NS = 100 * MS;
 /// After a missed try-lock of the view, the next attempt (never a busy retry).
 constexpr std::int64_t VIEW_RETRY_NS = 10 * MS;
@@ -431,7 +432,9 @@ std::int64_t Network::nextDeadlineNs() const noexcept {
     if (const auto deadline = bus->tp->nextDeadlineNs()) next = std::min(next, *deadline);
   }
   if (impl.dtcs) {
-    next = std::min(next, impl.nextEvaluationNs);
+    // the evaluation rides on wake-ups the schedule makes anyway; it forces its own only
+    // when none came for half a period more (a bus of slow messages)
+    next = std::min(next, impl.nextEvaluationNs + DTC_EVALUATION_NS / 2);
     next = std::min(next, std::max(impl.dtcs->nextDm1DueNs(), std::int64_t{0}));
   }
   if (impl.viewDirty) next = std::min(next, impl.viewRetryNs);  // a missed try-lock: again soon

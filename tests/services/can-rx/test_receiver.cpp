@@ -557,3 +557,26 @@ TEST_CASE("address claims and TP answers to this node go to can-tx on the net st
   REQUIRE_FALSE(f.outputs.transmitted.empty());
   CHECK(f.outputs.transmitted.back().second.data[0] == 0x11);
 }
+
+TEST_CASE("after the VCU's own claim of a new address requests and RTS to it are answered and the old address is another node's (issue 24)") {
+  Fixture f;
+  // the VCU's NAME (tests/data/can-rx/vehicle.json bus a): identity 1, function 128,
+  // vehicle system 1, industry group 3, arbitrary address capable -> 0xB002800000000001
+  const std::vector<std::uint8_t> ownName{0x01, 0x00, 0x00, 0x00, 0x00, 0x80, 0x02, 0xB0};
+  f.sut->onFrame(BUS_A, frameOf(0x18EA21F3, {0xE6, 0xFE, 0x00}, START + MS));  // Time/Date to 0x21
+  REQUIRE(f.outputs.requests.size() == 1);
+  f.sut->onFrame(BUS_A, frameOf(0x18EEFF80, ownName, START + 2 * MS));  // the VCU moved to 0x80
+  CHECK(f.sut->counters(BUS_A).ownAddressChanges == 1);
+  f.sut->onFrame(BUS_A, frameOf(0x18EA21F3, {0xE6, 0xFE, 0x00}, START + 3 * MS));  // to 0x21: not ours now
+  CHECK(f.outputs.requests.size() == 1);
+  f.sut->onFrame(BUS_A, frameOf(0x18EA80F3, {0xE6, 0xFE, 0x00}, START + 4 * MS));  // to 0x80: ours
+  CHECK(f.outputs.requests.size() == 2);
+  // an RTS to the new address is answered from it; a CTS to it goes to can-tx
+  f.outputs.transmitted.clear();
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC8010, {0x10, 20, 0, 3, 0xFF, 0x30, 0xFF, 0x00}, START + 5 * MS));
+  REQUIRE(f.outputs.transmitted.size() == 1);
+  CHECK(f.outputs.transmitted[0].second.id == 0x1CEC1080u);  // CTS to 0x10 from 0x80
+  const std::size_t before = f.outputs.networkFrames.size();
+  f.sut->onFrame(BUS_A, frameOf(0x1CEC8010, {0x11, 2, 1, 0xFF, 0xFF, 0xCA, 0xFE, 0}, START + 6 * MS));
+  CHECK(f.outputs.networkFrames.size() == before + 1);
+}
