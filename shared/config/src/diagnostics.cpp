@@ -162,7 +162,11 @@ class Loader {
       m_check.error(wherePath, "give exactly one of \"eq\", \"ne\", \"gt\", \"lt\"");
       return;
     }
-    const auto& [key, value] = *when->items().begin();
+    // the one member: its key copied, its value a reference into *when (items() would hand
+    // out a proxy that dies at the end of this statement)
+    const auto member = when->begin();
+    const std::string key = member.key();
+    const Json& value = member.value();
     static const std::pair<std::string_view, DtcCompare> COMPARES[] = {
         {"eq", DtcCompare::Eq}, {"ne", DtcCompare::Ne}, {"gt", DtcCompare::Gt}, {"lt", DtcCompare::Lt}};
     for (const auto& [name, compare] : COMPARES) {
