@@ -127,6 +127,7 @@ function showInfo(info) {
 }
 
 const app = {};
+let updates = 0;
 
 async function main() {
   showConnection('connecting', 'loading');
@@ -153,6 +154,8 @@ async function main() {
   app.tree = new SignalTree(signals, (key) => picks.toggle(key));
   app.stream = new LiveStream({
     onUpdate: (update) => {
+      updates += 1;
+      setAttr(byId('connection'), 'data-updates', updates);  // for the browser test and the curious
       app.live.render(update);
       app.plot.push(update);
       app.commands.renderOperator(update.operator);

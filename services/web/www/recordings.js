@@ -29,22 +29,18 @@ export class Recordings {
     setText(status, `${recordings.length} recordings, ${uploads.length} uploaded logs`);
   }
 
+  /// name (files and summary below it) | size | modified | report, download, summary
   row(kind, entry) {
     const tr = el('tr', { 'data-name': entry.name, 'data-kind': kind });
-    tr.appendChild(el('td', { class: 'name' }, entry.name));
-    tr.appendChild(el('td', { class: 'dim' }, kind === 'recordings' ? 'recording' : 'upload'));
-    tr.appendChild(el('td', {}, formatBytes(entry.bytes)));
-    tr.appendChild(el('td', {}, formatTime(entry.modifiedUnixMs)));
+    const nameCell = el('td', { class: 'name' });
+    nameCell.appendChild(el('div', { class: 'entry-name' }, entry.name));
     const files = Array.isArray(entry.files) ? entry.files : [];
-    tr.appendChild(el('td', { class: 'files dim' }, files.map((f) => `${f.name} (${formatBytes(f.bytes)})`).join(', ')));
-    const summaryCell = el('td', { class: 'summary' });
-    const summaryButton = el('button', { type: 'button', class: 'summary-button' }, 'summary');
-    summaryButton.addEventListener('click', async () => {
-      setText(summaryCell, 'analysing…');
-      setText(summaryCell, await this.summaryText(kind, entry.name));
-    });
-    summaryCell.appendChild(summaryButton);
-    tr.appendChild(summaryCell);
+    nameCell.appendChild(el('div', { class: 'files dim' }, files.map((f) => `${f.name} (${formatBytes(f.bytes)})`).join(', ')));
+    const summary = el('div', { class: 'summary-text' });
+    nameCell.appendChild(summary);
+    tr.appendChild(nameCell);
+    tr.appendChild(el('td', { class: 'size' }, formatBytes(entry.bytes)));
+    tr.appendChild(el('td', { class: 'modified' }, formatTime(entry.modifiedUnixMs)));
     const actions = el('td', { class: 'actions' });
     const report = el('a', { href: entryPath(kind, entry.name, 'report'), class: 'report-link' }, 'report');
     report.addEventListener('click', (event) => {
@@ -59,6 +55,12 @@ export class Recordings {
         class: 'download-link',
       }, 'download'));
     }
+    const summaryButton = el('button', { type: 'button', class: 'summary-button' }, 'summary');
+    summaryButton.addEventListener('click', async () => {
+      setText(summary, 'analysing…');
+      setText(summary, await this.summaryText(kind, entry.name));
+    });
+    actions.appendChild(summaryButton);
     tr.appendChild(actions);
     return tr;
   }

@@ -1,0 +1,668 @@
+#!/usr/bin/python3
+"""Every endpoint of docs/design/web.md against a running vcu-web, good and bad requests.
+
+Run by web_stack_test.sh (inside tests/harness/run_isolated.sh) with the HHEA stack and
+vcu-web up, the FSM in Standby:
+
+  web_api_test.py --url http://127.0.0.1:PORT --user alice --recording drive1 \
+                  --log tests/data/logs/candump_l.log
+  (the password in the environment: OPENVCU_WEB_PASSWORD)
+
+Python's standard library only. Prints one line per check and "web_api_test: PASS", or
+"web_api_test: FAIL: <check>: <why>" and exits 1. Leaves the FSM in Standby, no session open
+and one uploaded log behind (the browser test uploads its own).
+"""
+
+import argparse
+import http.client
+import io
+import json
+import os
+import socket
+import sys
+import tarfile
+import time
+import urllib.parse
+
+NAME = 'web_api_test'
+PASSWD_LINE = 'root:x:0:0'
+FSM_KEY = 'internal.fsm.state'
+START_KEY = 'internal.operator.StartStop'
+
+
+class Failure(Exception):
+    pass
+
+
+def check(condition, what):
+    if not condition:
+        raise Failure(what)
+
+
+class Answer:
+    def __init__(self, status, headers, body):
+        self.status = status
+        self.headers = headers  # lower-case name -> value (Set-Cookie: all joined by '\n')
+        self.body = body
+
+    def json(self):
+        try:
+            return json.loads(self.body.decode('utf-8'))
+        except (UnicodeDecodeError, json.JSONDecodeError) as error:
+            raise Failure(f'answer {self.status} is not JSON ({error}): {self.body[:200]!r}')
+
+    def error(self):
+        body = self.json()
+        check(isinstance(body, dict) and isinstance(body.get('error'), str) and body['error'],
+              f'an error answer without {{"error": "..."}}: {self.body[:200]!r}')
+        return body['error']
+
+    def __repr__(self):
+        return f'HTTP {self.status} {self.body[:300]!r}'
+
+
+class Client:
+    """One HTTP client with the session cookie vcu-web set (if any), from `source` address."""
+
+    def __init__(self, host, port, source='127.0.0.1'):
+        self.host = host
+        self.port = port
+        self.source = source
+        self.session = ''
+
+    def connection(self, timeout=10):
+        return http.client.HTTPConnection(self.host, self.port, timeout=timeout, source_address=(self.source, 0))
+
+    def request(self, method, path, body=None, headers=None, timeout=20):
+        """`path` is sent exactly as given (no normalisation: traversal attempts stay as written)."""
+        all_headers = dict(headers or {})
+        if self.session:
+            all_headers['Cookie'] = f'vcu_session={self.session}'
+        connection = self.connection(timeout)
+        try:
+            connection.request(method, path, body=body, headers=all_headers)
+            response = connection.getresponse()
+            data = response.read()
+            names = {}
+            for name, value in response.getheaders():
+                key = name.lower()
+                names[key] = names[key] + '\n' + value if key in names else value
+            answer = Answer(response.status, names, data)
+        finally:
+            connection.close()
+        for cookie in answer.headers.get('set-cookie', '').split('\n'):
+            if cookie.startswith('vcu_session='):
+                self.session = cookie.split(';', 1)[0].split('=', 1)[1]
+        return answer
+
+    def get(self, path, **kwargs):
+        return self.request('GET', path, **kwargs)
+
+    def post_json(self, path, value, **kwargs):
+        body = value if isinstance(value, (bytes, str)) else json.dumps(value)
+        return self.request('POST', path, body=body, headers={'Content-Type': 'application/json'}, **kwargs)
+
+
+class LiveStream:
+    """GET /api/live as a raw socket: reads `update` events one by one."""
+
+    def __init__(self, client, keys):
+        self.sock = socket.create_connection((client.host, client.port), timeout=10)
+        query = urllib.parse.quote(','.join(keys), safe='')
+        self.sock.sendall(f'GET /api/live?signals={query} HTTP/1.1\r\nHost: {client.host}\r\n'
+                          f'Accept: text/event-stream\r\n\r\n'.encode())
+        self.buffer = b''
+        head = self._read_until(b'\r\n\r\n')
+        lines = head.decode('latin-1').split('\r\n')
+        self.status = int(lines[0].split()[1])
+        self.headers = {l.split(':', 1)[0].lower(): l.split(':', 1)[1].strip() for l in lines[1:] if ':' in l}
+        self.chunked = 'chunked' in self.headers.get('transfer-encoding', '').lower()
+        self.raw = b''  # de-chunked body not yet split into events
+
+    def _read_until(self, marker, deadline=None):
+        while marker not in self.buffer:
+            if deadline is not None:
+                self.sock.settimeout(max(0.05, deadline - time.monotonic()))
+            data = self.sock.recv(65536)
+            if not data:
+                raise Failure('the live stream closed')
+            self.buffer += data
+        head, self.buffer = self.buffer.split(marker, 1)
+        return head
+
+    def _fill(self, deadline):
+        if not self.chunked:
+            self.sock.settimeout(max(0.05, deadline - time.monotonic()))
+            data = self.sock.recv(65536)
+            if not data:
+                raise Failure('the live stream closed')
+            self.raw += data
+            return
+        size_line = self._read_until(b'\r\n', deadline)
+        size = int(size_line.split(b';')[0], 16)
+        while len(self.buffer) < size + 2:
+            self.sock.settimeout(max(0.05, deadline - time.monotonic()))
+            data = self.sock.recv(65536)
+            if not data:
+                raise Failure('the live stream closed')
+            self.buffer += data
+        self.raw += self.buffer[:size]
+        self.buffer = self.buffer[size + 2:]
+
+    def next_event(self, timeout):
+        """(event name, data) of the next event, comments skipped; Failure after `timeout` s."""
+        deadline = time.monotonic() + timeout
+        while True:
+            text = self.raw.replace(b'\r\n', b'\n')
+            if b'\n\n' in text:
+                block, rest = text.split(b'\n\n', 1)
+                self.raw = rest
+                name, data = 'message', []
+                for line in block.decode('utf-8').split('\n'):
+                    if line.startswith(':') or not line:
+                        continue
+                    field, _, value = line.partition(':')
+                    value = value[1:] if value.startswith(' ') else value
+                    if field == 'event':
+                        name = value
+                    elif field == 'data':
+                        data.append(value)
+                if not data and name == 'message':
+                    continue  # a comment block (keep-alive)
+                return name, '\n'.join(data)
+            if time.monotonic() > deadline:
+                raise Failure(f'no event within {timeout} s')
+            try:
+                self._fill(deadline)
+            except socket.timeout:
+                raise Failure(f'no event within {timeout} s')
+
+    def next_update(self, timeout=10):
+        while True:
+            name, data = self.next_event(timeout)
+            if name == 'update':
+                try:
+                    return json.loads(data)
+                except json.JSONDecodeError as error:
+                    raise Failure(f'an update event is not JSON ({error}): {data[:200]!r}')
+
+    def close(self):
+        self.sock.close()
+
+
+def log(text):
+    print(f'{NAME}: {text}', flush=True)
+
+
+def expect_status(answer, statuses, what):
+    statuses = statuses if isinstance(statuses, (tuple, list, set)) else (statuses,)
+    check(answer.status in statuses, f'{what}: expected HTTP {"/".join(map(str, statuses))}, got {answer!r}')
+
+
+# ---------------------------------------------------------------------------------------------
+
+def check_static(c):
+    answer = c.get('/')
+    expect_status(answer, 200, 'GET /')
+    check(answer.headers.get('content-type', '').startswith('text/html'), f'GET / is not text/html: {answer.headers}')
+    check(b'id="fsm-state"' in answer.body, 'GET / is not the page of services/web/www')
+    csp = answer.headers.get('content-security-policy', '')
+    check("default-src 'self'" in csp, f"GET / has no Content-Security-Policy default-src 'self': {csp!r}")
+    for path, kind in (('/app.js', 'javascript'), ('/style.css', 'text/css')):
+        answer = c.get(path)
+        expect_status(answer, 200, f'GET {path}')
+        check(kind in answer.headers.get('content-type', ''), f'GET {path}: content type {answer.headers.get("content-type")}')
+    expect_status(c.get('/no-such-file.js'), 404, 'GET of a missing static file')
+    log('static files: /, app.js, style.css served with a CSP; a missing file is 404')
+
+
+def check_info(c):
+    answer = c.get('/api/info')
+    expect_status(answer, 200, 'GET /api/info')
+    info = answer.json()
+    for key in ('instance', 'vehicle', 'version', 'user', 'loginAvailable', 'maxUpdatesPerSecond', 'maxSignals', 'maxPlotted'):
+        check(key in info, f'/api/info has no "{key}": {info}')
+    check(info['user'] is None, f'/api/info without a session names a user: {info}')
+    check(info['loginAvailable'] is True, f'/api/info: logins not available with a users file: {info}')
+    check(info['instance'] == 'hhea', f'/api/info: instance {info["instance"]!r}')
+    check(isinstance(info['maxUpdatesPerSecond'], (int, float)) and info['maxUpdatesPerSecond'] > 0, f'maxUpdatesPerSecond: {info}')
+    check(isinstance(info['maxSignals'], int) and info['maxSignals'] >= 4, f'maxSignals: {info}')
+    check(isinstance(info['maxPlotted'], int) and 1 <= info['maxPlotted'] <= info['maxSignals'], f'maxPlotted: {info}')
+    log(f'info: {info}')
+    return info
+
+
+def check_catalog(c):
+    answer = c.get('/api/catalog')
+    expect_status(answer, 200, 'GET /api/catalog')
+    signals = answer.json().get('signals')
+    check(isinstance(signals, list) and len(signals) > 50, f'catalog: too few signals: {str(signals)[:200]}')
+    by_key = {}
+    for signal in signals:
+        for field in ('key', 'bus', 'node', 'message', 'signal', 'unit', 'min', 'max', 'direction', 'values', 'comment'):
+            check(field in signal, f'catalog entry without "{field}": {signal}')
+        check(signal['direction'] in ('rx', 'tx', 'internal'), f'catalog direction: {signal}')
+        if signal['direction'] == 'internal':
+            check(signal['bus'] == '' and signal['node'] == '' and signal['message'] == '', f'internal with a bus: {signal}')
+            check(signal.get('group') == signal['key'].split('.')[1], f'internal signal group: {signal}')
+        else:
+            check(signal['bus'] and signal['message'], f'a bus signal without bus/message: {signal}')
+        check(signal['key'] not in by_key, f'catalog key twice: {signal["key"]}')
+        by_key[signal['key']] = signal
+    start = by_key.get(START_KEY)
+    check(start is not None, f'{START_KEY} not in the catalog')
+    check(start['values'] == {'0': 'Stop', '1': 'Start'}, f'{START_KEY} values: {start["values"]}')
+    check(FSM_KEY in by_key, f'{FSM_KEY} not in the catalog')
+    directions = {s['direction'] for s in signals}
+    check(directions == {'rx', 'tx', 'internal'}, f'catalog directions: {directions}')
+    log(f'catalog: {len(signals)} signals, {START_KEY} {start["values"]}')
+    return by_key
+
+
+def pick_signals(catalog):
+    """internal.fsm.state, the received signal with a unit first in the catalog, a transmitted one."""
+    rx = next(k for k, s in catalog.items() if s['direction'] == 'rx' and s['unit'])
+    tx = next(k for k, s in catalog.items() if s['direction'] == 'tx')
+    return [FSM_KEY, rx, tx]
+
+
+def check_live(c, info, catalog):
+    keys = pick_signals(catalog)
+    stream = LiveStream(c, keys)
+    try:
+        check(stream.status == 200, f'/api/live: HTTP {stream.status}')
+        check(stream.headers.get('content-type', '').startswith('text/event-stream'),
+              f'/api/live content type: {stream.headers.get("content-type")}')
+        first = stream.next_update(10)
+        second = stream.next_update(10)
+        for update in (first, second):
+            for field in ('t', 'seq', 'header', 'faults', 'operator', 'signals'):
+                check(field in update, f'update without "{field}": {str(update)[:300]}')
+            header = update['header']
+            for field in ('state', 'stateIndex', 'stateSinceS', 'soc', 'health', 'services'):
+                check(field in header, f'update header without "{field}": {header}')
+            check(isinstance(header['state'], str) and header['state'], f'update: FSM state {header["state"]!r}')
+            check(set(header['soc']) >= {'text', 'status'}, f'update: soc {header["soc"]}')
+            check(header['health'] in ('Ready', 'Stale', 'NotConnected', 'Error'), f'update: health {header["health"]}')
+            for service in header['services']:
+                check(set(service) >= {'name', 'status', 'text'}, f'update: service {service}')
+            check([s['key'] for s in update['signals']] == keys, f'update signals {[s["key"] for s in update["signals"]]} != {keys}')
+            for signal in update['signals']:
+                check(set(signal) >= {'key', 'value', 'text', 'status', 'ageMs'}, f'update signal {signal}')
+                check(signal['status'] in ('Ready', 'Stale', 'NotConnected'), f'update signal status {signal}')
+            operator_keys = [o['key'] for o in update['operator']]
+            check(START_KEY in operator_keys, f'update operator switches {operator_keys}')
+            for entry in update['operator']:
+                check(set(entry) >= {'key', 'label', 'on', 'enabled', 'stateText'}, f'operator switch {entry}')
+        check(second['seq'] > first['seq'], f'seq does not grow: {first["seq"]} then {second["seq"]}')
+        check(second['t'] >= first['t'], f't goes back: {first["t"]} then {second["t"]}')
+        fsm = next(s for s in first['signals'] if s['key'] == FSM_KEY)
+        check(fsm['status'] == 'Ready' and isinstance(fsm['value'], (int, float)), f'{FSM_KEY} not Ready: {fsm}')
+        log(f'live: two updates, state {first["header"]["state"]}, signals {[(s["key"], s["text"], s["status"]) for s in first["signals"]]}')
+        # the cap: over 3 s, at most maxUpdatesPerSecond a second (one event of slack)
+        limit = info['maxUpdatesPerSecond']
+        start = time.monotonic()
+        count = 0
+        times = []
+        while time.monotonic() - start < 3.0:
+            try:
+                stream.next_update(max(0.1, 3.0 - (time.monotonic() - start)))
+            except Failure:
+                break
+            count += 1
+            times.append(time.monotonic())
+        elapsed = time.monotonic() - start
+        check(count <= limit * elapsed + 1, f'{count} updates in {elapsed:.2f} s, more than {limit}/s')
+        check(count >= 1, f'no update in 3 s (stateSinceS changes, so something should)')
+        gaps = [b - a for a, b in zip(times, times[1:])]
+        min_gap = min(gaps) if gaps else 0
+        log(f'live: {count} updates in {elapsed:.2f} s (cap {limit}/s), smallest gap {min_gap * 1000:.0f} ms')
+    finally:
+        stream.close()
+
+    # refusals read through the raw stream: a server that streams instead must not hang the test
+    status, error = live_refusal(c, ['no.such.Signal', FSM_KEY])
+    check(status == 400, f'live with an unknown key: HTTP {status}, expected 400')
+    check('no.such.Signal' in error, f'live: the 400 does not name the unknown key: {error!r}')
+    many = [k for k in catalog][: info['maxSignals'] + 1]
+    status, error = live_refusal(c, many)
+    check(status == 400, f'live with {len(many)} keys (maxSignals {info["maxSignals"]}): HTTP {status}, expected 400')
+    log(f'live: an unknown key -> 400 naming it; {len(many)} keys (more than maxSignals) -> 400 "{error}"')
+
+
+def live_refusal(c, keys):
+    """(status, error text) of GET /api/live for `keys`; the error is empty for a 200 stream."""
+    stream = LiveStream(c, keys)
+    try:
+        if stream.status == 200:
+            return 200, ''
+        length = int(stream.headers.get('content-length', '0'))
+        body = stream.buffer
+        stream.sock.settimeout(5)
+        while len(body) < length:
+            data = stream.sock.recv(65536)
+            if not data:
+                break
+            body += data
+        try:
+            return stream.status, str(json.loads(body[:length].decode('utf-8')).get('error', ''))
+        except (UnicodeDecodeError, json.JSONDecodeError, AttributeError):
+            raise Failure(f'/api/live refused with a body that is not {{"error"}}: {body[:200]!r}')
+    finally:
+        stream.close()
+
+
+def wait_state(c, predicate, what, timeout=20):
+    """Reads the live stream until predicate(state) holds; returns the state."""
+    stream = LiveStream(c, [FSM_KEY])
+    seen = []
+    try:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            update = stream.next_update(max(0.5, deadline - time.monotonic()))
+            state = update['header']['state']
+            if not seen or seen[-1] != state:
+                seen.append(state)
+            if predicate(state):
+                return state, seen
+    except Failure as failure:
+        raise Failure(f'{what}: {failure}; states seen {seen}')
+    finally:
+        stream.close()
+    raise Failure(f'{what}: not within {timeout} s; states seen {seen}')
+
+
+def check_logins(host, port, user, password):
+    c = Client(host, port)
+    answer = c.post_json('/api/login', {'user': user, 'password': password + 'x'})
+    expect_status(answer, 401, 'login with a wrong password')
+    check(answer.error() == 'wrong user or password', f'wrong password: {answer.error()!r}')
+    check(not c.session, 'a wrong password set a session cookie')
+    answer = c.post_json('/api/login', {'user': 'nobody-here', 'password': password})
+    expect_status(answer, 401, 'login of an unknown user')
+    check(answer.error() == 'wrong user or password', f'unknown user: {answer.error()!r} (must not differ from a wrong password)')
+    log('login: wrong password and unknown user -> 401 "wrong user or password"')
+
+    # too many failures from one address: from 127.0.0.2 (also loopback), so 127.0.0.1 stays usable
+    other = Client(host, port, source='127.0.0.2')
+    statuses = []
+    for _ in range(12):
+        answer = other.post_json('/api/login', {'user': user, 'password': 'wrong'})
+        statuses.append(answer.status)
+        if answer.status == 429:
+            break
+    check(statuses[-1] == 429, f'no 429 after {len(statuses)} failed logins: {statuses}')
+    check(statuses[0] == 401, f'the first failed login was not 401: {statuses}')
+    check('retry in' in answer.error(), f'429 without "retry in N s": {answer.error()!r}')
+    answer = other.post_json('/api/login', {'user': user, 'password': password})
+    expect_status(answer, 429, 'the right password from a locked-out address')
+    log(f'login: 127.0.0.2 locked out after {len(statuses) - 1} failures ({answer.error()}); the right password too')
+    answer = Client(host, port).post_json('/api/login', {'user': user, 'password': 'wrong again'})
+    expect_status(answer, 401, 'a failed login from 127.0.0.1 while 127.0.0.2 is locked out')
+
+    answer = c.post_json('/api/login', {'user': user})
+    expect_status(answer, 400, 'login without a password')
+    answer = c.request('POST', '/api/login', body=json.dumps({'user': user, 'password': password}),
+                       headers={'Content-Type': 'text/plain'})
+    expect_status(answer, 415, 'login as text/plain')
+    log('login: no password -> 400, text/plain -> 415')
+
+
+def login(host, port, user, password):
+    c = Client(host, port)
+    answer = c.post_json('/api/login', {'user': user, 'password': password})
+    expect_status(answer, 200, 'login with the right password')
+    body = answer.json()
+    check(body.get('user') == user and isinstance(body.get('expiresInS'), (int, float)) and body['expiresInS'] > 0,
+          f'login answer {body}')
+    cookie = answer.headers.get('set-cookie', '')
+    check(c.session and len(c.session) >= 32, f'no vcu_session cookie: {cookie!r}')
+    attributes = cookie.lower()
+    for attribute in ('httponly', 'samesite=strict', 'path=/'):
+        check(attribute in attributes, f'session cookie without {attribute}: {cookie!r}')
+    info = c.get('/api/info').json()
+    check(info['user'] == user, f'/api/info with the session: user {info["user"]!r}')
+    log(f'login: 200 {body}, cookie {"; ".join(p.strip() for p in cookie.split(";")[1:])}')
+    return c
+
+
+def check_commands(host, port, c, anonymous):
+    command = {'kind': 'operator', 'key': START_KEY, 'value': 'Start'}
+    answer = anonymous.post_json('/api/command', command)
+    expect_status(answer, 401, 'a command without a session')
+    forged = Client(host, port)
+    forged.session = '0' * 64
+    expect_status(forged.post_json('/api/command', command), 401, 'a command with a made-up session')
+    log('command: no session and a made-up session -> 401')
+
+    state, _ = wait_state(c, lambda s: s == 'Standby', 'the FSM in Standby before Start')
+    answer = c.post_json('/api/command', command)
+    expect_status(answer, 200, 'operator Start')
+    body = answer.json()
+    check(body.get('accepted') is True and body.get('responder') == 'vcu-fsm', f'operator Start: {body}')
+    state, seen = wait_state(c, lambda s: s != 'Standby', 'the FSM leaves Standby after Start', timeout=10)
+    log(f'command: operator Start accepted by {body["responder"]}; live stream: {seen}')
+    answer = c.post_json('/api/command', {'kind': 'operator', 'key': START_KEY, 'value': 0})
+    expect_status(answer, 200, 'operator Stop')
+    check(answer.json().get('accepted') is True, f'operator Stop: {answer.json()}')
+    state, seen = wait_state(c, lambda s: s == 'Standby', 'the FSM back in Standby after Stop', timeout=30)
+    log(f'command: operator Stop (value 0) accepted; live stream: {seen}')
+
+    answer = c.post_json('/api/command', {'kind': 'set', 'key': FSM_KEY, 'value': 1})
+    expect_status(answer, 200, f'set {FSM_KEY}')
+    body = answer.json()
+    check(body.get('accepted') is False and body.get('responder') == 'vcu-fsm' and body.get('reason'),
+          f'set {FSM_KEY} should be refused by vcu-fsm with a reason: {body}')
+    log(f'command: set {FSM_KEY} refused by {body["responder"]}: {body["reason"]}')
+
+    bad = [
+        ({'kind': 'set', 'key': 'no.such.Signal', 'value': 1}, 'no.such.Signal', 'an unknown key'),
+        ({'kind': 'launch', 'key': START_KEY, 'value': 1}, None, 'an unknown kind'),
+        ({'kind': 'set', 'key': START_KEY, 'value': {}}, '/value', 'a value that is an object'),
+        ({'kind': 'operator', 'key': START_KEY, 'value': 'Sideways'}, None, 'an operator value text not in the table'),
+        ({'key': START_KEY, 'value': 1}, '/kind', 'no kind'),
+    ]
+    for command, named, what in bad:
+        answer = c.post_json('/api/command', command)
+        expect_status(answer, 400, f'command with {what}')
+        error = answer.error()
+        if named:
+            check(named in error, f'command with {what}: the 400 does not name {named}: {error!r}')
+        log(f'command with {what} -> 400 "{error}"')
+    answer = c.post_json('/api/command', b'{"kind": "set", "key": ')
+    expect_status(answer, 400, 'malformed JSON')
+    log(f'command: malformed JSON -> 400 "{answer.error()}"')
+    answer = c.post_json('/api/command', b'[1, 2]')
+    expect_status(answer, 400, 'a JSON array body')
+    check('/' in answer.error(), f'a JSON array body: the 400 names no JSON path: {answer.error()!r}')
+    answer = c.request('POST', '/api/command', body=json.dumps(command), headers={'Content-Type': 'text/plain'})
+    expect_status(answer, 415, 'a command as text/plain')
+    big = json.dumps({'kind': 'set', 'key': START_KEY, 'value': 1, 'pad': 'x' * (70 * 1024)})
+    answer = c.post_json('/api/command', big)
+    expect_status(answer, 413, 'a 70 KiB command body')
+    log('command: JSON array -> 400 with a path, text/plain -> 415, 70 KiB -> 413')
+
+
+def check_traversal(c, recording):
+    attempts = [
+        '/../../etc/passwd',
+        '/%2e%2e/%2e%2e/etc/passwd',
+        '/..%2f..%2f..%2fetc%2fpasswd',
+        '/%2e%2e%2f%2e%2e%2f%2e%2e%2fetc%2fpasswd',
+        '/www/../../../../etc/passwd',
+        '/..\\..\\etc\\passwd',
+        '/%00/etc/passwd',
+        '//etc/passwd',
+        '/api/recordings/..%2Fetc/archive',
+        '/api/recordings/..%2F..%2F..%2Fetc/archive',
+        '/api/recordings/../../etc/passwd/archive',
+        '/api/recordings/%2e%2e/report',
+        '/api/recordings/escape/archive',
+        '/api/recordings/escape/summary',
+        '/api/uploads/..%2F..%2F..%2Fetc%2Fpasswd/report',
+        '/api/uploads/%2Fetc%2Fpasswd/summary',
+        f'/api/recordings/{recording}%2F..%2F..%2F..%2Fetc/archive',
+    ]
+    for path in attempts:
+        answer = c.get(path)
+        check(answer.status in (400, 403, 404), f'GET {path}: expected 400/403/404, got {answer!r}')
+        check(PASSWD_LINE.encode() not in answer.body, f'GET {path} served /etc/passwd')
+        check(not answer.body.startswith(b'\x1f\x8b'), f'GET {path} served an archive')
+    log(f'traversal: {len(attempts)} paths (.., %2e%2e, %2f, backslash, NUL, a symlink out of recordings/) -> 400/403/404')
+
+
+def check_recordings(c, recording):
+    answer = c.get('/api/recordings')
+    expect_status(answer, 200, 'GET /api/recordings')
+    listing = answer.json()
+    check(isinstance(listing.get('recordings'), list) and isinstance(listing.get('uploads'), list), f'recordings: {listing}')
+    entry = next((r for r in listing['recordings'] if r.get('name') == recording), None)
+    check(entry is not None, f'recording {recording} not listed: {listing}')
+    check(set(entry) >= {'name', 'bytes', 'modifiedUnixMs', 'files'}, f'recording entry {entry}')
+    files = {f['name']: f['bytes'] for f in entry['files']}
+    check('vehicle.log' in files and files['vehicle.log'] > 0, f'recording {recording} files {files}')
+    check(entry['bytes'] == sum(files.values()), f'recording bytes {entry["bytes"]} != sum of files {files}')
+    now_ms = time.time() * 1000
+    check(abs(now_ms - entry['modifiedUnixMs']) < 3600 * 1000, f'modifiedUnixMs {entry["modifiedUnixMs"]} vs now {now_ms:.0f}')
+    log(f'recordings: {recording} {files}')
+
+    answer = c.get(f'/api/recordings/{recording}/archive', timeout=60)
+    expect_status(answer, 200, 'the archive')
+    check(answer.headers.get('content-type', '').startswith('application/gzip'), f'archive type {answer.headers.get("content-type")}')
+    disposition = answer.headers.get('content-disposition', '')
+    check('attachment' in disposition and f'{recording}.tar.gz' in disposition, f'archive Content-Disposition {disposition!r}')
+    with tarfile.open(fileobj=io.BytesIO(answer.body), mode='r:gz') as archive:
+        members = {m.name: m for m in archive.getmembers()}
+        for name, size in files.items():
+            member = members.get(f'{recording}/{name}')
+            check(member is not None and member.isfile(), f'archive lacks {recording}/{name}: {list(members)}')
+            check(member.size == size, f'archive {name}: {member.size} bytes, listed {size}')
+        for name in members:
+            check(name == recording or name.startswith(f'{recording}/'), f'archive member outside {recording}/: {name}')
+            check('..' not in name.split('/'), f'archive member with ..: {name}')
+        log_bytes = archive.extractfile(members[f'{recording}/vehicle.log']).read()
+    check(b' vehicle ' in log_bytes[:4096], f'vehicle.log in the archive is not candump -L of bus vehicle: {log_bytes[:200]!r}')
+    log(f'archive: {len(answer.body)} bytes of gzip tar, members {sorted(members)}')
+
+    answer = c.get(f'/api/recordings/{recording}/summary', timeout=60)
+    expect_status(answer, 200, 'recording summary')
+    summary = answer.json()
+    check(set(summary) >= {'frames', 'durationS', 'buses', 'findings'}, f'summary {summary}')
+    check(summary['frames'] > 100 and 1.0 < summary['durationS'] < 10, f'summary of a 3 s recording: {summary}')
+    check(set(summary['findings']) >= {'errors', 'warnings'}, f'summary findings {summary["findings"]}')
+    log(f'recording summary: {summary}')
+    answer = c.get(f'/api/recordings/{recording}/report', timeout=60)
+    expect_status(answer, 200, 'recording report')
+    check(answer.headers.get('content-type', '').startswith('text/html'), f'report type {answer.headers.get("content-type")}')
+    check(b'<html' in answer.body[:2000].lower() and len(answer.body) > 2000, f'report: {answer.body[:200]!r}')
+    log(f'recording report: {len(answer.body)} bytes of HTML')
+    for path in ('/api/recordings/no-such-recording/archive', '/api/recordings/no-such-recording/report',
+                 '/api/uploads/no-such-upload/summary'):
+        expect_status(c.get(path), 404, f'GET {path}')
+    log('recordings: a missing recording or upload -> 404')
+
+
+def check_uploads(host, port, c, anonymous, log_path):
+    with open(log_path, 'rb') as file:
+        content = file.read()
+    answer = anonymous.request('POST', '/api/uploads?name=anonymous.log', body=content,
+                               headers={'Content-Type': 'application/octet-stream'})
+    expect_status(answer, 401, 'an upload without a session')
+    answer = c.request('POST', '/api/uploads?name=' + urllib.parse.quote('../../evil name.log'), body=content,
+                       headers={'Content-Type': 'application/octet-stream'})
+    expect_status(answer, 200, 'an upload')
+    name = answer.json().get('name')
+    check(isinstance(name, str) and name and '/' not in name and not name.startswith('.'), f'upload name {name!r}')
+    log(f'upload: "../../evil name.log" kept as {name!r}')
+    listing = c.get('/api/recordings').json()
+    entry = next((u for u in listing['uploads'] if u.get('name') == name), None)
+    check(entry is not None and entry['bytes'] == len(content), f'upload {name} not listed with {len(content)} bytes: {listing["uploads"]}')
+    answer = c.get(f'/api/uploads/{urllib.parse.quote(name)}/summary', timeout=60)
+    expect_status(answer, 200, 'upload summary')
+    summary = answer.json()
+    check(summary.get('frames', 0) > 0, f'upload summary: {summary}')
+    answer = c.get(f'/api/uploads/{urllib.parse.quote(name)}/report', timeout=60)
+    expect_status(answer, 200, 'upload report')
+    check(answer.headers.get('content-type', '').startswith('text/html') and b'<html' in answer.body[:2000].lower(),
+          f'upload report: {answer!r}')
+    log(f'upload: summary {summary}, report {len(answer.body)} bytes')
+
+    # Oversized: a Content-Length past any limit; vcu-web must refuse before reading the body.
+    before = {u['name'] for u in c.get('/api/recordings').json()['uploads']}
+    sock = socket.create_connection((host, port), timeout=10)
+    try:
+        sock.sendall((f'POST /api/uploads?name=huge.log HTTP/1.1\r\nHost: {host}\r\n'
+                      f'Cookie: vcu_session={c.session}\r\nContent-Type: application/octet-stream\r\n'
+                      f'Content-Length: {1 << 40}\r\n\r\n').encode() + b'x' * 65536)
+        reply = b''
+        while b'\r\n' not in reply:
+            data = sock.recv(4096)
+            if not data:
+                break
+            reply += data
+    except (ConnectionResetError, BrokenPipeError, socket.timeout) as error:
+        raise Failure(f'oversized upload: no answer ({error}), expected 413')
+    finally:
+        sock.close()
+    status_line = reply.split(b'\r\n', 1)[0].decode('latin-1')
+    check(' 413 ' in status_line + ' ', f'oversized upload: {status_line!r}, expected 413')
+    time.sleep(0.2)
+    after = {u['name'] for u in c.get('/api/recordings').json()['uploads']}
+    check(after == before, f'an oversized upload left something: {after - before}')
+    log(f'upload: 1 TiB announced -> {status_line}, nothing kept')
+
+
+def check_logout(host, port, c):
+    token = c.session
+    answer = c.post_json('/api/logout', {})
+    expect_status(answer, 200, 'logout')
+    cookie = answer.headers.get('set-cookie', '')
+    check(cookie.startswith('vcu_session=') and ('max-age=0' in cookie.lower() or 'expires=' in cookie.lower()),
+          f'logout does not clear the cookie: {cookie!r}')
+    old = Client(host, port)
+    old.session = token
+    expect_status(old.post_json('/api/command', {'kind': 'operator', 'key': START_KEY, 'value': 'Start'}), 401,
+                  'a command with the logged-out session')
+    check(old.get('/api/info').json()['user'] is None, '/api/info names a user for a logged-out session')
+    expect_status(Client(host, port).post_json('/api/logout', {}), 401, 'logout without a session')
+    log(f'logout: 200, cookie cleared ({cookie.split(";")[0]}...), the old session is refused')
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--url', required=True, help='http://127.0.0.1:PORT')
+    parser.add_argument('--user', required=True)
+    parser.add_argument('--recording', required=True, help='a recording in the data folder (vcu record)')
+    parser.add_argument('--log', required=True, help='a small candump -L file to upload')
+    args = parser.parse_args()
+    password = os.environ.get('OPENVCU_WEB_PASSWORD', '')
+    if not password:
+        print(f'{NAME}: FAIL: OPENVCU_WEB_PASSWORD is not set')
+        return 1
+    url = urllib.parse.urlsplit(args.url)
+    host, port = url.hostname, url.port
+    anonymous = Client(host, port)
+    try:
+        check_static(anonymous)
+        info = check_info(anonymous)
+        catalog = check_catalog(anonymous)
+        check_live(anonymous, info, catalog)
+        check_logins(host, port, args.user, password)
+        c = login(host, port, args.user, password)
+        check_commands(host, port, c, anonymous)
+        check_traversal(c, args.recording)
+        check_recordings(c, args.recording)
+        check_uploads(host, port, c, anonymous, args.log)
+        check_logout(host, port, c)
+    except Failure as failure:
+        print(f'{NAME}: FAIL: {failure}', flush=True)
+        return 1
+    except (OSError, http.client.HTTPException) as error:
+        print(f'{NAME}: FAIL: {type(error).__name__}: {error}', flush=True)
+        return 1
+    print(f'{NAME}: PASS', flush=True)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
