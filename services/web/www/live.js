@@ -111,6 +111,7 @@ export class LiveView {
     plotCell.appendChild(plot);
     const name = el('td', { class: 'key', title: info.comment || key });
     name.appendChild(el('span', { class: 'signal-name' }, info.signal || key.split('.').pop()));
+    if (info.unit) name.appendChild(el('span', { class: 'unit dim' }, ` [${info.unit}]`));
     name.appendChild(el('span', { class: 'dim path' }, ` ${key}`));
     const value = el('td', { class: 'value' });
     const raw = el('td', { class: 'raw dim' });
@@ -128,10 +129,12 @@ export class LiveView {
     const row = this.rows.get(signal.key);
     if (!row) return;
     const info = this.catalog.get(signal.key) || {};
+    // vcu-web's text (value-table text or number with unit); the catalog fills in what it lacks
     let text = signal.text ?? '';
+    const tableText = info.values && typeof signal.value === 'number' ? info.values[String(signal.value)] : undefined;
+    if (tableText !== undefined && !text.includes(tableText)) text = tableText;
     if (!text && typeof signal.value === 'number') text = `${formatNumber(signal.value)}${info.unit ? ' ' + info.unit : ''}`;
     setText(row.value, signal.value === null ? '—' : text);
-    const tableText = info.values && typeof signal.value === 'number' ? info.values[String(signal.value)] : undefined;
     setText(row.raw, typeof signal.value === 'number' && (tableText !== undefined || text !== formatNumber(signal.value))
       ? formatNumber(signal.value) : '');
     setText(row.status, statusLabel(signal.status));
