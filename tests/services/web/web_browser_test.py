@@ -24,7 +24,6 @@ Screenshots (01-live.png ...) go to DIR, also on failure (failure.png).
 import argparse
 import os
 import shlex
-import shutil
 import subprocess
 import sys
 import time
