@@ -14,6 +14,7 @@ export class LiveView {
     this.signalAges = new Map();  // key -> {ageMs, receivedAt}
     this.faultKey = '';
     this.rows = new Map();        // key -> row cells
+    this.faultSince = [];         // per listed fault: {seconds, receivedAt} or null
     setInterval(() => this.tick(), 500);
   }
 
@@ -22,14 +23,14 @@ export class LiveView {
     const header = update.header || {};
     setText(byId('fsm-state'), header.state ?? '?');
     setAttr(byId('fsm-state'), 'data-state-index', header.stateIndex ?? '');
-    this.stateSince = typeof header.stateSinceS === 'number' ? { seconds: header.stateSinceS, receivedAt: now } : null;
+    this.stateSince = sinceSeconds(update.t, header.stateSinceUnixMs, header.stateSinceS, now);
     const soc = header.soc || {};
     setText(byId('soc'), soc.text ?? '');
     setAttr(byId('soc'), 'data-status', soc.status ?? 'NotConnected');
     setText(byId('health'), statusLabel(header.health));
     setAttr(byId('health'), 'data-status', header.health ?? 'NotConnected');
     this.renderServices(Array.isArray(header.services) ? header.services : []);
-    this.renderFaults(Array.isArray(update.faults) ? update.faults : []);
+    this.renderFaults(Array.isArray(update.faults) ? update.faults : [], update.t, now);
     for (const signal of Array.isArray(update.signals) ? update.signals : []) {
       this.renderSignal(signal, now);
     }
@@ -50,18 +51,12 @@ export class LiveView {
     });
   }
 
-  renderFaults(faults) {
+  renderFaults(faults, t, now) {
+    this.faultSince = faults.map((f) => sinceSeconds(t, f.sinceUnixMs, f.sinceS, now));
     const key = JSON.stringify(faults.map((f) => [f.name, f.source, f.severity, f.text]));
     const list = byId('faults');
     setText(byId('fault-count'), faults.length ? `(${faults.length})` : '');
-    if (key === this.faultKey) {
-      // only the "since" times moved
-      faults.forEach((fault, i) => {
-        const since = list.children[i] && list.children[i].querySelector('.since');
-        if (since) setText(since, formatDuration(fault.sinceS));
-      });
-      return;
-    }
+    if (key === this.faultKey) return;  // only the "since" times moved: tick() shows them
     this.faultKey = key;
     clear(list);
     if (!faults.length) {
@@ -73,7 +68,7 @@ export class LiveView {
       item.appendChild(el('span', { class: 'severity' }, fault.severity ?? ''));
       item.appendChild(el('span', { class: 'name' }, fault.name ?? ''));
       item.appendChild(el('span', { class: 'source dim' }, fault.source ?? ''));
-      item.appendChild(el('span', { class: 'since dim' }, formatDuration(fault.sinceS)));
+      item.appendChild(el('span', { class: 'since dim' }));
       if (fault.text) item.appendChild(el('div', { class: 'text' }, fault.text));
       list.appendChild(item);
     }
@@ -147,14 +142,27 @@ export class LiveView {
   /// Keeps "since" and "age" counting between events.
   tick() {
     const now = performance.now();
-    if (this.stateSince) {
-      setText(byId('fsm-since'), `for ${formatDuration(this.stateSince.seconds + (now - this.stateSince.receivedAt) / 1000)}`);
-    } else {
-      setText(byId('fsm-since'), '');
+    const elapsed = (since) => (since ? since.seconds + (now - since.receivedAt) / 1000 : undefined);
+    setText(byId('fsm-since'), this.stateSince ? `for ${formatDuration(elapsed(this.stateSince))}` : '');
+    const faults = byId('faults').children;
+    for (let i = 0; i < faults.length; ++i) {
+      const since = faults[i].querySelector('.since');
+      if (since) setText(since, formatDuration(elapsed(this.faultSince[i])));
     }
     for (const [key, row] of this.rows) {
       const age = this.signalAges.get(key);
       setText(row.age, age ? formatAge(age.ageMs + (now - age.receivedAt)) : '');
     }
   }
+}
+
+/// How long ago `sinceUnixMs` was at the server's time `t` (both the VCU's clock, so a laptop
+/// whose clock is off still shows the right duration), as {seconds, receivedAt} for tick();
+/// `sinceS` (seconds) when vcu-web sends a duration instead. Null when neither is given.
+function sinceSeconds(t, sinceUnixMs, sinceS, receivedAt) {
+  if (typeof sinceUnixMs === 'number' && typeof t === 'number') {
+    return { seconds: Math.max(0, (t - sinceUnixMs) / 1000), receivedAt };
+  }
+  if (typeof sinceS === 'number') return { seconds: sinceS, receivedAt };
+  return null;
 }

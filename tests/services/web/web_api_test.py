@@ -308,8 +308,12 @@ def check_live(c, info, catalog):
             for field in ('t', 'seq', 'header', 'faults', 'operator', 'signals'):
                 check(field in update, f'update without "{field}": {str(update)[:300]}')
             header = update['header']
-            for field in ('state', 'stateIndex', 'stateSinceS', 'soc', 'health', 'services'):
+            for field in ('state', 'stateIndex', 'stateSinceUnixMs', 'soc', 'health', 'services'):
                 check(field in header, f'update header without "{field}": {header}')
+            since = header['stateSinceUnixMs']
+            check(isinstance(since, (int, float)) and since <= update['t'], f'stateSinceUnixMs {since} after t {update["t"]}')
+            for fault in update['faults']:
+                check(set(fault) >= {'name', 'source', 'severity', 'text', 'sinceUnixMs'}, f'update fault {fault}')
             check(isinstance(header['state'], str) and header['state'], f'update: FSM state {header["state"]!r}')
             check(set(header['soc']) >= {'text', 'status'}, f'update: soc {header["soc"]}')
             check(header['health'] in ('Ready', 'Stale', 'NotConnected', 'Error'), f'update: health {header["health"]}')
