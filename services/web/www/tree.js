@@ -16,10 +16,12 @@ export class SignalTree {
     this.build(signals);
     const search = byId('signal-search');
     let timer = null;
-    search.addEventListener('input', () => {
+    const later = () => {
       clearTimeout(timer);
       timer = setTimeout(() => this.filter(search.value), 120);
-    });
+    };
+    search.addEventListener('input', later);
+    search.addEventListener('search', later);  // the field's clear button
   }
 
   build(signals) {

@@ -216,6 +216,13 @@ def check_recordings(page, log_path):
     href = recording.find_element(By.CSS_SELECTOR, 'a.download-link').get_attribute('href')
     if not href.endswith(f'/api/recordings/{name}/archive'):
         raise Failure(f'download link {href}')
+    fetched = page.driver.execute_async_script(
+        "const done = arguments[arguments.length - 1];"
+        "fetch(arguments[0]).then(async (r) => done([r.status, r.headers.get('Content-Type'), (await r.arrayBuffer()).byteLength]))"
+        ".catch((e) => done(['error', String(e), 0]));", href)
+    if fetched[0] != 200 or not str(fetched[1]).startswith('application/gzip') or fetched[2] < 100:
+        raise Failure(f'the download link gives {fetched}')
+    log(f'recordings: the download link gives HTTP {fetched[0]} {fetched[1]}, {fetched[2]} bytes')
     recording.find_element(By.CSS_SELECTOR, 'button.summary-button').click()
     page.wait(lambda: 'frames' in recording.find_element(By.CSS_SELECTOR, '.summary-text').text, 'the recording summary')
     log(f'recordings: {name}: {recording.find_element(By.CSS_SELECTOR, ".summary-text").text}; download {href}')
