@@ -355,7 +355,10 @@ void Connection::respond(Response response, bool closeAfter) {
   try {
     if (response.file) {
       std::shared_ptr<FileRemover> remover;
-      if (response.deleteFileAfter) remover = std::make_shared<FileRemover>(FileRemover{*response.file});
+      if (response.deleteFileAfter) {
+        remover = std::make_shared<FileRemover>();
+        remover->path = *response.file;
+      }
       http::file_body::value_type body;
       beast::error_code ec;
       body.open(response.file->c_str(), beast::file_mode::scan, ec);
@@ -553,7 +556,7 @@ void Connection::startStream(const StreamOpener& opener) {
   m_tickPeriod = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
   m_stream.expires_never();  // the stream keeps its own write deadline (onTick)
   m_eventText = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n"
-                "X-Content-Type-Options: nosniff\r\nConnection: close\r\n\r\n";
+                "X-Content-Type-Options: nosniff\r\nX-Accel-Buffering: no\r\nConnection: close\r\n\r\n";
   if (m_version == 10) m_eventText.replace(0, 8, "HTTP/1.0");
   writeEvent();
   readDiscard();
