@@ -195,6 +195,26 @@ TEST_CASE("web server: an upload over maxUploadBytes is answered 413 and leaves 
   CHECK(eventually([&] { return filesIn(server.folder / "uploads") == 0; }));
 }
 
+TEST_CASE("web server: an upload cut off by its client leaves no file") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  TestServer server;
+  auto& sut = server.make();
+  std::atomic<bool> completed{false};
+  sut.upload("/api/uploads", web::UploadRoute{{}, [&](const web::Request&, fs::path, web::Responder respond) {
+                                               completed = true;
+                                               respond(web::Response::json(200, "{}"));
+                                             }});
+  const auto port = server.start();
+  const int fd = connectTo(port);
+  REQUIRE(fd >= 0);
+  sendAll(fd, "POST /api/uploads HTTP/1.1\r\nHost: x\r\nContent-Length: 100000\r\n\r\n" + std::string(30000, 'p'));
+  // the partial file is there while the body comes in, and gone once the client leaves
+  REQUIRE(eventually([&] { return filesIn(server.folder / "uploads") == 1; }));
+  ::close(fd);
+  CHECK(eventually([&] { return filesIn(server.folder / "uploads") == 0; }));
+  CHECK_FALSE(completed.load());
+}
+
 TEST_CASE("web server: an upload that authorize refuses is answered with its response and writes nothing") {
   if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
   TestServer server;
