@@ -1,23 +1,14 @@
 #include "http_connection.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
-#include <cmath>
-#include <cstring>
-#include <exception>
-#include <limits>
-#include <system_error>
-
 #include <boost/asio/post.hpp>
 #include <boost/asio/write.hpp>
-#include <boost/beast/core/file.hpp>
 #include <boost/beast/http/read.hpp>
 #include <boost/beast/http/serializer.hpp>
 #include <boost/beast/http/write.hpp>
+#include <exception>
+#include <limits>
+#include <system_error>
 
 #include "http_util.hpp"
 
@@ -58,14 +49,20 @@ struct PendingAnswer {
 
 std::optional<Method> methodOf(http::verb verb) noexcept {
   switch (verb) {
-    case http::verb::get: return Method::Get;
-    case http::verb::post: return Method::Post;
-    case http::verb::delete_: return Method::Delete;
-    default: return std::nullopt;
+    case http::verb::get:
+      return Method::Get;
+    case http::verb::post:
+      return Method::Post;
+    case http::verb::delete_:
+      return Method::Delete;
+    default:
+      return std::nullopt;
   }
 }
 
-bool isApiPath(const std::string& path) { return path == "/api" || path.rfind("/api/", 0) == 0; }
+bool isApiPath(const std::string& path) {
+  return path == "/api" || path.rfind("/api/", 0) == 0;
+}
 
 /// A file name safe inside a quoted Content-Disposition parameter.
 std::string dispositionName(std::string_view name) {
@@ -90,7 +87,9 @@ Connection::~Connection() {
   if (!m_uploadFile.empty()) std::filesystem::remove(m_uploadFile, ec);
 }
 
-void Connection::start() { readHeader(); }
+void Connection::start() {
+  readHeader();
+}
 
 void Connection::close() {
   if (m_closed) return;
@@ -126,8 +125,9 @@ void Connection::readHeader() {
   m_upload = nullptr;
   m_request = Request{};
   m_stream.expires_after(m_core.options.readTimeout);
-  http::async_read_header(m_stream, m_buffer, *m_headerParser,
-                          [self = shared_from_this()](const beast::error_code& ec, std::size_t) { self->onHeader(ec); });
+  http::async_read_header(
+      m_stream, m_buffer, *m_headerParser,
+      [self = shared_from_this()](const beast::error_code& ec, std::size_t) { self->onHeader(ec); });
 }
 
 bool Connection::requestHasBody() const {
@@ -146,7 +146,8 @@ void Connection::onHeader(const beast::error_code& ec) {
     } else {
       m_version = 11;
       m_clientKeepAlive = false;
-      respond(Response::error(400, ec == http::error::header_limit ? "request header too large" : "malformed request"), true);
+      respond(Response::error(400, ec == http::error::header_limit ? "request header too large" : "malformed request"),
+              true);
     }
     return;
   }
@@ -285,7 +286,8 @@ void Connection::serveStatic() {
   const std::string& path = m_request.path;
   std::optional<std::filesystem::path> file;
   if (!m_core.options.staticRoot.empty()) {
-    file = resolveUnder(m_core.options.staticRoot, path == "/" ? std::string_view("index.html") : std::string_view(path).substr(1));
+    file = resolveUnder(m_core.options.staticRoot,
+                        path == "/" ? std::string_view("index.html") : std::string_view(path).substr(1));
   }
   std::error_code ec;
   if (!file || !std::filesystem::is_regular_file(*file, ec)) {
@@ -342,7 +344,8 @@ void Connection::prepareHeaders(http::response<Body>& message, const Response& r
   }
   if (!cacheControlSet && isApiPath(m_request.path)) message.set(http::field::cache_control, "no-store");
   if (!response.downloadName.empty()) {
-    message.set(http::field::content_disposition, "attachment; filename=\"" + dispositionName(response.downloadName) + "\"");
+    message.set(http::field::content_disposition,
+                "attachment; filename=\"" + dispositionName(response.downloadName) + "\"");
   }
   message.keep_alive(keepAlive);
   message.prepare_payload();
@@ -434,196 +437,6 @@ void Connection::lingerThenClose(std::size_t drained) {
                                self->lingerThenClose(drained + n);
                              }
                            });
-}
-
-// ---- uploads --------------------------------------------------------------------------
-
-void Connection::startUpload(const UploadRoute& route) {
-  if (route.authorize) {
-    std::optional<Response> refusal;
-    try {
-      refusal = route.authorize(m_request);
-    } catch (const std::exception& error) {
-      refusal = Response::error(500, error.what());
-    } catch (...) {
-      refusal = Response::error(500, "internal error");
-    }
-    if (refusal) {
-      respond(std::move(*refusal), requestHasBody());
-      return;
-    }
-  }
-  const auto length = m_headerParser->content_length();
-  if (length && *length > m_core.options.maxUploadBytes) {
-    respond(Response::error(413, "upload too large"), true);
-    return;
-  }
-  std::string pattern = (m_core.options.uploadFolder / "upload-XXXXXX").string();
-  const int fd = ::mkstemp(pattern.data());
-  if (fd < 0) {
-    const int error = errno;
-    respond(Response::error(500, "cannot create the upload file in " + m_core.options.uploadFolder.string() + ": " +
-                                     std::strerror(error)),
-            true);
-    return;
-  }
-  m_uploadFile = pattern;
-  (void)::fchmod(fd, 0640);
-  m_uploadParser.emplace(std::move(*m_headerParser));
-  m_headerParser.reset();
-  m_uploadParser->body_limit(m_core.options.maxUploadBytes);
-  beast::file file;
-  beast::error_code ec;
-  file.native_handle(fd);  // the file now owns fd
-  m_uploadParser->get().body().reset(std::move(file), ec);
-  if (ec) {
-    respond(Response::error(500, "cannot write the upload file: " + ec.message()), true);
-    return;
-  }
-  m_upload = &route;
-  if (m_uploadParser->is_done()) {
-    finishUpload();
-    return;
-  }
-  continueThen(&Connection::readUpload);
-}
-
-void Connection::readUpload() {
-  if (m_closed) return;
-  m_stream.expires_after(m_core.options.readTimeout);
-  http::async_read_some(m_stream, m_buffer, *m_uploadParser,
-                        [self = shared_from_this()](const beast::error_code& ec, std::size_t) {
-                          if (self->m_closed) return;
-                          if (ec == http::error::body_limit) {
-                            self->m_uploadParser.reset();
-                            std::error_code removeError;
-                            std::filesystem::remove(self->m_uploadFile, removeError);
-                            self->m_uploadFile.clear();
-                            self->respond(Response::error(413, "upload too large"), true);
-                          } else if (ec) {
-                            self->close();  // removes the partial file
-                          } else if (self->m_uploadParser->is_done()) {
-                            self->finishUpload();
-                          } else {
-                            self->readUpload();
-                          }
-                        });
-}
-
-void Connection::finishUpload() {
-  m_uploadParser->get().body().close();
-  m_uploadParser.reset();
-  std::filesystem::path file = std::move(m_uploadFile);
-  m_uploadFile.clear();  // the handler owns it from here
-  const UploadRoute* route = m_upload;
-  m_upload = nullptr;
-  Responder responder = makeResponder();
-  try {
-    route->onComplete(m_request, file, responder);
-  } catch (const std::exception& error) {
-    responder(Response::error(500, error.what()));
-  } catch (...) {
-    responder(Response::error(500, "internal error"));
-  }
-}
-
-// ---- event streams --------------------------------------------------------------------
-
-void Connection::startStream(const StreamOpener& opener) {
-  if (m_core.streamCount.load() >= m_core.options.maxStreams) {
-    respond(Response::error(503, "too many event streams"));
-    return;
-  }
-  std::unique_ptr<EventSource> source;
-  try {
-    auto opened = opener(m_request);
-    if (!opened) {
-      respond(Response::error(400, opened.error().toString()));
-      return;
-    }
-    source = std::move(*opened);
-  } catch (const std::exception& error) {
-    respond(Response::error(500, error.what()));
-    return;
-  }
-  if (!source) {
-    respond(Response::error(500, "no event source"));
-    return;
-  }
-  m_source = std::move(source);
-  m_core.streamCount.fetch_add(1);
-  const double rate = std::clamp(m_core.options.maxUpdatesPerSecond, 0.01, 1000.0);
-  m_tickPeriod = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
-  m_stream.expires_never();  // the stream keeps its own write deadline (onTick)
-  m_eventText = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n"
-                "X-Content-Type-Options: nosniff\r\nX-Accel-Buffering: no\r\nConnection: close\r\n\r\n";
-  if (m_version == 10) m_eventText.replace(0, 8, "HTTP/1.0");
-  writeEvent();
-  readDiscard();
-  scheduleTick();
-}
-
-void Connection::writeEvent() {
-  m_writing = true;
-  m_writeStarted = Clock::now();
-  asio::async_write(m_stream.socket(), asio::buffer(m_eventText), [self = shared_from_this()](const beast::error_code& ec, std::size_t) {
-    if (self->m_closed) return;
-    self->m_writing = false;
-    if (ec) {
-      self->close();
-      return;
-    }
-    self->m_lastWrite = Clock::now();
-  });
-}
-
-void Connection::readDiscard() {
-  // a stream's client sends nothing more; reading finds out at once when it leaves
-  m_stream.socket().async_read_some(asio::buffer(m_discard), [self = shared_from_this()](const beast::error_code& ec, std::size_t) {
-    if (self->m_closed) return;
-    if (ec) {
-      self->close();
-      return;
-    }
-    self->readDiscard();
-  });
-}
-
-void Connection::scheduleTick() {
-  m_tick.expires_after(m_tickPeriod);
-  m_tick.async_wait([self = shared_from_this()](const beast::error_code& ec) {
-    if (ec || self->m_closed) return;
-    self->onTick();
-  });
-}
-
-void Connection::onTick() {
-  const auto now = Clock::now();
-  if (m_writing) {
-    if (now - m_writeStarted > m_core.options.writeTimeout) {
-      close();  // the client stopped reading
-      return;
-    }
-    m_core.eventsSkipped.fetch_add(1, std::memory_order_relaxed);
-    scheduleTick();
-    return;
-  }
-  std::string event;
-  try {
-    event = m_source->next();
-  } catch (...) {
-    close();
-    return;
-  }
-  if (!event.empty()) {
-    m_eventText = std::move(event);
-    m_core.eventsSent.fetch_add(1, std::memory_order_relaxed);
-    writeEvent();
-  } else if (now - m_lastWrite >= KEEP_ALIVE_INTERVAL) {
-    m_eventText = ": keep-alive\n\n";
-    writeEvent();
-  }
-  scheduleTick();
 }
 
 }  // namespace openvcu::web::detail

@@ -1,11 +1,10 @@
 #include "http_server.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <exception>
-
 #include <boost/asio/post.hpp>
 #include <boost/asio/write.hpp>
+#include <cmath>
+#include <exception>
 
 #include "http_connection.hpp"
 #include "http_util.hpp"
@@ -50,9 +49,12 @@ Response Response::error(unsigned status, std::string_view message) {
 
 std::string_view methodName(Method method) noexcept {
   switch (method) {
-    case Method::Get: return "GET";
-    case Method::Post: return "POST";
-    case Method::Delete: return "DELETE";
+    case Method::Get:
+      return "GET";
+    case Method::Post:
+      return "POST";
+    case Method::Delete:
+      return "DELETE";
   }
   return "GET";
 }
@@ -63,7 +65,8 @@ namespace detail {
 namespace {
 
 bool pathMatches(const std::string& routePath, const std::string& path) {
-  if (!routePath.empty() && routePath.back() == '/') return path.size() > routePath.size() && path.rfind(routePath, 0) == 0;
+  if (!routePath.empty() && routePath.back() == '/')
+    return path.size() > routePath.size() && path.rfind(routePath, 0) == 0;
   return routePath == path;
 }
 
@@ -118,12 +121,17 @@ const Handler* ServerCore::findRoute(Method method, const std::string& path) con
   return best;
 }
 
-const UploadRoute* ServerCore::findUpload(const std::string& path) const { return findBest(uploads, path); }
+const UploadRoute* ServerCore::findUpload(const std::string& path) const {
+  return findBest(uploads, path);
+}
 
-const StreamOpener* ServerCore::findStream(const std::string& path) const { return findBest(streams, path); }
+const StreamOpener* ServerCore::findStream(const std::string& path) const {
+  return findBest(streams, path);
+}
 
 bool ServerCore::knowsPath(const std::string& path) const {
-  const bool routed = std::any_of(routes.begin(), routes.end(), [&](const RouteEntry& entry) { return pathMatches(entry.path, path); });
+  const bool routed =
+      std::any_of(routes.begin(), routes.end(), [&](const RouteEntry& entry) { return pathMatches(entry.path, path); });
   return routed || findUpload(path) != nullptr || findStream(path) != nullptr;
 }
 
@@ -162,7 +170,8 @@ void ServerCore::pruneAddresses(Clock::time_point now) {
 
 void ServerCore::accept() {
   if (stopping) return;
-  acceptor.async_accept([this](const beast::error_code& ec, asio::ip::tcp::socket socket) { onAccept(ec, std::move(socket)); });
+  acceptor.async_accept(
+      [this](const beast::error_code& ec, asio::ip::tcp::socket socket) { onAccept(ec, std::move(socket)); });
 }
 
 void ServerCore::onAccept(const beast::error_code& ec, asio::ip::tcp::socket socket) {
@@ -243,9 +252,13 @@ void HttpServer::route(Method method, std::string path, Handler handler) {
   m_impl->routes.push_back({method, std::move(path), std::move(handler)});
 }
 
-void HttpServer::upload(std::string path, UploadRoute route) { m_impl->uploads.emplace_back(std::move(path), std::move(route)); }
+void HttpServer::upload(std::string path, UploadRoute route) {
+  m_impl->uploads.emplace_back(std::move(path), std::move(route));
+}
 
-void HttpServer::stream(std::string path, StreamOpener opener) { m_impl->streams.emplace_back(std::move(path), std::move(opener)); }
+void HttpServer::stream(std::string path, StreamOpener opener) {
+  m_impl->streams.emplace_back(std::move(path), std::move(opener));
+}
 
 Status HttpServer::start() {
   namespace asio = boost::asio;
@@ -269,7 +282,9 @@ Status HttpServer::start() {
   return {};
 }
 
-std::uint16_t HttpServer::port() const noexcept { return m_impl->boundPort; }
+std::uint16_t HttpServer::port() const noexcept {
+  return m_impl->boundPort;
+}
 
 void HttpServer::run() {
   for (;;) {
@@ -305,7 +320,9 @@ void HttpServer::post(std::function<void()> work) {
   });
 }
 
-boost::asio::io_context& HttpServer::context() noexcept { return m_impl->io; }
+boost::asio::io_context& HttpServer::context() noexcept {
+  return m_impl->io;
+}
 
 ServerCounters HttpServer::counters() const {
   ServerCounters counters;

@@ -73,11 +73,16 @@ std::string_view contentTypeFor(std::string_view fileName) noexcept {
     std::string_view type;
   };
   static constexpr Entry TYPES[] = {
-      {".html", "text/html; charset=utf-8"},     {".htm", "text/html; charset=utf-8"},
-      {".js", "text/javascript; charset=utf-8"}, {".mjs", "text/javascript; charset=utf-8"},
-      {".css", "text/css; charset=utf-8"},       {".svg", "image/svg+xml"},
-      {".png", "image/png"},                     {".json", "application/json"},
-      {".ico", "image/x-icon"},                  {".txt", "text/plain; charset=utf-8"},
+      {".html", "text/html; charset=utf-8"},
+      {".htm", "text/html; charset=utf-8"},
+      {".js", "text/javascript; charset=utf-8"},
+      {".mjs", "text/javascript; charset=utf-8"},
+      {".css", "text/css; charset=utf-8"},
+      {".svg", "image/svg+xml"},
+      {".png", "image/png"},
+      {".json", "application/json"},
+      {".ico", "image/x-icon"},
+      {".txt", "text/plain; charset=utf-8"},
       {".woff2", "font/woff2"},
   };
   const std::size_t dot = fileName.rfind('.');
@@ -94,11 +99,21 @@ std::string jsonEscape(std::string_view text) {
   out.reserve(text.size() + 8);
   for (const char c : text) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
           char escaped[8];
@@ -123,7 +138,8 @@ std::string lowerCase(std::string_view text) {
 
 std::optional<std::filesystem::path> resolveUnder(const std::filesystem::path& root, std::string_view relative) {
   namespace fs = std::filesystem;
-  if (relative.find('\0') != std::string_view::npos || relative.find('\\') != std::string_view::npos) return std::nullopt;
+  if (relative.find('\0') != std::string_view::npos || relative.find('\\') != std::string_view::npos)
+    return std::nullopt;
   if (!relative.empty() && relative.front() == '/') return std::nullopt;
   fs::path candidate;
   std::string_view rest = relative;
@@ -141,7 +157,8 @@ std::optional<std::filesystem::path> resolveUnder(const std::filesystem::path& r
   // canonical() follows every symlink and fails when the file does not exist
   const fs::path resolved = fs::canonical(canonicalRoot / candidate, ec);
   if (ec) return std::nullopt;
-  const auto [rootEnd, resolvedIt] = std::mismatch(canonicalRoot.begin(), canonicalRoot.end(), resolved.begin(), resolved.end());
+  const auto [rootEnd, resolvedIt] =
+      std::mismatch(canonicalRoot.begin(), canonicalRoot.end(), resolved.begin(), resolved.end());
   (void)resolvedIt;
   if (rootEnd != canonicalRoot.end()) return std::nullopt;
   return resolved;

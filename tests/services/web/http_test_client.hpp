@@ -35,14 +35,17 @@ inline constexpr auto CLIENT_TIMEOUT = 5s;
 
 inline fs::path makeTempFolder() {
   static int counter = 0;
-  const fs::path folder = fs::temp_directory_path() / ("openvcu-http-" + std::to_string(::getpid()) + "-" + std::to_string(++counter));
+  const fs::path folder =
+      fs::temp_directory_path() / ("openvcu-http-" + std::to_string(::getpid()) + "-" + std::to_string(++counter));
   fs::remove_all(folder);
   fs::create_directories(folder / "www");
   fs::create_directories(folder / "uploads");
   return folder;
 }
 
-inline void writeFile(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+inline void writeFile(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
 
 inline std::string readFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -81,7 +84,7 @@ inline bool sendAll(int fd, std::string_view data) {
 /// Reads until the peer closes, `until` returns true for what has arrived, or the deadline.
 /// `closed` (when given) tells whether the peer closed.
 inline std::string readFrom(int fd, Clock::duration timeout, const std::function<bool(const std::string&)>& until = {},
-                     bool* closed = nullptr) {
+                            bool* closed = nullptr) {
   if (closed != nullptr) *closed = false;
   std::string data;
   const auto deadline = Clock::now() + timeout;
@@ -114,7 +117,8 @@ struct Answer {
 inline Answer parseAnswer(std::string raw) {
   Answer answer;
   // interim answers ("HTTP/1.1 100 Continue") come before the answer
-  while (raw.rfind("HTTP/1.1 1", 0) == 0 && raw.find("\r\n\r\n") != std::string::npos) raw.erase(0, raw.find("\r\n\r\n") + 4);
+  while (raw.rfind("HTTP/1.1 1", 0) == 0 && raw.find("\r\n\r\n") != std::string::npos)
+    raw.erase(0, raw.find("\r\n\r\n") + 4);
   const std::size_t end = raw.find("\r\n\r\n");
   if (raw.size() < 12 || end == std::string::npos) return answer;
   answer.status = static_cast<unsigned>(std::stoul(raw.substr(9, 3)));
@@ -135,8 +139,8 @@ inline Answer parseAnswer(std::string raw) {
 }
 
 /// One request on a fresh connection ("Connection: close"), the answer read to the end.
-inline Answer request(std::uint16_t port, const std::string& method, const std::string& target, const std::string& body = {},
-               const std::string& extraHeaders = {}) {
+inline Answer request(std::uint16_t port, const std::string& method, const std::string& target,
+                      const std::string& body = {}, const std::string& extraHeaders = {}) {
   const int fd = connectTo(port);
   REQUIRE(fd >= 0);
   std::string text = method + " " + target + " HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n" + extraHeaders;
@@ -148,7 +152,9 @@ inline Answer request(std::uint16_t port, const std::string& method, const std::
   return parseAnswer(raw);
 }
 
-inline Answer get(std::uint16_t port, const std::string& target) { return request(port, "GET", target); }
+inline Answer get(std::uint16_t port, const std::string& target) {
+  return request(port, "GET", target);
+}
 
 /// Waits (polling, bounded) until `condition` holds.
 inline bool eventually(const std::function<bool()>& condition, Clock::duration timeout = 3s) {

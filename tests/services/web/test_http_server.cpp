@@ -88,7 +88,9 @@ TEST_CASE("web server: static files are served with their content type and index
   CHECK(get(port, "/js").status == 404);  // a folder is not a file
 }
 
-TEST_CASE("web server: paths that leave the static root are refused: dot-dot and percent-encoded dot-dot and absolute and backslash and NUL and symlinks") {
+TEST_CASE(
+    "web server: paths that leave the static root are refused: dot-dot and percent-encoded dot-dot and absolute and "
+    "backslash and NUL and symlinks") {
   if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
   TestServer server;
   const fs::path root = server.folder / "www";
@@ -145,16 +147,16 @@ TEST_CASE("web server: an upload is streamed to a new file that onComplete recei
   auto& sut = server.make();
   std::string received;
   unsigned mode = 0;
-  sut.upload("/api/uploads", web::UploadRoute{
-                                 [](const web::Request&) { return std::optional<web::Response>{}; },
-                                 [&](const web::Request& request, fs::path file, web::Responder respond) {
-                                   received = readFile(file);
-                                   struct stat info {};
-                                   ::stat(file.c_str(), &info);
-                                   mode = info.st_mode & 0777u;
-                                   fs::remove(file);
-                                   respond(web::Response::json(200, "{\"name\": \"" + request.query.at("name") + "\"}"));
-                                 }});
+  sut.upload("/api/uploads",
+             web::UploadRoute{[](const web::Request&) { return std::optional<web::Response>{}; },
+                              [&](const web::Request& request, fs::path file, web::Responder respond) {
+                                received = readFile(file);
+                                struct stat info {};
+                                ::stat(file.c_str(), &info);
+                                mode = info.st_mode & 0777u;
+                                fs::remove(file);
+                                respond(web::Response::json(200, "{\"name\": \"" + request.query.at("name") + "\"}"));
+                              }});
   const auto port = server.start();
   std::string body(300 * 1024, '\0');
   for (std::size_t i = 0; i < body.size(); ++i) body[i] = static_cast<char>(i * 7);
@@ -174,9 +176,9 @@ TEST_CASE("web server: an upload over maxUploadBytes is answered 413 and leaves 
   auto& sut = server.make();
   std::atomic<bool> completed{false};
   sut.upload("/api/uploads", web::UploadRoute{{}, [&](const web::Request&, fs::path, web::Responder respond) {
-                                               completed = true;
-                                               respond(web::Response::json(200, "{}"));
-                                             }});
+                                                completed = true;
+                                                respond(web::Response::json(200, "{}"));
+                                              }});
   const auto port = server.start();
   // declared too large: refused before the body
   CHECK(request(port, "POST", "/api/uploads", std::string(64 * 1024 + 1, 'x')).status == 413);
@@ -201,9 +203,9 @@ TEST_CASE("web server: an upload cut off by its client leaves no file") {
   auto& sut = server.make();
   std::atomic<bool> completed{false};
   sut.upload("/api/uploads", web::UploadRoute{{}, [&](const web::Request&, fs::path, web::Responder respond) {
-                                               completed = true;
-                                               respond(web::Response::json(200, "{}"));
-                                             }});
+                                                completed = true;
+                                                respond(web::Response::json(200, "{}"));
+                                              }});
   const auto port = server.start();
   const int fd = connectTo(port);
   REQUIRE(fd >= 0);
@@ -221,16 +223,17 @@ TEST_CASE("web server: an upload that authorize refuses is answered with its res
   auto& sut = server.make();
   std::atomic<bool> completed{false};
   sut.upload("/api/uploads", web::UploadRoute{[](const web::Request& request) -> std::optional<web::Response> {
-                                               if (request.cookie("vcu_session") == "good") return std::nullopt;
-                                               return web::Response::error(401, "login needed");
-                                             },
-                                             [&](const web::Request&, fs::path file, web::Responder respond) {
-                                               completed = true;
-                                               fs::remove(file);
-                                               respond(web::Response::json(200, "{}"));
-                                             }});
+                                                if (request.cookie("vcu_session") == "good") return std::nullopt;
+                                                return web::Response::error(401, "login needed");
+                                              },
+                                              [&](const web::Request&, fs::path file, web::Responder respond) {
+                                                completed = true;
+                                                fs::remove(file);
+                                                respond(web::Response::json(200, "{}"));
+                                              }});
   const auto port = server.start();
-  const Answer refused = request(port, "POST", "/api/uploads", std::string(100000, 'x'), "Cookie: a=b; vcu_session=bad\r\n");
+  const Answer refused =
+      request(port, "POST", "/api/uploads", std::string(100000, 'x'), "Cookie: a=b; vcu_session=bad\r\n");
   CHECK(refused.status == 401);
   CHECK(refused.body == "{\"error\": \"login needed\"}");
   CHECK_FALSE(completed.load());
@@ -245,7 +248,8 @@ TEST_CASE("web server: requests beyond the per-address rate are answered 429 wit
   server.options.requestsPerSecondPerAddress = 0.5;
   server.options.requestBurstPerAddress = 3;
   auto& sut = server.make();
-  sut.route(web::Method::Get, "/api/info", [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
+  sut.route(web::Method::Get, "/api/info",
+            [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
   const auto port = server.start();
   for (int i = 0; i < 3; ++i) CHECK(get(port, "/api/info").status == 200);
   const Answer limited = get(port, "/api/info");
@@ -259,7 +263,8 @@ TEST_CASE("web server: connections beyond the per-address limit are closed at on
   TestServer server;
   server.options.maxConnectionsPerAddress = 2;
   auto& sut = server.make();
-  sut.route(web::Method::Get, "/api/info", [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
+  sut.route(web::Method::Get, "/api/info",
+            [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
   const auto port = server.start();
   const int first = connectTo(port);
   const int second = connectTo(port);
@@ -274,8 +279,9 @@ TEST_CASE("web server: connections beyond the per-address limit are closed at on
   CHECK(sut.counters().refusedConnections == 1);
   // a connection that is let in still works, and a closed one frees its place
   sendAll(first, "GET /api/info HTTP/1.1\r\nHost: x\r\n\r\n");
-  CHECK(parseAnswer(readFrom(first, CLIENT_TIMEOUT, [](const std::string& d) { return d.find("{}") != std::string::npos; })).status ==
-        200);
+  CHECK(parseAnswer(readFrom(first, CLIENT_TIMEOUT, [](const std::string& d) {
+          return d.find("{}") != std::string::npos;
+        })).status == 200);
   ::close(first);
   ::close(second);
   REQUIRE(eventually([&] { return sut.counters().connections == 0; }));

@@ -98,7 +98,8 @@ TEST_CASE("web server: a stream client that stops reading holds up no other clie
   sut.stream("/api/live", [&](const web::Request&) -> openvcu::Result<std::unique_ptr<web::EventSource>> {
     return std::unique_ptr<web::EventSource>(std::make_unique<CountingSource>(shared, 512 * 1024));
   });
-  sut.route(web::Method::Get, "/api/info", [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
+  sut.route(web::Method::Get, "/api/info",
+            [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
   const auto port = server.start();
   const int stalled = connectTo(port, 4096);
   REQUIRE(stalled >= 0);
@@ -107,7 +108,7 @@ TEST_CASE("web server: a stream client that stops reading holds up no other clie
   REQUIRE(eventually([&] { return sut.counters().eventsSkipped > 0; }));
   const auto asked = Clock::now();
   CHECK(get(port, "/api/info").status == 200);
-  CHECK(Clock::now() - asked < 1s);  // well before the stalled stream's writeTimeout
+  CHECK(Clock::now() - asked < 1s);                                    // well before the stalled stream's writeTimeout
   CHECK(eventually([&] { return sut.counters().streams == 0; }, 4s));  // closed after writeTimeout
   ::close(stalled);
 }
@@ -133,7 +134,8 @@ TEST_CASE("web server: a Responder called from another thread answers the reques
   // two requests on one keep-alive connection: both answered once, in order
   for (int i = 0; i < 2; ++i) {
     sendAll(fd, "GET /api/slow HTTP/1.1\r\nHost: x\r\n\r\n");
-    const Answer answer = parseAnswer(readFrom(fd, CLIENT_TIMEOUT, [](const std::string& d) { return d.find("true}") != std::string::npos; }));
+    const Answer answer = parseAnswer(
+        readFrom(fd, CLIENT_TIMEOUT, [](const std::string& d) { return d.find("true}") != std::string::npos; }));
     CHECK(answer.status == 200);
     CHECK(answer.body == "{\"worker\": true}");
   }
