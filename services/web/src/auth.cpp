@@ -303,7 +303,15 @@ Status UserFile::setPassword(const std::string& path, std::string_view name, std
   } else {
     users.push_back(Json::object({{"name", std::string(name)}, {"hash", *hash}}));
   }
-  return writeUsersFile(path, document.dump(2) + "\n");
+  // A users file reached through a symlink is replaced where it lives; the link stays.
+  std::string target = path;
+  if (status.type() == std::filesystem::file_type::symlink) {
+    std::error_code resolveError;
+    const auto resolved = std::filesystem::canonical(path, resolveError);
+    if (resolveError) return Error{"cannot resolve the users file: " + resolveError.message(), Location{path, 0, 0, {}}};
+    target = resolved.string();
+  }
+  return writeUsersFile(target, document.dump(2) + "\n");
 }
 
 // ---- sessions ---------------------------------------------------------------------------

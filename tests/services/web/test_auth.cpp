@@ -155,6 +155,20 @@ TEST_CASE("setPassword creates the users file with mode 0600 and replaces a pass
   CHECK(verifyPassword("bobs", sut->find("bob")->hash));
 }
 
+TEST_CASE("setPassword through a symlink replaces the file it points to and keeps the link") {
+  TempFolder folder;
+  const std::string real = folder.file("real.json");
+  const std::string link = folder.file("link.json");
+  REQUIRE(UserFile::setPassword(real, "alice", "first"));
+  std::filesystem::create_symlink("real.json", link);
+  REQUIRE(UserFile::setPassword(link, "alice", "second"));
+  CHECK(std::filesystem::is_symlink(link));
+  auto sut = UserFile::load(real);
+  REQUIRE(sut);
+  REQUIRE(sut->find("alice") != nullptr);
+  CHECK(verifyPassword("second", sut->find("alice")->hash));
+}
+
 TEST_CASE("setPassword leaves a broken users file untouched and refuses a bad name") {
   TempFolder folder;
   const std::string path = folder.file("web-users.json");
