@@ -104,9 +104,10 @@ std::string hashProblem(const std::string& hash) {
   const std::size_t lastDollar = hash.rfind('$');
   const std::size_t tail = hash.size() - lastDollar - 1;
   const int check = ::crypt_checksalt(hash.c_str());
-  const bool characters = std::all_of(hash.begin() + static_cast<std::ptrdiff_t>(lastDollar) + 1, hash.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '/';
-  });
+  const bool characters =
+      std::all_of(hash.begin() + static_cast<std::ptrdiff_t>(lastDollar) + 1, hash.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '/';
+      });
   if (lastDollar < method->prefix.size() || tail != method->tailLength || !characters ||
       (check != CRYPT_SALT_OK && check != CRYPT_SALT_METHOD_LEGACY)) {
     return "not a complete " + std::string(method->name) + " hash";
@@ -125,7 +126,8 @@ bool constantTimeEqual(std::string_view a, std::string_view b) noexcept {
   if (a.size() != b.size()) return false;
   unsigned char difference = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    difference = static_cast<unsigned char>(difference | (static_cast<unsigned char>(a[i]) ^ static_cast<unsigned char>(b[i])));
+    difference =
+        static_cast<unsigned char>(difference | (static_cast<unsigned char>(a[i]) ^ static_cast<unsigned char>(b[i])));
   }
   return difference == 0;
 }
@@ -178,7 +180,8 @@ Status writeUsersFile(const std::string& path, const std::string& text) {
   temporary += target.filename().string();
   temporary += ".XXXXXX";
   const int fd = ::mkstemp(temporary.data());  // mode 0600
-  if (fd < 0) return Error{"cannot write the users file: " + std::string(std::strerror(errno)), Location{path, 0, 0, {}}};
+  if (fd < 0)
+    return Error{"cannot write the users file: " + std::string(std::strerror(errno)), Location{path, 0, 0, {}}};
   const auto fail = [&](const std::string& what) -> Status {
     const int saved = errno;
     ::close(fd);
@@ -308,7 +311,8 @@ Status UserFile::setPassword(const std::string& path, std::string_view name, std
   if (status.type() == std::filesystem::file_type::symlink) {
     std::error_code resolveError;
     const auto resolved = std::filesystem::canonical(path, resolveError);
-    if (resolveError) return Error{"cannot resolve the users file: " + resolveError.message(), Location{path, 0, 0, {}}};
+    if (resolveError)
+      return Error{"cannot resolve the users file: " + resolveError.message(), Location{path, 0, 0, {}}};
     target = resolved.string();
   }
   return writeUsersFile(target, document.dump(2) + "\n");
@@ -333,8 +337,7 @@ bool Sessions::checkPassword(const UserFile& users, std::string_view user, std::
 }
 
 std::optional<Session> Sessions::login(const UserFile& users, std::string_view user, std::string_view password,
-                                       const std::string& clientAddress, Clock::time_point now,
-                                       LoginRefusal* refusal) {
+                                       const std::string& clientAddress, Clock::time_point now, LoginRefusal* refusal) {
   if (!beginLogin(clientAddress, now)) {
     if (refusal != nullptr) *refusal = LoginRefusal::TooManyAttempts;
     return std::nullopt;
@@ -395,7 +398,8 @@ std::chrono::seconds Sessions::retryAfter(const std::string& clientAddress, Cloc
   const auto found = m_failures.find(clientAddress);
   if (found == m_failures.end()) return std::chrono::seconds(0);
   const std::vector<Clock::time_point>& times = found->second;
-  const auto recent = std::count_if(times.begin(), times.end(), [&](Clock::time_point t) { return t + m_failureWindow > now; });
+  const auto recent =
+      std::count_if(times.begin(), times.end(), [&](Clock::time_point t) { return t + m_failureWindow > now; });
   if (recent < m_maxFailures) return std::chrono::seconds(0);
   // refused until the oldest of the last maxFailures attempts leaves the window (rounded up)
   const Clock::time_point freeAt = times[times.size() - static_cast<std::size_t>(m_maxFailures)] + m_failureWindow;

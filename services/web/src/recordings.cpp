@@ -35,7 +35,9 @@ bool nameCharacter(char c) noexcept {
   return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
 }
 
-std::string errnoText(int error) { return std::strerror(error); }
+std::string errnoText(int error) {
+  return std::strerror(error);
+}
 
 std::int64_t unixMs(const struct stat& info) noexcept {
   return static_cast<std::int64_t>(info.st_mtim.tv_sec) * 1000 + info.st_mtim.tv_nsec / 1'000'000;
@@ -64,7 +66,8 @@ Result<fs::path> resolveEntry(const fs::path& container, std::string_view name, 
   const fs::path resolved = fs::canonical(container / std::string(name), error);
   if (error) return Error{std::string(kind) + " " + quoted + ": not found"};
   if (resolved == root || !isUnder(resolved, root)) {
-    return Error{std::string(kind) + " " + quoted + ": refused: it leads out of " + container.filename().string() + "/"};
+    return Error{std::string(kind) + " " + quoted + ": refused: it leads out of " + container.filename().string() +
+                 "/"};
   }
   return resolved;
 }
@@ -104,7 +107,8 @@ Status ensureFolder(const fs::path& folder) {
     return Error{"cannot create the folder: " + errnoText(errno), Location{folder.string(), 0, 0, {}}};
   }
   struct stat info {};
-  if (::stat(folder.c_str(), &info) != 0) return Error{"cannot read: " + errnoText(errno), Location{folder.string(), 0, 0, {}}};
+  if (::stat(folder.c_str(), &info) != 0)
+    return Error{"cannot read: " + errnoText(errno), Location{folder.string(), 0, 0, {}}};
   if (!S_ISDIR(info.st_mode)) return Error{"not a folder", Location{folder.string(), 0, 0, {}}};
   return {};
 }
@@ -133,8 +137,8 @@ std::pair<std::string, std::string> sanitiseUploadName(std::string_view clientNa
   for (std::size_t i = 0; i < name.size() && name[i] == '.'; ++i) name[i] = '_';
   if (name.empty()) name = "upload";
   std::string extension;
-  if (const std::size_t dot = name.rfind('.'); dot != std::string::npos && dot > 0 &&
-                                               name.size() - dot <= MAX_KEPT_EXTENSION) {
+  if (const std::size_t dot = name.rfind('.');
+      dot != std::string::npos && dot > 0 && name.size() - dot <= MAX_KEPT_EXTENSION) {
     extension = name.substr(dot);
     name.resize(dot);
   }
@@ -244,8 +248,12 @@ bool validEntryName(std::string_view name) noexcept {
 
 DataFolder::DataFolder(fs::path root) : m_root(std::move(root)) {}
 
-fs::path DataFolder::incomingFolder() const { return m_root / "uploads" / ".incoming"; }
-fs::path DataFolder::cacheFolder() const { return m_root / "cache"; }
+fs::path DataFolder::incomingFolder() const {
+  return m_root / "uploads" / ".incoming";
+}
+fs::path DataFolder::cacheFolder() const {
+  return m_root / "cache";
+}
 
 Status DataFolder::prepare() const {
   std::error_code error;

@@ -55,8 +55,8 @@ std::string readText(const std::string& path) {
 }
 
 UserFile usersWithSha512(const char* name = "alice") {
-  auto parsed = UserFile::parse(std::string(R"({"users": [{"name": ")") + name + R"(", "hash": ")" + SHA512_HASH + "\"}]}",
-                                "web-users.json");
+  auto parsed = UserFile::parse(
+      std::string(R"({"users": [{"name": ")") + name + R"(", "hash": ")" + SHA512_HASH + "\"}]}", "web-users.json");
   REQUIRE(parsed);
   return *parsed;
 }
@@ -86,7 +86,9 @@ TEST_CASE("two hashes of one password differ by their random salt") {
   CHECK(*first != *second);
 }
 
-TEST_CASE("hashPassword refuses an empty password") { CHECK_FALSE(hashPassword("")); }
+TEST_CASE("hashPassword refuses an empty password") {
+  CHECK_FALSE(hashPassword(""));
+}
 
 TEST_CASE("a SHA-512 hash made elsewhere verifies") {
   CHECK(verifyPassword(SHA512_PASSWORD, SHA512_HASH));
@@ -101,7 +103,8 @@ TEST_CASE("verifyPassword is false for a hash crypt refuses") {
 
 TEST_CASE("a users file with users of each accepted method loads") {
   const std::string text = std::string(R"({"comment": "bench", "users": [
-    {"name": "alice", "hash": ")") + SHA512_HASH + R"(", "comment": "engineer"},
+    {"name": "alice", "hash": ")") +
+                           SHA512_HASH + R"(", "comment": "engineer"},
     {"name": "bob.b-2_", "hash": "$y$j9T$obvBnZVTKMr0wltDt0yiN.$Q6cuJ9xOxDlNeVTocFOfPGxxAs2Wlj.dOyts3v4cTrD"}]})";
   auto sut = UserFile::parse(text, "web-users.json");
   REQUIRE(sut);
@@ -116,16 +119,19 @@ TEST_CASE("users file errors name the file and the place") {
   CHECK(parseError(R"({"people": []})").find("web-users.json: /people: unknown key") == 0);
   CHECK(parseError(R"({})") == "web-users.json: /users: missing (required)");
   const std::string hash = SHA512_HASH;
-  CHECK(parseError(R"({"users": [{"name": "a", "hash": ")" + hash + R"("}, {"name": "a", "hash": ")" + hash + "\"}]}") ==
-        "web-users.json: /users/1/name: user 'a' is given twice");
-  CHECK(parseError(R"({"users": [{"name": "a b", "hash": ")" + hash + "\"}]}").starts_with("web-users.json: /users/0/name: "));
-  CHECK(parseError(R"({"users": [{"name": "a", "hash": "secret"}]})").starts_with("web-users.json: /users/0/hash: not a crypt(3) hash"));
-  CHECK(parseError(R"({"users": [{"name": "a", "hash": "$1$abc$def"}]})").starts_with("web-users.json: /users/0/hash: "));
+  CHECK(parseError(R"({"users": [{"name": "a", "hash": ")" + hash + R"("}, {"name": "a", "hash": ")" + hash +
+                   "\"}]}") == "web-users.json: /users/1/name: user 'a' is given twice");
+  CHECK(parseError(R"({"users": [{"name": "a b", "hash": ")" + hash + "\"}]}")
+            .starts_with("web-users.json: /users/0/name: "));
+  CHECK(parseError(R"({"users": [{"name": "a", "hash": "secret"}]})")
+            .starts_with("web-users.json: /users/0/hash: not a crypt(3) hash"));
+  CHECK(
+      parseError(R"({"users": [{"name": "a", "hash": "$1$abc$def"}]})").starts_with("web-users.json: /users/0/hash: "));
   CHECK(parseError(R"({"users": [{"name": "a", "hash": "$6$IVxBmB2j5n6FtWJq$short"}]})") ==
         "web-users.json: /users/0/hash: not a complete SHA-512 hash");
   CHECK(parseError(R"({"users": [{"name": "a"}]})") == "web-users.json: /users/0/hash: missing (required)");
-  CHECK(parseError(R"({"users": [{"name": "a", "hash": ")" + hash + R"(", "pasword": "x"}]})").starts_with(
-      "web-users.json: /users/0/pasword: unknown key"));
+  CHECK(parseError(R"({"users": [{"name": "a", "hash": ")" + hash + R"(", "pasword": "x"}]})")
+            .starts_with("web-users.json: /users/0/pasword: unknown key"));
 }
 
 TEST_CASE("loading a missing users file is an error naming it") {
