@@ -77,9 +77,9 @@ Result<FirstPass> readFirstPass(const ReportJob& job, std::vector<Error>& errors
   if (pass.logs.empty()) {
     if (job.logs.empty()) return Error{"no log given"};
     if (job.logs.size() == 1) return *firstError;
-    return Error{"none of the " + std::to_string(job.logs.size()) + " logs can be opened; the first: " +
-                     firstError->message,
-                 firstError->location};
+    return Error{
+        "none of the " + std::to_string(job.logs.size()) + " logs can be opened; the first: " + firstError->message,
+        firstError->location};
   }
   std::uint64_t logProblems = 0;
   Result<LogTimeline> timelineResult =

@@ -17,13 +17,12 @@ namespace {
 /// needs whatever the number of samples.
 class BucketedSeries {
  public:
-  explicit BucketedSeries(double durationS)
-      : m_durationS(durationS > 0 ? durationS : 1.0), m_buckets(SIGNAL_BUCKETS) {}
+  explicit BucketedSeries(double durationS) : m_durationS(durationS > 0 ? durationS : 1.0), m_buckets(SIGNAL_BUCKETS) {}
 
   void add(double s, double value) {
     if (!(value == value)) return;  // NaN: not drawn
     const auto index = std::min(SIGNAL_BUCKETS - 1, static_cast<std::size_t>(std::max(0.0, s) / m_durationS *
-                                                                                 static_cast<double>(SIGNAL_BUCKETS)));
+                                                                             static_cast<double>(SIGNAL_BUCKETS)));
     Bucket& bucket = m_buckets[index];
     if (bucket.count == 0 || value < bucket.min.second) bucket.min = {s, value};
     if (bucket.count == 0 || value > bucket.max.second) bucket.max = {s, value};
@@ -71,15 +70,20 @@ std::optional<SignalRef> findSignalByName(const dbc::Database& database, const s
 
 Severity faultSeverity(ipc::FaultSeverity severity) {
   switch (severity) {
-    case ipc::FaultSeverity::Info: return Severity::Info;
-    case ipc::FaultSeverity::Warning: return Severity::Warning;
-    default: return Severity::Fault;
+    case ipc::FaultSeverity::Info:
+      return Severity::Info;
+    case ipc::FaultSeverity::Warning:
+      return Severity::Warning;
+    default:
+      return Severity::Fault;
   }
 }
 
 }  // namespace
 
-Error cancelledError() { return Error{"cancelled"}; }
+Error cancelledError() {
+  return Error{"cancelled"};
+}
 
 std::vector<SignalRef> resolveSignals(const dbc::Database& database, const std::vector<std::string>& names,
                                       std::vector<Error>& errors) {
@@ -150,7 +154,8 @@ std::vector<EventLane> recordedEventLanes(const std::string& path, std::int64_t 
   }
   EventLane faults{"Faults", {}};
   for (const ipc::FaultEvent& fault : eventsResult->faults) {
-    faults.events.push_back(ReportEvent{seconds(fault.timestampNs), (fault.active ? "raised " : "cleared ") + fault.name,
+    faults.events.push_back(ReportEvent{seconds(fault.timestampNs),
+                                        (fault.active ? "raised " : "cleared ") + fault.name,
                                         fault.active ? faultSeverity(fault.severity) : Severity::Info});
   }
   lanes.push_back(std::move(states));

@@ -46,8 +46,8 @@ class FrameBudget {
 
 /// The signals of `names` in `database`: "MESSAGE.SIGNAL" or the table key
 /// "NODE.MESSAGE.SIGNAL". An unknown name becomes an Error in `errors` and is left out.
-[[nodiscard]] std::vector<SignalRef> resolveSignals(const dbc::Database& database, const std::vector<std::string>& names,
-                                                    std::vector<Error>& errors);
+[[nodiscard]] std::vector<SignalRef> resolveSignals(const dbc::Database& database,
+                                                    const std::vector<std::string>& names, std::vector<Error>& errors);
 
 /// The second pass over `logs`: every signal of `refs` as min/max buckets (SIGNAL_BUCKETS)
 /// over [0, durationS] seconds from `startNs`. Fails when a log cannot be opened again or

@@ -38,17 +38,20 @@ ReportJob fixtureJob() {
   return job;
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
 
 /// The input error whose location is `file`, or null.
 const Error* errorAbout(const std::vector<Error>& errors, const std::string& file) {
-  const auto it = std::find_if(errors.begin(), errors.end(), [&file](const Error& e) { return e.location.file == file; });
+  const auto it =
+      std::find_if(errors.begin(), errors.end(), [&file](const Error& e) { return e.location.file == file; });
   return it == errors.end() ? nullptr : &*it;
 }
 
 }  // namespace
 
-TEST_CASE("makeReport of a candump log counts its frames per bus and draws the figures and the message table") {
+TEST_CASE("trace::makeReport of a candump log counts its frames per bus and draws the figures and the message table") {
   ReportJob job = fixtureJob();
   job.signals = {"CCVS1.WheelSpeed"};
 
@@ -71,25 +74,25 @@ TEST_CASE("makeReport of a candump log counts its frames per bus and draws the f
   REQUIRE_FALSE(sut->inputErrors.empty());
   for (const Error& error : sut->inputErrors) {
     CAPTURE(error.toString());
-    CHECK(error.severity == Severity::Warning);
+    CHECK(error.severity == openvcu::Severity::Warning);
     CHECK(error.location.file == FIXTURE_LOG);
   }
   CHECK(contains(sut->inputErrors.front().message, "time goes backwards"));
 
   const std::string& html = sut->html;
   CHECK(html.rfind("<!DOCTYPE html>", 0) == 0);
-  CHECK(contains(html, "<title>candump_l.log"));                 // the title: the log's name
-  CHECK(contains(html, "logs: " + FIXTURE_LOG));                 // the source line
+  CHECK(contains(html, "<title>candump_l.log"));  // the title: the log's name
+  CHECK(contains(html, "logs: " + FIXTURE_LOG));  // the source line
   CHECK(contains(html, "<div class=\"chart\" data-chart=\"bus-load\">"));
   CHECK(contains(html, "<div class=\"chart\" data-chart=\"node-rate\">"));
   CHECK(contains(html, "<div class=\"chart\" data-chart=\"signals-1\">"));
   CHECK(contains(html, "CCVS1.WheelSpeed"));
-  CHECK(contains(html, "<td class=\"l\">CCVS1</td>"));           // the message table
-  CHECK(contains(html, "<td class=\"l\">vcan0</td>"));           // the bus table
-  CHECK_FALSE(contains(html, "data-chart=\"event-lanes\""));     // no events log
+  CHECK(contains(html, "<td class=\"l\">CCVS1</td>"));        // the message table
+  CHECK(contains(html, "<td class=\"l\">vcan0</td>"));        // the bus table
+  CHECK_FALSE(contains(html, "data-chart=\"event-lanes\""));  // no events log
 }
 
-TEST_CASE("summarize gives the summary of makeReport without the signal pass") {
+TEST_CASE("trace::summarize gives the summary of makeReport without the signal pass") {
   ReportJob job = fixtureJob();
   auto reportResult = makeReport(job);
   REQUIRE(reportResult);
@@ -107,7 +110,7 @@ TEST_CASE("summarize gives the summary of makeReport without the signal pass") {
   CHECK(inputErrors.size() == reportResult->inputErrors.size());
 }
 
-TEST_CASE("makeReport fails naming the log when its only log cannot be opened") {
+TEST_CASE("trace::makeReport fails naming the log when its only log cannot be opened") {
   ReportJob job = fixtureJob();
   job.logs = {"/nonexistent/drive.log"};
 
@@ -118,7 +121,7 @@ TEST_CASE("makeReport fails naming the log when its only log cannot be opened") 
   CHECK_FALSE(summarize(job));
 }
 
-TEST_CASE("makeReport leaves out a log that cannot be opened, names it and reports the others") {
+TEST_CASE("trace::makeReport leaves out a log that cannot be opened, names it and reports the others") {
   ReportJob job = fixtureJob();
   job.logs = {FIXTURE_LOG, "/nonexistent/drive.log"};
   job.signals = {"CCVS1.NoSuchSignal"};
@@ -130,7 +133,7 @@ TEST_CASE("makeReport leaves out a log that cannot be opened, names it and repor
   CHECK(sut->summary.unreadableLogs == std::vector<std::string>{"/nonexistent/drive.log"});
   const Error* missing = errorAbout(sut->inputErrors, "/nonexistent/drive.log");
   REQUIRE(missing != nullptr);
-  CHECK(missing->severity == Severity::Error);
+  CHECK(missing->severity == openvcu::Severity::Error);
   const auto unknownSignal = std::find_if(sut->inputErrors.begin(), sut->inputErrors.end(), [](const Error& e) {
     return contains(e.message, "CCVS1.NoSuchSignal: no such signal");
   });
@@ -139,7 +142,7 @@ TEST_CASE("makeReport leaves out a log that cannot be opened, names it and repor
   CHECK(contains(sut->html, "</html>"));
 }
 
-TEST_CASE("makeReport stops at maxFrames and says so; a set cancel flag returns cancelled") {
+TEST_CASE("trace::makeReport stops at maxFrames and says so, and returns cancelled when its cancel flag is set") {
   constexpr std::uint64_t LIMIT = 4;
   ReportJob job = fixtureJob();
   job.maxFrames = LIMIT;
@@ -160,7 +163,7 @@ TEST_CASE("makeReport stops at maxFrames and says so; a set cancel flag returns 
   CHECK(cancelled.error().message == "cancelled");
 }
 
-TEST_CASE("jobForFolder takes a recording's *.log files in order, its events log and its name") {
+TEST_CASE("trace::jobForFolder takes a recording's *.log files in order, its events log and its name") {
   test::ScratchFolder folder;
   const std::string vehicle = folder.write("vehicle.log", "(1436509052.249713) vehicle 18FEF100#0102030405060708\n");
   const std::string body = folder.write("body.log", "(1436509052.300000) body 123#01\n");
@@ -171,7 +174,7 @@ TEST_CASE("jobForFolder takes a recording's *.log files in order, its events log
     CHECK(busResult->publish(ipc::FsmTransition{EVENTS_START_NS + 10'000'000, "Off", "KeepAliveState", "StartStop"}));
   }
 
-  auto sut = jobForFolder(folder.path("") , emptySetup());
+  auto sut = jobForFolder(folder.path(""), emptySetup());
 
   REQUIRE_MESSAGE(sut, (sut ? "" : sut.error().toString()));
   CHECK(sut->logs == std::vector<std::string>{body, vehicle});
@@ -179,12 +182,13 @@ TEST_CASE("jobForFolder takes a recording's *.log files in order, its events log
   CHECK(sut->title.rfind("openvcu-trace-", 0) == 0);  // the folder's name, also with a trailing slash
   auto reportResult = makeReport(*sut);
   REQUIRE(reportResult);
-  CHECK(reportResult->summary.buses == std::vector<std::string>{"vehicle", "body"});
+  // LogTimeline::buses(): channels as the logs are read (each log's first frame at open)
+  CHECK(reportResult->summary.buses == std::vector<std::string>{"body", "vehicle"});
   CHECK(contains(reportResult->html, "data-chart=\"event-lanes\""));
   CHECK(contains(reportResult->html, "KeepAliveState"));
 }
 
-TEST_CASE("jobForFolder fails on a folder without logs; an unreadable events log is an input error") {
+TEST_CASE("trace::jobForFolder fails on a folder without logs, and an unreadable events log is an input error") {
   test::ScratchFolder folder;
   auto empty = jobForFolder(folder.path(""), emptySetup());
   REQUIRE_FALSE(empty);
@@ -198,6 +202,6 @@ TEST_CASE("jobForFolder fails on a folder without logs; an unreadable events log
   REQUIRE(reportResult);
   const Error* eventsError = errorAbout(reportResult->inputErrors, events);
   REQUIRE(eventsError != nullptr);
-  CHECK(eventsError->severity == Severity::Error);
+  CHECK(eventsError->severity == openvcu::Severity::Error);
   CHECK(reportResult->summary.frames == 1);
 }

@@ -51,7 +51,7 @@ struct ReportJob {
   /// Signals to chart: "MESSAGE.SIGNAL" as in the DBC, or the table key
   /// "NODE.MESSAGE.SIGNAL" (config::signalKey). Empty: no signal chart.
   std::vector<std::string> signals;
-  std::string title;              ///< the heading; empty: the first log's file name
+  std::string title;  ///< the heading; empty: the first log's file name
   /// Frames read at most (each pass); 0: all. A log cut short says so in a warning and the
   /// report covers what was read.
   std::uint64_t maxFrames{};
@@ -73,21 +73,21 @@ struct ReportSummary {
   std::uint64_t frames{};
   double durationS{};               ///< first to last frame
   double startS{};                  ///< the first frame's log time, s (candump: since 1970)
-  std::vector<std::string> buses;   ///< log channels in order of first appearance
+  std::vector<std::string> buses;   ///< log channels as LogTimeline::buses() names them
   std::vector<BusSummary> busLoad;  ///< per bus with frames, in the order of `buses`
   std::uint64_t errors{};           ///< findings of severity Fault (protocol faults)
   std::uint64_t warnings{};         ///< findings of severity Warning
   std::uint64_t infos{};            ///< findings of severity Info
   std::uint64_t messages{};         ///< distinct (bus, identifier) streams
   std::uint64_t errorFrames{};
-  std::uint64_t malformedLines{};   ///< all logs, skipped
+  std::uint64_t malformedLines{};           ///< all logs, skipped
   std::vector<std::string> logs;            ///< the logs read
   std::vector<std::string> unreadableLogs;  ///< the logs that could not be opened (left out)
-  bool truncated{};                 ///< stopped at ReportJob::maxFrames
+  bool truncated{};                         ///< stopped at ReportJob::maxFrames
 };
 
 struct ReportOutcome {
-  std::string html;                ///< the whole document (renderHtmlReport)
+  std::string html;  ///< the whole document (renderHtmlReport)
   ReportSummary summary;
   std::vector<Error> inputErrors;  ///< in the order found; severity Error, Warning or Note
 };
