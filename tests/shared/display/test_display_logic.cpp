@@ -1,5 +1,6 @@
-// The HMI's display logic without Qt: value text and status, the FSM rules behind the
-// operator switches, service health, command acknowledgements and the log ring (issue 10).
+// The display logic the HMI and vcu-web share (openvcu::display): value text and status, the
+// FSM rules behind the operator switches, service health, command acknowledgements and the
+// log ring (issue 10).
 // The plot's ring and decimation are tested with shared/trace (tests/shared/trace).
 #include <doctest/doctest.h>
 
@@ -8,10 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "common/display_logic.hpp"
+#include "openvcu/display/commands.hpp"
+#include "openvcu/display/fsm_rules.hpp"
+#include "openvcu/display/health.hpp"
+#include "openvcu/display/log_buffer.hpp"
+#include "openvcu/display/values.hpp"
 
 using namespace openvcu;
-using namespace openvcu::hmi;
+using namespace openvcu::display;
 
 namespace {
 
