@@ -29,8 +29,8 @@ std::string LogBuffer::exportText(const std::vector<std::size_t>& indices) const
   for (const std::size_t index : indices) {
     if (index >= m_records.size()) continue;
     const ipc::LogRecord& record = m_records[index];
-    out += service::formatUtc(record.timestampNs) + " " + std::string(levelName(record.level)) + " " +
-           record.service + ": " + record.text + "\n";
+    out += service::formatUtc(record.timestampNs) + " " + std::string(levelName(record.level)) + " " + record.service +
+           ": " + record.text + "\n";
   }
   return out;
 }

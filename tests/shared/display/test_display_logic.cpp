@@ -4,11 +4,10 @@
 // The plot's ring and decimation are tested with shared/trace (tests/shared/trace).
 #include <doctest/doctest.h>
 
-#include "dashboard_test_catalog.hpp"
-
 #include <string>
 #include <vector>
 
+#include "dashboard_test_catalog.hpp"
 #include "openvcu/display/commands.hpp"
 #include "openvcu/display/fsm_rules.hpp"
 #include "openvcu/display/health.hpp"
@@ -23,7 +22,9 @@ namespace {
 constexpr std::int64_t SECOND_NS = 1'000'000'000;
 constexpr std::int64_t STALE_AFTER_NS = 2 * SECOND_NS;
 
-signals::Catalog smallCatalog() { return openvcu::testing::dashboardCatalog(); }
+signals::Catalog smallCatalog() {
+  return openvcu::testing::dashboardCatalog();
+}
 
 signals::SlotSnapshot busSlot(double value, std::int64_t timestampNs, signals::Quality quality) {
   signals::SlotSnapshot slot;
@@ -162,7 +163,8 @@ TEST_CASE("a command is answered by its own ack only, refused with the reason, o
   CHECK(first.requestId == 41);
   CHECK(second.requestId == 42);
   CHECK(first.issuer == "vcu-hmi");
-  CHECK_FALSE(sut.onAck({.requestId = 41, .issuer = "vcu", .responder = "vcu-fsm", .accepted = true, .reason = {}, .owner = true}));
+  CHECK_FALSE(sut.onAck(
+      {.requestId = 41, .issuer = "vcu", .responder = "vcu-fsm", .accepted = true, .reason = {}, .owner = true}));
   const auto refused = sut.onAck({.requestId = 41,
                                   .issuer = "vcu-hmi",
                                   .responder = "vcu-fsm",
