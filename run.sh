@@ -165,7 +165,7 @@ fi
 # (openvcu.conf names $run/data)
 data=$(dirname "$bin")/data
 mkdir -p "$data" || { echo "run.sh: cannot create the data folder $data" >&2; exit 1; }
-ln -s "$data" "$run/data"
+ln -sfn "$data" "$run/data"
 web=0
 if [ "$web_port" -ne 0 ] && [ -x "$bin/vcu-web" ]; then
   web=1
