@@ -119,8 +119,8 @@ async function loadCatalog() {
 }
 
 function showInfo(info) {
-  const name = [info.vehicle, info.instance].filter(Boolean).join(' · ');
-  setText(byId('instance'), info.version ? `${name} · ${info.version}` : name);
+  setText(byId('instance'), info.instance || '');
+  setAttr(byId('instance'), 'title', [info.instance, info.vehicle, info.version && `openvcu ${info.version}`].filter(Boolean).join(' · '));
   document.title = info.instance ? `openvcu ${info.instance}` : 'openvcu';
   byId('login-form').classList.toggle('unavailable', info.loginAvailable === false);
   if (info.loginAvailable === false) setText(byId('login-error'), 'logins are not configured: read-only');
@@ -139,6 +139,7 @@ async function main() {
   app.commands.setUser(info.user);
   const signals = await loadCatalog();
   const catalog = new Map(signals.map((s) => [s.key, s]));
+  app.commands.catalog = catalog;
   fillDatalists(signals);
 
   const maxSignals = Number(info.maxSignals) > 0 ? Number(info.maxSignals) : 32;

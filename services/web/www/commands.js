@@ -8,7 +8,9 @@ import { byId, clear, el, setAttr, setText } from './dom.js';
 
 export class Commands {
   /// onUserChanged(user): after a login, a logout or a lost session
+  /// catalog: key -> catalog entry (value texts of the switches), may be set later
   constructor(onUserChanged) {
+    this.catalog = new Map();
     this.user = null;
     this.onUserChanged = onUserChanged;
     this.operatorKeys = '';
@@ -94,12 +96,23 @@ export class Commands {
     switches.forEach((entry, i) => {
       const button = box.children[i];
       setText(button.querySelector('.label'), entry.label ?? entry.key);
-      setText(button.querySelector('.state'), entry.stateText ?? (entry.on ? 'on' : 'off'));
+      setText(button.querySelector('.state'), entry.stateText || this.valueText(entry));
       setAttr(button, 'data-on', entry.on ? 'true' : 'false');
       setAttr(button, 'title', `${entry.key}: press to switch ${entry.on ? 'off' : 'on'}`);
-      this.operatorState.set(entry.key, { on: !!entry.on, enabled: entry.enabled !== false });
+      this.operatorState.set(entry.key, {
+        on: !!entry.on,
+        enabled: entry.enabled !== false,
+        onValue: typeof entry.onValue === 'number' ? entry.onValue : 1,
+      });
     });
     this.refreshOperatorButtons();
+  }
+
+  /// "Start" / "Stop" from the catalog's value table when vcu-web sends no stateText.
+  valueText(entry) {
+    const values = (this.catalog.get(entry.key) || {}).values || {};
+    const value = entry.on ? (typeof entry.onValue === 'number' ? entry.onValue : 1) : 0;
+    return values[String(value)] ?? (entry.on ? 'on' : 'off');
   }
 
   refreshOperatorButtons() {
@@ -113,7 +126,9 @@ export class Commands {
     const state = this.operatorState.get(key);
     if (!state) return;
     const label = button.querySelector('.label').textContent;
-    this.send({ kind: 'operator', key, value: state.on ? 0 : 1 }, `${label} ${state.on ? 'off' : 'on'}`);
+    const value = state.on ? 0 : state.onValue;
+    const text = ((this.catalog.get(key) || {}).values || {})[String(value)] ?? (state.on ? 'off' : 'on');
+    this.send({ kind: 'operator', key, value }, `${label}: ${text}`);
   }
 
   async send(command, description) {

@@ -25,7 +25,7 @@ export class LiveView {
     setAttr(byId('fsm-state'), 'data-state-index', header.stateIndex ?? '');
     this.stateSince = sinceSeconds(update.t, header.stateSinceUnixMs, header.stateSinceS, now);
     const soc = header.soc || {};
-    setText(byId('soc'), soc.text ?? '');
+    setText(byId('soc'), soc.text || (soc.status === 'Ready' ? '?' : statusLabel(soc.status ?? 'NotConnected')));
     setAttr(byId('soc'), 'data-status', soc.status ?? 'NotConnected');
     setText(byId('health'), statusLabel(header.health));
     setAttr(byId('health'), 'data-status', header.health ?? 'NotConnected');
@@ -45,9 +45,10 @@ export class LiveView {
     }
     services.forEach((service, i) => {
       const chip = box.children[i];
-      setText(chip, service.name);
+      setText(chip, String(service.name ?? '').replace(/^vcu-/, ''));
       setAttr(chip, 'data-status', service.status ?? 'NotConnected');
-      setAttr(chip, 'title', `${service.name}: ${service.text ?? statusLabel(service.status)}`);
+      const restarts = service.restarts ? `, restarted ${service.restarts} times` : '';
+      setAttr(chip, 'title', `${service.name}: ${service.text || statusLabel(service.status)}${restarts}`);
     });
   }
 

@@ -151,10 +151,16 @@ def check_live(page, url):
                        'the plot legend')
     if legend[:2] != [FSM_KEY, rx_key]:
         raise Failure(f'plot legend {legend}, expected [{FSM_KEY}, {rx_key}]')
-    # the first lane's colour (#4fc3f7) must be on the canvas: the FSM state is drawn
+    # the first lane's colour (#4fc3f7, light blue; antialiased a darker blue) right of the
+    # axis labels (which are drawn in the lane's colour too): the FSM state's line is drawn
     count_pixels = """
       const c = document.getElementById('plot'); const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-      let n = 0; for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 0x4f) < 24 && Math.abs(d[i+1] - 0xc3) < 24 && Math.abs(d[i+2] - 0xf7) < 24) n++;
+      const left = Math.ceil(66 * (window.devicePixelRatio || 1));
+      let n = 0;
+      for (let y = 0; y < c.height; ++y) for (let x = left; x < c.width; ++x) {
+        const i = 4 * (y * c.width + x);
+        if (d[i + 2] > 100 && d[i + 2] - d[i] > 60 && d[i + 1] > 80) n++;
+      }
       return n;"""
     pixels = page.wait(lambda: page.driver.execute_script(count_pixels) > 50 and page.driver.execute_script(count_pixels),
                        'the plot draws the FSM state', timeout=10)

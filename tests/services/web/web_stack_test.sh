@@ -63,11 +63,18 @@ echo "$NAME: recording drive1: $(ls -l "$data/recordings/drive1" | tail -n +2 | 
 port=18080
 url=http://127.0.0.1:$port/
 # start_web / kill_web, also as scripts for the browser test's --start-command / --kill-command
+# vcu-web ends with its parent (PR_SET_PDEATHSIG): a subshell that waits for it is its parent,
+# so it outlives web-start.sh.
 cat > "$run/web-start.sh" <<EOF
 #!/bin/bash
-"$bin/vcu-web" --config "$config" --listen 127.0.0.1:$port --data-folder "$data" --users "$users" \\
-  --www "$root/services/web/www" >> "$run/web.log" 2>&1 &
-echo \$! > "$run/web.pid"
+rm -f "$run/web.pid"
+(
+  "$bin/vcu-web" --config "$config" --listen 127.0.0.1:$port --data-folder "$data" --users "$users" \\
+    --www "$root/services/web/www" >> "$run/web.log" 2>&1 &
+  echo \$! > "$run/web.pid"
+  wait
+) &
+for _ in \$(seq 1 50); do [ -s "$run/web.pid" ] && break; sleep 0.02; done
 for _ in \$(seq 1 100); do
   curl -s -o /dev/null --max-time 1 "${url}api/info" && exit 0
   kill -0 \$(cat "$run/web.pid") 2>/dev/null || { echo "vcu-web exited" >&2; exit 1; }
@@ -96,6 +103,7 @@ if [ "$mode" = api ]; then
 else
   shots=${OPENVCU_WEB_SCREENSHOTS:-$bin/../tests/web-screenshots}
   mkdir -p "$shots" || fail "cannot create $shots"
+  rm -f "$shots"/*.png  # only this run's
   "$python" "$here/web_browser_test.py" --url "$url" --user "$user" --log "$root/tests/data/logs/candump_l.log" \
     --screenshots "$shots" --kill-command "$run/web-kill.sh" --start-command "$run/web-start.sh"
   status=$?
