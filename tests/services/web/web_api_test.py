@@ -358,7 +358,9 @@ def check_live(c, info, catalog):
             times.append(time.monotonic())
         elapsed = time.monotonic() - start
         count = len(times)
-        check(count <= limit * elapsed + 1, f'{count} updates in {elapsed:.2f} s, more than {limit}/s')
+        # 10 % and one event of slack for timer jitter; these signals change every 10-20 ms, so
+        # a stream without the cap sends several times more
+        check(count <= limit * elapsed * 1.1 + 1, f'{count} updates in {elapsed:.2f} s, more than {limit}/s')
         check(count >= limit, f'{count} updates in 3 s of {len(busy)} transmitted signals: too quiet to measure the cap')
         gaps = [b - a for a, b in zip(times, times[1:])]
         log(f'live: {count} updates in {elapsed:.2f} s of {len(busy)} transmitted signals (cap {limit}/s), '
@@ -508,15 +510,37 @@ def check_commands(host, port, c, anonymous):
         ({'kind': 'operator', 'key': START_KEY, 'value': 'Sideways'}, None, 'an operator value text not in the table'),
         ({'key': START_KEY, 'value': 1}, '/kind', 'no kind'),
     ]
+    # the other kinds reach their owners and come back decided (accepted or refused with a reason)
+    message = 'HC1_Demands'
+    others = [
+        {'kind': 'scheduleEnable', 'key': message, 'value': 1},
+        {'kind': 'scheduleCycle', 'key': message, 'value': 100},
+        {'kind': 'clear', 'key': 'Vehicle_Control_Unit.HC1_Demands.ControlWord', 'value': 0},
+    ]
+    for command in others:
+        answer = c.post_json('/api/command', command)
+        expect_status(answer, 200, f'command {command}')
+        body = answer.json()
+        check(isinstance(body.get('accepted'), bool) and body.get('responder'), f'command {command}: {body}')
+        check(body['accepted'] or body.get('reason'), f'command {command} refused without a reason: {body}')
+        log(f'command {command["kind"]} {command["key"]}: {"accepted" if body["accepted"] else "refused"} by '
+            f'{body["responder"]}{": " + body["reason"] if body.get("reason") else ""}')
+
+    bad += [
+        ({'kind': 'scheduleEnable', 'key': message, 'value': 2}, '/value', 'scheduleEnable 2'),
+        ({'kind': 'scheduleEnable', 'key': 'NoSuchMessage', 'value': 1}, 'NoSuchMessage', 'an unknown message'),
+    ]
     for command, named, what in bad:
         answer = c.post_json('/api/command', command)
         expect_status(answer, 400, f'command with {what}')
         error = answer.error()
+        check(error.startswith('/'), f'command with {what}: the 400 names no JSON path: {error!r}')
         if named:
             check(named in error, f'command with {what}: the 400 does not name {named}: {error!r}')
         log(f'command with {what} -> 400 "{error}"')
     answer = c.post_json('/api/command', b'{"kind": "set", "key": ')
     expect_status(answer, 400, 'malformed JSON')
+    check(answer.error().startswith('/'), f'malformed JSON: the 400 names no JSON path: {answer.error()!r}')
     log(f'command: malformed JSON -> 400 "{answer.error()}"')
     answer = c.post_json('/api/command', b'[1, 2]')
     expect_status(answer, 400, 'a JSON array body')
@@ -526,6 +550,16 @@ def check_commands(host, port, c, anonymous):
     status = announce_body(c, '/api/command', 'application/json', 70 * 1024)
     check(status == 413, f'a 70 KiB command body: HTTP {status}, expected 413')
     log('command: JSON array -> 400 with a path, text/plain -> 415, 70 KiB -> 413')
+
+
+def check_fault_reset(c):
+    """faultReset (key empty: every latched fault) is decided by the stack like the HMI's Reset."""
+    answer = c.post_json('/api/command', {'kind': 'faultReset', 'key': '', 'value': 1})
+    expect_status(answer, 200, 'faultReset')
+    body = answer.json()
+    check(isinstance(body.get('accepted'), bool) and body.get('responder'), f'faultReset: {body}')
+    log(f'command faultReset: {"accepted" if body["accepted"] else "refused"} by {body["responder"]}'
+        f'{": " + body["reason"] if body.get("reason") else ""}')
 
 
 def check_traversal(c, recording):
@@ -673,23 +707,36 @@ def main():
     url = urllib.parse.urlsplit(args.url)
     host, port = url.hostname, url.port
     anonymous = Client(host, port)
-    try:
-        check_static(anonymous)
-        info = check_info(anonymous)
-        catalog = check_catalog(anonymous)
-        check_live(anonymous, info, catalog)
-        check_logins(host, port, args.user, password)
-        c = login(host, port, args.user, password)
-        check_commands(host, port, c, anonymous)
-        check_traversal(c, args.recording)
-        check_recordings(c, args.recording)
-        check_uploads(host, port, c, anonymous, args.log)
-        check_logout(host, port, c)
-    except Failure as failure:
-        print(f'{NAME}: FAIL: {failure}', flush=True)
-        return 1
-    except (OSError, http.client.HTTPException) as error:
-        print(f'{NAME}: FAIL: {type(error).__name__}: {error}', flush=True)
+    failures = []
+
+    def run(what, check_function, *arguments):
+        """One group of checks; a failure is reported and the next group still runs."""
+        try:
+            return check_function(*arguments)
+        except Failure as failure:
+            text = str(failure)
+        except (OSError, http.client.HTTPException) as error:
+            text = f'{type(error).__name__}: {error}'
+        print(f'{NAME}: FAIL ({what}): {text}', flush=True)
+        failures.append(f'{what}: {text}')
+        return None
+
+    run('static', check_static, anonymous)
+    info = run('info', check_info, anonymous)
+    catalog = run('catalog', check_catalog, anonymous)
+    if info and catalog:
+        run('live', check_live, anonymous, info, catalog)
+    run('logins', check_logins, host, port, args.user, password)
+    c = run('login', login, host, port, args.user, password)
+    if c:
+        run('commands', check_commands, host, port, c, anonymous)
+        run('fault reset', check_fault_reset, c)
+        run('traversal', check_traversal, c, args.recording)
+        run('recordings', check_recordings, c, args.recording)
+        run('uploads', check_uploads, host, port, c, anonymous, args.log)
+        run('logout', check_logout, host, port, c)
+    if failures:
+        print(f'{NAME}: FAIL: {len(failures)} group(s): ' + '; '.join(f.split(':')[0] for f in failures), flush=True)
         return 1
     print(f'{NAME}: PASS', flush=True)
     return 0
