@@ -11,10 +11,13 @@ through chromium-driver), against the running stack (web_stack_test.sh starts it
      shown;
   4. vcu-web killed (--kill-command) while the page is open: the page shows "reconnecting";
      started again (--start-command): the page is connected again by itself, updates flow,
-     the lost session shows as logged out, and a new login commands the VCU again.
+     the lost session shows as logged out, and a new login commands the VCU again;
+  5. a battery fault injected in Ready (--fault-on-command): the FSM's fault and the VIC's DM1
+     DTC are listed; cleared (--fault-off-command) and reset from the page, Stop gets Standby.
 
   web_browser_test.py --url http://127.0.0.1:PORT --user alice --log FILE
                       --screenshots DIR --kill-command CMD --start-command CMD
+                      --fault-on-command CMD --fault-off-command CMD
   (the password in the environment: OPENVCU_WEB_PASSWORD)
 
 Exit 0 PASS, 1 FAIL, 77 when chromium, chromium-driver or python3-selenium is missing.
@@ -316,6 +319,35 @@ def check_restart(page, kill_command, start_command, user, password):
               page.find(start).get_attribute('data-on') == 'false', 'Stop accepted after the restart')
 
 
+def check_faults(page, fault_on, fault_off):
+    """A battery fault injected into the simulated vehicle in Ready: the FSM's fault and the VIC's
+    DM1 DTC appear in #faults; cleared and reset from the page, the vehicle stops again."""
+    start = f'#operator button[data-key="{START_KEY}"]'
+    page.wait(lambda: page.text('#fsm-state') == 'Standby', 'the FSM in Standby before the fault case', timeout=30)
+    page.click(start)
+    page.wait(lambda: page.text('#fsm-state') == 'Ready', 'Ready after Start', timeout=20)
+    subprocess.run(shlex.split(fault_on), check=True, timeout=20)
+    page.wait(lambda: page.text('#fsm-state') == 'Battery Fault', 'the FSM in Battery Fault', timeout=10)
+    faults = page.wait(lambda: [(li.get_attribute('data-name'), li.find_element(By.CSS_SELECTOR, '.source').text)
+                                for li in page.driver.find_elements(By.CSS_SELECTOR, '#faults li.fault')]
+                       if page.driver.find_elements(By.CSS_SELECTOR, '#faults li.fault[data-name^="dm1."]') else None,
+                       'a DM1 DTC in #faults', timeout=10)
+    if not any(source == 'vcu-fsm' for _, source in faults):
+        raise Failure(f'no fault of vcu-fsm in #faults: {faults}')
+    dm1 = page.text('#faults li.fault[data-name^="dm1."]')
+    log(f'faults: {faults}; the DM1 row reads "{" ".join(dm1.split())}"')
+    page.screenshot('faults')
+    subprocess.run(shlex.split(fault_off), check=True, timeout=20)
+    page.click('#fault-reset-button')
+    page.wait(lambda: page.text('#command-result') not in ('', 'sending…') and
+              page.find('#command-result').get_attribute('data-outcome') != 'pending', 'the answer to Reset faults')
+    if not page.text('#command-result').startswith('accepted by '):
+        raise Failure(f'Reset faults: "{page.text("#command-result")}"')
+    page.click(start)
+    page.wait(lambda: page.text('#fsm-state') == 'Standby', 'Standby after the fault is cleared and Stop', timeout=30)
+    log(f'faults: Reset faults "{page.text("#command-result")}", back in Standby')
+
+
 def check_console(page):
     """The page's own errors (CSP violations, exceptions) are defects."""
     try:
@@ -340,6 +372,8 @@ def main():
     parser.add_argument('--screenshots', default=os.environ.get('OPENVCU_WEB_SCREENSHOTS', '.'))
     parser.add_argument('--kill-command', help='SIGKILLs vcu-web')
     parser.add_argument('--start-command', help='starts vcu-web again and returns once it listens')
+    parser.add_argument('--fault-on-command', help='injects a battery fault into the simulated vehicle')
+    parser.add_argument('--fault-off-command', help='clears it')
     args = parser.parse_args()
     if webdriver is None:
         print(f'{NAME}: SKIPPED: python3-selenium is missing ({IMPORT_ERROR})')
@@ -350,7 +384,8 @@ def main():
             return SKIP
     if args.check_only:
         return 0
-    missing = [name for name in ('url', 'user', 'log', 'kill_command', 'start_command') if not getattr(args, name)]
+    missing = [name for name in ('url', 'user', 'log', 'kill_command', 'start_command', 'fault_on_command',
+                                 'fault_off_command') if not getattr(args, name)]
     if missing:
         parser.error(f'missing --{", --".join(m.replace("_", "-") for m in missing)}')
     password = os.environ.get('OPENVCU_WEB_PASSWORD', '')
@@ -372,6 +407,7 @@ def main():
         check_logout(page)
         check_console(page)
         check_restart(page, args.kill_command, args.start_command, args.user, password)
+        check_faults(page, args.fault_on_command, args.fault_off_command)
         page.screenshot('final')
         print(f'{NAME}: PASS', flush=True)
     except (Failure, WebDriverException, subprocess.SubprocessError) as failure:

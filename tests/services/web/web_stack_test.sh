@@ -2,7 +2,8 @@
 # vcu-web on the simulated HHEA stack, inside tests/harness/run_isolated.sh (issue 23):
 #   web_stack_test.sh api       every endpoint of docs/design/web.md (web_api_test.py)
 #   web_stack_test.sh browser   the page in headless chromium, then vcu-web SIGKILLed and
-#                               started again while the page is open (web_browser_test.py)
+#                               started again while the page is open, then a battery fault
+#                               injected into the simulated vehicle (web_browser_test.py)
 # Starts the HHEA stack under supervisord (tests/demo/supervised_stack.sh; the HMI stays off),
 # makes a users file with `vcu-web passwd`, a data folder with one 3 s `vcu record` and a
 # symlink out of it (recordings/escape -> /etc: must never be served), starts vcu-web on
@@ -105,7 +106,9 @@ else
   mkdir -p "$shots" || fail "cannot create $shots"
   rm -f "$shots"/*.png  # only this run's
   "$python" "$here/web_browser_test.py" --url "$url" --user "$user" --log "$root/tests/data/logs/candump_l.log" \
-    --screenshots "$shots" --kill-command "$run/web-kill.sh" --start-command "$run/web-start.sh"
+    --screenshots "$shots" --kill-command "$run/web-kill.sh" --start-command "$run/web-start.sh" \
+    --fault-on-command "$vcu sim fault battery on --config $config" \
+    --fault-off-command "$vcu sim fault battery off --config $config"
   status=$?
   [ $status -eq 77 ] && exit 77
   [ $status -eq 0 ] || fail "web_browser_test.py"
