@@ -172,9 +172,10 @@ def check_live(page, url):
         f'"{page.find(rx_row + " td.value").text}" ({page.find(rx_row + " td.status").text}); '
         f'plot legend {legend}, {pixels} pixels of lane 1')
     page.screenshot('live')
+    return rx_key
 
 
-def check_commands(page, user, password):
+def check_commands(page, user, password, rx_key):
     start = f'#operator button[data-key="{START_KEY}"]'
     page.wait(lambda: page.find(start), 'the Start/Stop operator switch')
     if page.find(start).is_enabled() or page.find('#set-button').is_enabled():
@@ -197,7 +198,16 @@ def check_commands(page, user, password):
     page.wait(lambda: page.text('#fsm-state') != 'Standby', 'the FSM state changes after Start')
     after = page.text('#fsm-state')
     page.wait(lambda: page.find(start).get_attribute('data-on') == 'true', 'the switch shows Start')
-    log(f'command: Start -> "{page.text("#command-result")}", FSM "{after}", switch "{page.text(start)}"')
+    log(f'command: Start -> "{page.text("#command-result")}", FSM "{after}", switch "{" ".join(page.text(start).split())}"')
+    # the woken battery (VIC) sends: its picked signal becomes Ready with its value-table text
+    rx_row = f'#picked tr[data-key="{rx_key}"]'
+    page.wait(lambda: page.find(rx_row + ' td.status').get_attribute('data-status') == 'Ready', f'{rx_key} Ready after Start')
+    rx_text, rx_raw = page.text(rx_row + ' td.value'), page.text(rx_row + ' td.raw')
+    values = page.driver.execute_script(
+        "return fetch('/api/catalog').then((r) => r.json()).then((c) => c.signals.find((s) => s.key === arguments[0]).values);", rx_key)
+    if values and rx_raw and values.get(rx_raw) != rx_text:
+        raise Failure(f'{rx_key} shows "{rx_text}" for raw {rx_raw}; its value table says {values.get(rx_raw)!r}')
+    log(f'live: {rx_key} Ready: "{rx_text}" (raw {rx_raw or "-"})')
     page.screenshot('started')
 
     page.type('#set-key', FSM_KEY)
@@ -214,7 +224,11 @@ def check_commands(page, user, password):
     page.wait(lambda: page.text('#command-result') == 'accepted by vcu-fsm' and
               page.find(start).get_attribute('data-on') == 'false', 'Stop accepted')
     page.wait(lambda: page.text('#fsm-state') == 'Standby', 'the FSM back in Standby after Stop', timeout=30)
-    log('command: Stop accepted, FSM back in Standby')
+    # the battery goes quiet without its keep-alive: the page shows its signal as stale
+    page.wait(lambda: page.find(rx_row + ' td.status').get_attribute('data-status') in ('Stale', 'NotConnected'),
+              f'{rx_key} stale after Stop', timeout=20)
+    log(f'command: Stop accepted, FSM back in Standby; {rx_key} "{page.text(rx_row + " td.status")}", '
+        f'age {page.text(rx_row + " td.age")}')
 
 
 def check_recordings(page, log_path):
@@ -401,8 +415,8 @@ def main():
     page = Page(driver, args.screenshots)
     status = 0
     try:
-        check_live(page, args.url)
-        check_commands(page, args.user, password)
+        rx_key = check_live(page, args.url)
+        check_commands(page, args.user, password, rx_key)
         check_recordings(page, args.log)
         check_logout(page)
         check_console(page)
