@@ -7,6 +7,8 @@ vcu-web up, the FSM in Standby:
   web_api_test.py --url http://127.0.0.1:PORT --user alice --recording drive1 \
                   --log tests/data/logs/candump_l.log
   (the password in the environment: OPENVCU_WEB_PASSWORD)
+  web_api_test.py --url http://127.0.0.1:PORT --read-only MISSING_USERS_FILE
+  (vcu-web started with a users file that does not exist: read-only pages, logins 503)
 
 Python's standard library only. Prints one line per check and "web_api_test: PASS", or
 "web_api_test: FAIL: <check>: <why>" and exits 1. Leaves the FSM in Standby, no session open
@@ -693,18 +695,50 @@ def check_logout(host, port, c):
     log(f'logout: 200, cookie cleared ({cookie.split(";")[0]}...), the old session is refused')
 
 
+def check_read_only(c, missing_users_file):
+    """vcu-web whose users file does not exist: the pages are read-only, logins 503 with the reason."""
+    answer = c.get('/api/info')
+    expect_status(answer, 200, 'GET /api/info (read-only)')
+    check(answer.json().get('loginAvailable') is False, f'read-only: loginAvailable {answer.json()}')
+    answer = c.post_json('/api/login', {'user': 'alice', 'password': 'whatever'})
+    expect_status(answer, 503, 'login without a users file')
+    check(os.path.basename(missing_users_file) in answer.error(), f'the 503 does not name the users file: {answer.error()!r}')
+    expect_status(c.post_json('/api/command', {'kind': 'operator', 'key': START_KEY, 'value': 1}), 401,
+                  'a command to a read-only vcu-web')
+    expect_status(c.get('/'), 200, 'the page of a read-only vcu-web')
+    stream = LiveStream(c, [FSM_KEY])
+    try:
+        check(stream.status == 200, f'/api/live of a read-only vcu-web: HTTP {stream.status}')
+        state = stream.next_update(10)['header']['state']
+    finally:
+        stream.close()
+    log(f'read-only: loginAvailable false, login -> 503 "{answer.error()}", command -> 401, live view works ({state})')
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('--url', required=True, help='http://127.0.0.1:PORT')
-    parser.add_argument('--user', required=True)
-    parser.add_argument('--recording', required=True, help='a recording in the data folder (vcu record)')
-    parser.add_argument('--log', required=True, help='a small candump -L file to upload')
+    parser.add_argument('--user')
+    parser.add_argument('--recording', help='a recording in the data folder (vcu record)')
+    parser.add_argument('--log', help='a small candump -L file to upload')
+    parser.add_argument('--read-only', metavar='MISSING_USERS_FILE',
+                        help='only the checks of a vcu-web started with this (missing) users file')
     args = parser.parse_args()
+    url = urllib.parse.urlsplit(args.url)
+    if args.read_only:
+        try:
+            check_read_only(Client(url.hostname, url.port), args.read_only)
+        except (Failure, OSError, http.client.HTTPException) as failure:
+            print(f'{NAME}: FAIL (read-only): {failure}', flush=True)
+            return 1
+        print(f'{NAME}: PASS (read-only)', flush=True)
+        return 0
+    if not (args.user and args.recording and args.log):
+        parser.error('--user, --recording and --log are needed (or --read-only)')
     password = os.environ.get('OPENVCU_WEB_PASSWORD', '')
     if not password:
         print(f'{NAME}: FAIL: OPENVCU_WEB_PASSWORD is not set')
         return 1
-    url = urllib.parse.urlsplit(args.url)
     host, port = url.hostname, url.port
     anonymous = Client(host, port)
     failures = []

@@ -1,6 +1,7 @@
 #!/bin/bash
 # vcu-web on the simulated HHEA stack, inside tests/harness/run_isolated.sh (issue 23):
-#   web_stack_test.sh api       every endpoint of docs/design/web.md (web_api_test.py)
+#   web_stack_test.sh api       every endpoint of docs/design/web.md (web_api_test.py), then
+#                               vcu-web without its users file: read-only
 #   web_stack_test.sh browser   the page in headless chromium, then vcu-web SIGKILLed and
 #                               started again while the page is open, then a battery fault
 #                               injected into the simulated vehicle (web_browser_test.py)
@@ -63,14 +64,15 @@ echo "$NAME: recording drive1: $(ls -l "$data/recordings/drive1" | tail -n +2 | 
 
 port=18080
 url=http://127.0.0.1:$port/
-# start_web / kill_web, also as scripts for the browser test's --start-command / --kill-command
+# web-start.sh / web-kill.sh start and SIGKILL vcu-web (the browser test's --start-command and
+# --kill-command too).
 # vcu-web ends with its parent (PR_SET_PDEATHSIG): a subshell that waits for it is its parent,
-# so it outlives web-start.sh.
+# so it outlives web-start.sh. WEB_USERS overrides the users file.
 cat > "$run/web-start.sh" <<EOF
 #!/bin/bash
 rm -f "$run/web.pid"
 (
-  "$bin/vcu-web" --config "$config" --listen 127.0.0.1:$port --data-folder "$data" --users "$users" \\
+  "$bin/vcu-web" --config "$config" --listen 127.0.0.1:$port --data-folder "$data" --users "\${WEB_USERS:-$users}" \\
     --www "$root/services/web/www" >> "$run/web.log" 2>&1 &
   echo \$! > "$run/web.pid"
   wait
@@ -100,7 +102,13 @@ echo "$NAME: vcu-web listens on $url (pid $(cat "$run/web.pid"))"
 
 if [ "$mode" = api ]; then
   "$python" "$here/web_api_test.py" --url "$url" --user "$user" --recording drive1 \
-    --log "$root/tests/data/logs/candump_l.log" || fail "web_api_test.py"
+    --log "$root/tests/data/logs/candump_l.log"
+  status=$?
+  # the same vcu-web with a users file that does not exist: read-only
+  "$run/web-kill.sh" || fail "vcu-web did not die"
+  WEB_USERS=$run/no-such-users.json "$run/web-start.sh" || fail "the read-only vcu-web did not start"
+  "$python" "$here/web_api_test.py" --url "$url" --read-only "$run/no-such-users.json" || fail "web_api_test.py --read-only"
+  [ $status -eq 0 ] || fail "web_api_test.py"
 else
   shots=${OPENVCU_WEB_SCREENSHOTS:-$bin/../tests/web-screenshots}
   mkdir -p "$shots" || fail "cannot create $shots"
