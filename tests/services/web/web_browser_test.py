@@ -422,6 +422,7 @@ def main():
         check_console(page)
         check_restart(page, args.kill_command, args.start_command, args.user, password)
         check_faults(page, args.fault_on_command, args.fault_off_command)
+        check_console(page)  # the entries since the first look (reading the log empties it)
         page.screenshot('final')
         print(f'{NAME}: PASS', flush=True)
     except (Failure, WebDriverException, subprocess.SubprocessError) as failure:
