@@ -51,6 +51,7 @@ export class Commands {
     byId('logged-in').hidden = !loggedIn;
     setText(byId('whoami'), this.user ?? '');
     byId('command-hint').hidden = loggedIn;
+    document.body.classList.toggle('logged-in', loggedIn);
     for (const button of document.querySelectorAll('.needs-login')) button.disabled = !loggedIn;
     this.refreshOperatorButtons();
     if (this.onUserChanged) this.onUserChanged(this.user);

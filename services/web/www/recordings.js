@@ -97,7 +97,7 @@ export class Recordings {
     setAttr(result, 'data-outcome', 'pending');
     byId('upload-button').disabled = true;
     const answer = await postFile(`/api/uploads?name=${encodeURIComponent(file.name)}`, file);
-    byId('upload-button').disabled = false;
+    byId('upload-button').disabled = !document.body.classList.contains('logged-in');  // a logout meanwhile
     if (answer.status !== 200 || !answer.body || typeof answer.body.name !== 'string') {
       setText(result, `not uploaded: ${answer.error || 'unexpected answer'}`);
       setAttr(result, 'data-outcome', 'error');
