@@ -2,13 +2,14 @@
 """vcu-web's page in a real browser (Debian's chromium, headless, driven by python3-selenium
 through chromium-driver), against the running stack (web_stack_test.sh starts it):
 
-  1. the live page shows the FSM state and the connection, picked signals get values and
-     the plot draws them;
-  2. after a login, Start on the operator switch is accepted by vcu-fsm and the FSM state
-     in the header changes; a refused command shows vcu-fsm's reason; logout disables the
-     commands again;
-  3. the recording's report opens; a log uploaded from the page is analysed and its report
-     shown;
+  1. the live page shows the FSM state and the connection, signals picked in the tree get
+     values and the plot draws them;
+  2. after a login, Start on the operator switch is accepted by vcu-fsm, the FSM state in the
+     header changes and the woken battery's signal shows its value-table text; a refused
+     command shows vcu-fsm's reason; a cycle change is accepted by vcu-can-tx; after Stop the
+     battery's signal goes stale;
+  3. the recording's summary, download and report; a log uploaded from the page is analysed
+     and its report shown; logout disables the commands again;
   4. vcu-web killed (--kill-command) while the page is open: the page shows "reconnecting";
      started again (--start-command): the page is connected again by itself, updates flow,
      the lost session shows as logged out, and a new login commands the VCU again;
@@ -219,6 +220,13 @@ def check_commands(page, user, password, rx_key):
         raise Failure(f'refused without a reason: "{page.text("#command-result")}"')
     log(f'command: set {FSM_KEY} 1 -> "{page.text("#command-result")}"')
     page.screenshot('refused')
+
+    # a schedule command goes to its owner, vcu-can-tx
+    page.type('#schedule-key', 'HC1_Demands')
+    page.type('#schedule-cycle', '100')
+    page.click('#schedule-cycle-button')
+    page.wait(lambda: page.text('#command-result') == 'accepted by vcu-can-tx', 'the cycle change accepted by vcu-can-tx')
+    log(f'command: cycle of HC1_Demands 100 ms -> "{page.text("#command-result")}"')
 
     page.click(start)
     page.wait(lambda: page.text('#command-result') == 'accepted by vcu-fsm' and
