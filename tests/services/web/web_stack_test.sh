@@ -18,6 +18,7 @@ case "$mode" in api|browser) ;; *) echo "usage: web_stack_test.sh api|browser" >
 NAME=web_stack_test
 here=$(cd "$(dirname "$0")" && pwd)
 python=/usr/bin/python3
+export PYTHONDONTWRITEBYTECODE=1  # nothing written into the source tree
 [ -x "$python" ] || { echo "$NAME: FAIL: no $python"; exit 1; }
 if [ "$mode" = browser ]; then
   "$python" "$here/web_browser_test.py" --check-only
