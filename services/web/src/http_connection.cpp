@@ -175,6 +175,20 @@ void Connection::onHeader(const beast::error_code& ec) {
     respond(std::move(refusal), requestHasBody());
     return;
   }
+  if (!m_core.options.allowedHosts.empty()) {
+    // DNS rebinding: a page of another site resolved to this address sends its own Host
+    std::string host = lowerCase(m_request.header("host"));
+    if (host.starts_with('[')) {
+      host = host.substr(0, host.find(']') + 1);
+    } else if (const auto colon = host.rfind(':'); colon != std::string::npos) {
+      host.resize(colon);
+    }
+    const auto& allowed = m_core.options.allowedHosts;
+    if (std::find(allowed.begin(), allowed.end(), host) == allowed.end()) {
+      respond(Response::error(421, "Host '" + host + "' is not this VCU's; open it by its address"), requestHasBody());
+      return;
+    }
+  }
   const auto method = methodOf(header.method());
   if (!method) {
     Response refusal = Response::error(405, "method not allowed");

@@ -117,6 +117,9 @@ struct ServerOptions {
   double maxUpdatesPerSecond{20};          ///< per event stream
   std::chrono::seconds readTimeout{15};    ///< a request header (or upload) not progressing
   std::chrono::seconds writeTimeout{15};   ///< a response or event not accepted by the client
+  /// Host header names (lower case, without the port; IPv6 in brackets) a request may carry;
+  /// another is answered 421 (a DNS-rebinding page). Empty: any.
+  std::vector<std::string> allowedHosts;
 };
 
 /// Counters for the heartbeat and the benchmark.

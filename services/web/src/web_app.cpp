@@ -171,7 +171,8 @@ struct WebAppImpl {
     server.route(Method::Post, "/api/login", [this](const Request& request, const Responder& respond) { login(request, respond); });
     server.route(Method::Post, "/api/logout", [this](const Request& request, const Responder& respond) {
       const std::string token = request.cookie(SESSION_COOKIE);
-      if (!token.empty()) {
+      if (userOf(request).empty()) return respond(Response::error(401, "not logged in"));
+      {
         const std::lock_guard lock(sessionsMutex);
         sessions.logout(token);
       }
@@ -282,7 +283,9 @@ struct WebAppImpl {
       if (!answer) {
         audit(user, client, what, false, answer.error().message);
         runtime.log().warning("command by " + user + " from " + client + ": " + what + ": " + answer.error().message);
-        respond(Response::error(504, answer.error().message));
+        // nobody owning the key is said at once; no answer in time is a timeout
+        const bool unowned = answer.error().message.find("no running service answers for") != std::string::npos;
+        respond(Response::error(unowned ? 409 : 504, answer.error().message));
         return;
       }
       const std::string verdict = answer->accepted ? "accepted by " + answer->responder
@@ -418,6 +421,10 @@ Result<std::unique_ptr<WebApp>> WebApp::create(service::Service& runtime, const 
   options.maxConnections = settings.maxConnections;
   options.maxStreams = settings.maxClients;
   options.maxUpdatesPerSecond = settings.maxUpdatesPerSecond;
+  if (config::isLoopbackAddress(settings.address)) {
+    // reachable through this host (or an SSH tunnel) only: by an address or "localhost", never by another name
+    options.allowedHosts = {"localhost", "127.0.0.1", settings.address, "[::1]"};
+  }
 
   auto impl = std::make_unique<WebAppImpl>(runtime, settings, std::move(liveSetup), std::move(options));
   impl->routes();

@@ -58,8 +58,13 @@ Result<ipc::CommandRequest> parseWebCommand(std::string_view body, const signals
   request.key = key;
 
   if (kind == "faultReset") {
-    request.kind = ipc::CommandKind::FaultReset;
-    if (!key.empty() && !catalog.indexOf(key)) return Error{"/key: unknown signal '" + key + "'"};
+    // as the HMI's Reset: the FSM's reset switch (its transitions read it), not a latched key
+    if (!catalog.indexOf(FAULT_RESET_KEY)) {
+      return Error{"/kind: this vehicle has no " + std::string(FAULT_RESET_KEY) + " (its vehicle.json internalSignals)"};
+    }
+    request.kind = ipc::CommandKind::SetSignal;
+    request.key = std::string(FAULT_RESET_KEY);
+    request.value = 1;
     return request;
   }
   if (kind == "scheduleEnable" || kind == "scheduleCycle") {

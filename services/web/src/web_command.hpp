@@ -18,7 +18,8 @@
 
 namespace openvcu::web {
 
-/// The kinds a page may send: "operator", "set", "clear", "faultReset", "scheduleEnable", "scheduleCycle".
+/// The kinds a page may send: "operator", "set", "clear", "faultReset" (SetSignal internal.operator.FaultReset = 1,
+/// as the HMI resets), "scheduleEnable", "scheduleCycle".
 /// An error is "<JSON path>: <reason>"; the request's id, deadline and issuer are left to the sender.
 Result<ipc::CommandRequest> parseWebCommand(std::string_view body, const signals::Catalog& catalog,
                                             const dbc::Database& database);

@@ -287,3 +287,26 @@ TEST_CASE("web server: connections beyond the per-address limit are closed at on
   REQUIRE(eventually([&] { return sut.counters().connections == 0; }));
   CHECK(get(port, "/api/info").status == 200);
 }
+
+TEST_CASE("web server: a request naming another host is answered 421 when the hosts are limited") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  TestServer server;
+  server.options.allowedHosts = {"localhost", "127.0.0.1"};
+  auto& sut = server.make();
+  sut.route(web::Method::Get, "/api/info", [](const web::Request&, web::Responder respond) {
+    respond(web::Response::json(200, "{}"));
+  });
+  const auto port = server.start();
+  const auto ask = [port](const std::string& host) {
+    const int fd = connectTo(port);
+    REQUIRE(fd >= 0);
+    sendAll(fd, "GET /api/info HTTP/1.1\r\nHost: " + host + "\r\nConnection: close\r\n\r\n");
+    const std::string raw = readFrom(fd, CLIENT_TIMEOUT);
+    ::close(fd);
+    return parseAnswer(raw).status;
+  };
+  CHECK(ask("localhost:" + std::to_string(port)) == 200);
+  CHECK(ask("127.0.0.1:" + std::to_string(port)) == 200);
+  CHECK(ask("evil.example:" + std::to_string(port)) == 421);
+  CHECK(ask("127.0.0.1.evil.example") == 421);
+}

@@ -68,3 +68,11 @@ TEST_CASE("schedule commands take a DBC message and a bounded value") {
   CHECK(errorOf(R"({"kind":"scheduleCycle","key":"HC1_Demands","value":0})") == "/value: a cycle of 1 to 3600000 ms");
   CHECK(errorOf(R"({"kind":"scheduleEnable","key":"HC1_Demands","value":2})") == "/value: 1 (transmit) or 0 (stop)");
 }
+
+TEST_CASE("a fault reset is the FSM's reset switch set to 1 as the HMI sends it") {
+  auto sut = parse(R"({"kind":"faultReset"})");
+  REQUIRE(sut);
+  CHECK(sut->kind == ipc::CommandKind::SetSignal);
+  CHECK(sut->key == "internal.operator.FaultReset");
+  CHECK(sut->value == 1);
+}
