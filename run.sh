@@ -13,6 +13,9 @@
 #   ./run.sh --record DIR         record the session: every bus as candump -L, the LCM events
 #   ./run.sh --bus socketcan:can0 the vehicle bus on real hardware (no simulated vehicle)
 #   ./run.sh --config FILE        another vehicle (default config/hhea/vehicle.json)
+#   ./run.sh --web-port PORT      vcu-web, the VCU in a browser, on http://127.0.0.1:PORT
+#                                 (default 8080; 0: not started); read-only until a user
+#                                 exists (the command to add one is printed at start)
 #   ./run.sh --dbc FILE --node NAME [--into DIR]
 #                                 a new machine from its DBC in one command: `vcu init DIR`
 #                                 (default ./<DBC name>) for the VCU node NAME, then runs it;
@@ -21,13 +24,14 @@
 #                                 code (0 clean, 1 errors); installs and builds nothing
 # Ctrl-C (or the end of --for) stops every process cleanly and removes the stack's shared
 # memory, also when the output is piped (`./run.sh | tee run.log`). Logs: the folder printed
-# at start (one file per service); it is kept.
+# at start (one file per service); it is kept. Recordings, exports, uploads and vcu-web's
+# users file: build/data (the data folder of vcu-hmi and vcu-web; it outlives the run).
 set -euo pipefail
 # paths given on the command line are the caller's (relative to where run.sh was started);
 # realpath -m: the folder of --record need not exist yet
 root=$(dirname "$(readlink -f "$0")")
 
-headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0; record=""; dbc=""; node=""; into=""
+headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0; record=""; dbc=""; node=""; into=""; web_port=8080
 config=$root/config/hhea/vehicle.json; config_given=0
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -42,7 +46,8 @@ while [ $# -gt 0 ]; do
     --dbc) dbc=$(realpath -m -- "${2:?--dbc needs a DBC file}"); shift ;;
     --node) node=${2:?--node needs the node name of the VCU}; shift ;;
     --into) into=$(realpath -m -- "${2:?--into needs a folder}"); shift ;;
-    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
+    --web-port) web_port=${2:?--web-port needs a port (0: no vcu-web)}; shift ;;
+    -h|--help) sed -n '2,29p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
   esac
   shift
@@ -66,6 +71,10 @@ if [ -n "$scenario" ] && [ "$(realpath -m -- "$config")" != "$root/config/hhea/v
 fi
 case "$bus" in ""|socketcan:*) ;; *) echo "run.sh: --bus takes socketcan:IFACE" >&2; exit 2 ;; esac
 if [ -n "$seconds" ] && ! [[ "$seconds" =~ ^[0-9]+$ ]]; then echo "run.sh: --for takes whole seconds" >&2; exit 2; fi
+if ! [[ "$web_port" =~ ^[0-9]{1,5}$ ]] || [ "$web_port" -gt 65535 ]; then
+  echo "run.sh: --web-port takes a port 1-65535, or 0 for no vcu-web" >&2; exit 2
+fi
+web_port=$((10#$web_port))
 cd "$root"
 
 bin=${OPENVCU_BIN:-$root/build/bin}  # the tests point it at their build tree
@@ -122,6 +131,7 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
     [ -n "$seconds" ] && inner+=(--for "$seconds")
     [ -n "$bus" ] && inner+=(--bus "$bus")
     [ -n "$record" ] && inner+=(--record "$record")
+    inner+=(--web-port "$web_port")
     exec tests/harness/run_isolated.sh "${keep[@]}" -- "$root/run.sh" "${inner[@]}"
   fi
 fi
@@ -151,12 +161,23 @@ sed -e "s/^;user=root.*/$( [ "$(id -u)" = 0 ] && echo 'user=root' || echo ';not 
 if [ -n "$bus" ]; then
   sed -i -e '/^\[program:ecu-sim\]/,/^$/s/^autorestart=true/autostart=false\nautorestart=true/' "$run/openvcu.conf"
 fi
+# the data folder of vcu-hmi and vcu-web, beside the binaries so that it outlives the run
+# (openvcu.conf names $run/data)
+data=$(dirname "$bin")/data
+mkdir -p "$data" || { echo "run.sh: cannot create the data folder $data" >&2; exit 1; }
+ln -sfn "$data" "$run/data"
+web=0
+if [ "$web_port" -ne 0 ] && [ -x "$bin/vcu-web" ]; then
+  web=1
+  sed -i -e '/^\[program:web\]/,/^$/{s/^autostart=false/autostart=true/;s/127\.0\.0\.1:8080/127.0.0.1:'"$web_port"'/}' \
+    "$run/openvcu.conf"
+fi
 hmi=0
 if [ $headless -eq 0 ] && [ -x "$bin/vcu-hmi" ] && { [ -n "${DISPLAY:-}" ] || [ -n "${WAYLAND_DISPLAY:-}" ]; }; then
   hmi=1
   sed -i -e '/^\[program:hmi\]/,/^$/s/^autostart=false/autostart=true/' "$run/openvcu.conf"
 fi
-echo "== starting the stack under supervisord (logs: $run)$( [ $hmi -eq 1 ] && echo ', with the HMI')"
+echo "== starting the stack under supervisord (logs: $run)$( [ $hmi -eq 1 ] && echo ', with the HMI')$( [ $web -eq 1 ] && echo ', with vcu-web')"
 
 # Stopping. Ctrl-C sends SIGINT to the whole foreground process group: this script, the
 # command it waits for, and whatever its output is piped to (`| tee run.log`), which then
@@ -219,6 +240,25 @@ for _ in $(seq 1 30); do
   [ "$beating" -ge "$expected" ] && break
 done
 waitfor "$vcu" top --once --config "$config" || true
+if [ $web -eq 1 ]; then
+  # supervisord calls it RUNNING once it has lived startsecs (3 s): a vcu-web that cannot
+  # start (the port taken) is told here rather than announced
+  for _ in $(seq 1 10); do
+    web_state=$(supervisorctl -c "$run/openvcu.conf" status web 2>/dev/null | awk '{print $2}' || true)
+    [ "$web_state" = RUNNING ] && break
+    waitfor sleep 0.5 || true
+  done
+  users=$data/web-users.json
+  if [ "$web_state" != RUNNING ]; then
+    say "web: vcu-web is not running (${web_state:-no state}; its log: $run/web.log)"
+  else
+    if [ -s "$users" ]; then access="logins from $users"; else access="read-only until a user exists"; fi
+    sandbox=""; [ "${OPENVCU_ISOLATED:-0}" = 1 ] && sandbox=" in the sandbox's own network"
+    say "web: http://127.0.0.1:$web_port$sandbox ($access: $bin/vcu-web passwd --users $users NAME)"
+  fi
+elif [ "$web_port" -ne 0 ]; then
+  say "web: not started: $bin/vcu-web is not built"
+fi
 roudi=$(supervisorctl -c "$run/openvcu.conf" pid roudi 2>/dev/null || true)
 [[ "$roudi" =~ ^[1-9][0-9]*$ ]] || roudi=""
 

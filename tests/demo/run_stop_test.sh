@@ -20,7 +20,7 @@ fail() {
   echo "---- run.log (what tee wrote)"; cat "$log" 2>/dev/null
   exit 1
 }
-stack_processes() { pgrep -a -f 'vcu-(can-rx|can-tx|fsm|gpio|ecu-sim|hmi)|iox-roudi|supervisord' || true; }
+stack_processes() { pgrep -a -f 'vcu-(can-rx|can-tx|fsm|gpio|ecu-sim|hmi|web)|iox-roudi|supervisord' || true; }
 shared_memory() { ls /dev/shm | grep -E '^(openvcu-|iceoryx_)' || true; }
 
 # setsid: the pipeline's shell leads a new process group (its pid is the group id), as a

@@ -2,18 +2,19 @@
 # Issue 19: a supervisor that dies must not leave its services running. Inside
 # run_isolated.sh: ./run.sh --headless brings the supervised stack up; supervisord is then
 # SIGKILLed (it stops nothing itself). Every service (vcu-can-rx, -can-tx, -fsm, -gpio,
-# -ecu-sim) must end within GONE_SECONDS: the kernel sends each SIGTERM when its parent dies
-# (PR_SET_PDEATHSIG, set by the service runtime). Their last log lines are lost: supervisord
-# wrote the log files from their output pipes. run.sh sees supervisord gone, stops
-# iox-roudi (not a service: no parent-death signal) and removes the shared memory; nothing
-# may be left.
+# -ecu-sim, and vcu-web when it is built) must end within GONE_SECONDS: the kernel sends
+# each SIGTERM when its parent dies (PR_SET_PDEATHSIG, set by the service runtime). Their
+# last log lines are lost: supervisord wrote the log files from their output pipes. run.sh
+# sees supervisord gone, stops iox-roudi (not a service: no parent-death signal) and
+# removes the shared memory; nothing may be left.
 set -uo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 GONE_SECONDS=5
 UP_SECONDS=90
 work=$(mktemp -d)
 log=$work/run.log
-SERVICES='vcu-(can-rx|can-tx|fsm|gpio|ecu-sim)'
+SERVICES='vcu-(can-rx|can-tx|fsm|gpio|ecu-sim|web)'
+EXPECTED=5; [ -x "${OPENVCU_BIN:-$root/build/bin}/vcu-web" ] && EXPECTED=6
 
 fail() {
   echo "supervisor_kill_test: FAIL: $*"
@@ -31,7 +32,7 @@ for _ in $(seq 1 $((UP_SECONDS * 10))); do
 done
 [ $up -eq 1 ] || fail "no status line within ${UP_SECONDS} s"
 services=$(pgrep -f "$SERVICES" | tr '\n' ' ')
-[ "$(echo $services | wc -w)" -eq 5 ] || fail "expected 5 services before the kill, found: $(pgrep -a -f "$SERVICES")"
+[ "$(echo $services | wc -w)" -eq $EXPECTED ] || fail "expected $EXPECTED services before the kill, found: $(pgrep -a -f "$SERVICES")"
 supervisor=$(pgrep -x supervisord || pgrep -f 'supervisord -n')
 [ -n "$supervisor" ] || fail "no supervisord"
 

@@ -61,7 +61,8 @@ struct Session {
 
 /// Open sessions and failed-login limits.
 /// @note not thread-safe: lives on vcu-web's io thread (password checks are ~50 ms of CPU with
-///       yescrypt: the caller may run verifyPassword on a worker and call complete()).
+///       yescrypt: the caller may split login() into beginLogin() on the io thread,
+///       checkPassword() on a worker and completeLogin() back on the io thread).
 class Sessions {
  public:
   using Clock = std::chrono::steady_clock;
@@ -77,12 +78,25 @@ class Sessions {
   [[nodiscard]] std::optional<Session> login(const UserFile& users, std::string_view user, std::string_view password,
                                              const std::string& clientAddress, Clock::time_point now,
                                              LoginRefusal* refusal = nullptr);
+  /// login() in three steps, for a caller that checks passwords on a worker thread:
+  ///   if (!sessions.beginLogin(address, now)) -> 429 (retryAfter(address, now))
+  ///   bool ok = Sessions::checkPassword(users, user, password);   // any thread
+  ///   auto session = sessions.completeLogin(user, ok, address, now);  // nullopt -> 401
+  /// beginLogin() counts the attempt as failed until completeLogin() reports success, so
+  /// attempts running in parallel use up the address's allowance too.
+  [[nodiscard]] bool beginLogin(const std::string& clientAddress, Clock::time_point now);
+  [[nodiscard]] std::optional<Session> completeLogin(std::string_view user, bool passwordOk,
+                                                     const std::string& clientAddress, Clock::time_point now);
+  /// True when `user` exists and `password` matches its hash; an unknown user costs the same
+  /// time (a dummy yescrypt hash is checked). @note thread-safe (reads `users` only).
+  [[nodiscard]] static bool checkPassword(const UserFile& users, std::string_view user, std::string_view password);
   /// The session of `token`, its expiry pushed out, or nullptr when unknown or expired.
   const Session* find(std::string_view token, Clock::time_point now);
   void logout(std::string_view token);
   /// Seconds until a refused address may try again (0: may try now).
   [[nodiscard]] std::chrono::seconds retryAfter(const std::string& clientAddress, Clock::time_point now) const;
   [[nodiscard]] std::size_t size() const noexcept { return m_sessions.size(); }
+  [[nodiscard]] std::chrono::seconds lifetime() const noexcept { return m_lifetime; }
 
  private:
   std::chrono::seconds m_lifetime;
@@ -92,5 +106,11 @@ class Sessions {
   std::map<std::string, Session, std::less<>> m_sessions;
   std::map<std::string, std::vector<Clock::time_point>> m_failures;
 };
+
+/// `vcu-web passwd --users FILE NAME`: sets NAME's password in FILE (UserFile::setPassword).
+/// `argv` as main() received it (argv[1] == "passwd"). The password is one line of stdin;
+/// when stdin is a terminal it is asked twice without echo. Returns the exit code: 0 written,
+/// 1 error (one line "vcu-web: error: ..." on stderr), 2 usage (the usage on stderr).
+int runPasswdCommand(int argc, char** argv);
 
 }  // namespace openvcu::web

@@ -9,7 +9,7 @@
 //   server.route(web::Method::Get, "/api/info", [&](const web::Request& request, web::Responder respond) {
 //     respond(web::Response::json(200, R"({"instance":"hhea"})"));
 //   });
-//   server.stream("/api/live", [&](const web::Request& request) -> Result<web::StreamHandle> { ... });
+//   server.stream("/api/live", [&](const web::Request& request) -> Result<std::unique_ptr<web::EventSource>> { ... });
 //   auto listening = server.start();               // bound; "127.0.0.1:8080"
 //   server.run();                                  // serves on the calling thread until stop()
 //
@@ -109,7 +109,7 @@ struct ServerOptions {
   std::filesystem::path uploadFolder;     ///< where UploadRoute bodies are written
   std::size_t maxBodyBytes{64 * 1024};    ///< JSON bodies of route() POSTs; beyond: 413
   std::uint64_t maxUploadBytes{256ull << 20};
-  std::size_t maxConnections{64};         ///< beyond: the connection is closed at once (503 when a request can be read)
+  std::size_t maxConnections{64};         ///< beyond: the connection is closed at once (after a 503 sent without waiting)
   std::size_t maxConnectionsPerAddress{16};
   double requestsPerSecondPerAddress{50};  ///< token bucket; beyond: 429
   double requestBurstPerAddress{100};

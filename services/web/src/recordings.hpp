@@ -44,8 +44,9 @@ struct RecordingEntry {
 class DataFolder {
  public:
   explicit DataFolder(std::filesystem::path root);
-  /// Creates recordings/, uploads/ and cache/ when missing (mode 0750); removes cache files
-  /// older than a day. Error: the folder cannot be created or is not a folder.
+  /// Creates the data folder, recordings/, uploads/, uploads/.incoming and cache/ when missing
+  /// (mode 0750); removes files older than a day from cache/ and uploads/.incoming (bodies of
+  /// uploads that never finished). Error: a folder cannot be created or is not a folder.
   Status prepare() const;
   [[nodiscard]] const std::filesystem::path& root() const noexcept { return m_root; }
 

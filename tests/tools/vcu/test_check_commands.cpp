@@ -136,7 +136,7 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
   }
   // the whole-vehicle checks' two warnings (#22): received messages nothing reads, and the
   // DC-DC command the VCU sends with the charger's source address 0xE5 (as the original did)
-  CHECK(contains(result.out, "vehicle 'hhea': 8 files, 0 errors, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 9 files, 0 errors, 2 warnings\n"));
   CHECK(contains(result.err, "vehicle.json: /buses/0/messages: warning: bus 'vehicle': "));
   CHECK(contains(result.err, "hhea.dbc:166: warning: bus 'vehicle': J1939 source address 0xE5 (229)"));
   CHECK_FALSE(contains(result.err, "error:"));
@@ -157,7 +157,7 @@ TEST_CASE("vcu check reports a broken simulation, dashboard and schedule togethe
   CHECK_FALSE(contains(result.err, "fsm.json: /"));
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));
-  CHECK(contains(result.out, "8 files, 3 errors"));
+  CHECK(contains(result.out, "9 files, 3 errors"));
   CHECK(result.out.find("error:") == std::string::npos);  // diagnostics on stderr only
 }
 
@@ -209,7 +209,7 @@ TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
   CHECK_MESSAGE(contains(result.err, "check_simulation/simulation.json: /battery/initialSoc: error: "), result.err);
   CHECK(contains(result.out, "simulation.json: 1 error"));
-  CHECK(contains(result.out, "8 files, 1 error"));
+  CHECK(contains(result.out, "9 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a receive file naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
@@ -254,7 +254,7 @@ TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two no
                 result.err);
   CHECK(contains(result.err, "OBC (NmStationAddress)"));
   CHECK(contains(result.out, "hhea.dbc: 1 error, 1 warning"));
-  CHECK(contains(result.out, "vehicle 'hhea': 8 files, 1 error, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 9 files, 1 error, 2 warnings\n"));
 }
 
 TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
@@ -273,7 +273,7 @@ TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the
   CHECK_MESSAGE(contains(result.err, "check_schedule/schedule.json: /messages/HVESSC1_PGN691"), result.err);
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));  // its send groups still come from the schedule
-  CHECK(contains(result.out, "8 files, 1 error"));
+  CHECK(contains(result.out, "9 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a dashboard naming a signal the catalog lacks, with the file and the JSON path (#19, #20)") {
@@ -286,7 +286,7 @@ TEST_CASE("vcu check refuses a dashboard naming a signal the catalog lacks, with
   CHECK_MESSAGE(contains(result.err, "check_dashboard/dashboard.json: /items/1/key: error: unknown signal 'internal.relay.Cl16'"),
                 result.err);
   CHECK(contains(result.out, "dashboard.json: 1 error"));
-  CHECK(contains(result.out, "8 files, 1 error"));
+  CHECK(contains(result.out, "9 files, 1 error"));
 }
 
 TEST_CASE("vcu check still checks the other files when vehicle.json itself has an error") {

@@ -1,7 +1,7 @@
 // `vcu trace report` in-process: a folder as `vcu record` writes it (vehicle.log and an
 // events.lcmlog written through LCM's own file:// provider, no network) gives one HTML
 // file with the FSM states and faults on the time axis; bad signal names and a missing
-// log are reported.
+// log are reported (the pipeline itself is trace::makeReport, tests/shared/trace).
 
 #include <doctest/doctest.h>
 
@@ -91,4 +91,12 @@ TEST_CASE("vcu trace report names an unknown signal and a missing log") {
   const RunResult missing = runVcu({"trace", "report", "/nonexistent/drive.log", "-o", html});
   CHECK(missing.exitCode == EXIT_INPUT_ERROR);
   CHECK(contains(missing.err, "/nonexistent/drive.log"));
+
+  // one of two logs missing: named, exit 1, and the report of the other one is written
+  std::filesystem::remove(html);
+  const RunResult oneMissing = runVcu({"trace", "report", "--dbc", dbc, log, "/nonexistent/drive.log", "-o", html});
+  CHECK(oneMissing.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(oneMissing.err, "/nonexistent/drive.log"));
+  CHECK(contains(oneMissing.out, "1 frames"));
+  CHECK(contains(readText(html), "</html>"));
 }

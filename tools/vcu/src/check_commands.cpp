@@ -17,6 +17,7 @@
 #include "openvcu/config/receive.hpp"
 #include "openvcu/config/simulation.hpp"
 #include "openvcu/config/vehicle.hpp"
+#include "openvcu/config/web.hpp"
 #include "openvcu/fsm/machine.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
 
@@ -149,7 +150,7 @@ std::vector<std::string> namedFiles(const std::string& vehiclePath) {
   auto json = config::readJsonFile(vehiclePath);
   if (!json || !json->is_object()) return files;
   const fs::path directory = fs::path(vehiclePath).parent_path();
-  for (const char* key : {"fsm", "schedule", "simulation", "receive", "diagnostics"}) {
+  for (const char* key : {"fsm", "schedule", "simulation", "receive", "diagnostics", "web"}) {
     const auto it = json->find(key);
     if (it == json->end() || !it->is_string()) continue;
     const fs::path file(it->get<std::string>());
@@ -263,6 +264,13 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
       checkWithLoader(
           dashboard, [&] { return config::loadDashboardConfig(dashboard, stack->catalog); }, tally, options.quiet,
           streams.err);
+    }
+    if (!vehicle.webFile.empty()) {
+      tally.add(vehicle.webFile);
+      std::vector<Error> webWarnings;
+      auto web = config::loadWebConfig(vehicle.webFile, &webWarnings);
+      if (!web) tally.report(web.error(), options.quiet, streams.err);
+      for (const Error& warning : webWarnings) tally.report(warning, options.quiet, streams.err);
     }
     // diagnostics.json is loaded by the whole-vehicle check (it needs the FSM's states)
     if (!vehicle.diagnosticsFile.empty()) tally.add(vehicle.diagnosticsFile);

@@ -2,30 +2,15 @@
 #include "trace_commands.hpp"
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <system_error>
 
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
+#include "openvcu/trace/report_job.hpp"
 
 namespace openvcu::cli {
-namespace {
-
-/// The *.log files of a folder (vcu record writes one per bus), sorted.
-std::vector<std::string> logsOfFolder(const std::string& folder) {
-  std::vector<std::string> logs;
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
-    if (entry.path().extension() == ".log" && entry.is_regular_file(error)) logs.push_back(entry.path().string());
-  }
-  std::sort(logs.begin(), logs.end());
-  return logs;
-}
-
-}  // namespace
-
 void addTraceInputOptions(CLI::App& command, TraceInputOptions& options) {
   auto* config = command.add_option("-c,--config", options.configFile,
                                     "vehicle configuration: its DBC files, bit rates, schedule cycles and J1939-76 pairs")
@@ -51,7 +36,7 @@ void addTraceInputOptions(CLI::App& command, TraceInputOptions& options) {
       ->type_name("");
 }
 
-std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink& err) {
+std::optional<TraceInput> prepareTraceInput(const TraceInputOptions& options, Sink& err) {
   TraceInput input;
   input.reportedErrors = std::make_shared<std::uint64_t>(0);
   Result<trace::AnalysisSetup> setupResult = trace::emptySetup();
@@ -73,7 +58,7 @@ std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink&
     std::error_code error;
     if (std::filesystem::is_directory(log, error)) {
       if (input.recordFolder.empty()) input.recordFolder = log;
-      std::vector<std::string> logs = logsOfFolder(log);
+      std::vector<std::string> logs = trace::recordingLogs(log);
       if (logs.empty()) {
         report(err, Error{"no *.log file in this folder", Location{log, 0, 0, {}}});
         input.failed = true;
@@ -84,6 +69,13 @@ std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink&
     }
   }
   if (input.logPaths.empty()) return std::nullopt;
+  return input;
+}
+
+std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink& err) {
+  std::optional<TraceInput> maybeInput = prepareTraceInput(options, err);
+  if (!maybeInput) return std::nullopt;
+  TraceInput& input = *maybeInput;
   auto reported = input.reportedErrors;
   Result<trace::LogTimeline> timelineResult =
       trace::LogTimeline::open(input.logPaths, *input.setup, [&err, reported](const Error& error) {
@@ -95,7 +87,7 @@ std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink&
     return std::nullopt;
   }
   input.timeline.emplace(std::move(*timelineResult));
-  return input;
+  return maybeInput;
 }
 
 void reportSkipped(TraceInput& input, Sink& err) {

@@ -34,7 +34,8 @@ struct TraceInputOptions {
   std::optional<dbc::MatchMode> match;  ///< default: the setup's (J1939)
 };
 
-/// An opened input: the setup and the merged timeline. `failed` is set when something could
+/// An opened input: the setup and the merged timeline (`vcu trace report` hands the setup and
+/// the log paths to trace::makeReport instead). `failed` is set when something could
 /// not be read (a DBC, a malformed line): the command goes on and exits with 1.
 struct TraceInput {
   std::unique_ptr<trace::AnalysisSetup> setup;
@@ -49,8 +50,12 @@ struct TraceInput {
 void addTraceInputOptions(CLI::App& command, TraceInputOptions& options);
 
 /// Loads the setup (a DBC or configuration that cannot be read is reported and the analysis
-/// goes on without it, `failed` set) and opens the logs. Empty after reporting when no log
-/// can be opened.
+/// goes on without it, `failed` set) and lists the logs (a folder: its *.log files); opens
+/// no log (`timeline` stays empty). Empty after reporting when there is no log to read.
+[[nodiscard]] std::optional<TraceInput> prepareTraceInput(const TraceInputOptions& options, Sink& err);
+
+/// prepareTraceInput(), then opens the logs as one timeline. Empty after reporting when a
+/// log cannot be opened.
 [[nodiscard]] std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink& err);
 
 /// After the timeline is read: one line on `err` per log with what was skipped (malformed

@@ -1,24 +1,30 @@
-// The HMI's display logic without Qt: value text and status, the FSM rules behind the
-// operator switches, service health, command acknowledgements and the log ring (issue 10).
+// The display logic the HMI and vcu-web share (openvcu::display): value text and status, the
+// FSM rules behind the operator switches, service health, command acknowledgements and the
+// log ring (issue 10).
 // The plot's ring and decimation are tested with shared/trace (tests/shared/trace).
 #include <doctest/doctest.h>
-
-#include "dashboard_test_catalog.hpp"
 
 #include <string>
 #include <vector>
 
-#include "common/display_logic.hpp"
+#include "dashboard_test_catalog.hpp"
+#include "openvcu/display/commands.hpp"
+#include "openvcu/display/fsm_rules.hpp"
+#include "openvcu/display/health.hpp"
+#include "openvcu/display/log_buffer.hpp"
+#include "openvcu/display/values.hpp"
 
 using namespace openvcu;
-using namespace openvcu::hmi;
+using namespace openvcu::display;
 
 namespace {
 
 constexpr std::int64_t SECOND_NS = 1'000'000'000;
 constexpr std::int64_t STALE_AFTER_NS = 2 * SECOND_NS;
 
-signals::Catalog smallCatalog() { return openvcu::testing::dashboardCatalog(); }
+signals::Catalog smallCatalog() {
+  return openvcu::testing::dashboardCatalog();
+}
 
 signals::SlotSnapshot busSlot(double value, std::int64_t timestampNs, signals::Quality quality) {
   signals::SlotSnapshot slot;
@@ -157,7 +163,8 @@ TEST_CASE("a command is answered by its own ack only, refused with the reason, o
   CHECK(first.requestId == 41);
   CHECK(second.requestId == 42);
   CHECK(first.issuer == "vcu-hmi");
-  CHECK_FALSE(sut.onAck({.requestId = 41, .issuer = "vcu", .responder = "vcu-fsm", .accepted = true, .reason = {}, .owner = true}));
+  CHECK_FALSE(sut.onAck(
+      {.requestId = 41, .issuer = "vcu", .responder = "vcu-fsm", .accepted = true, .reason = {}, .owner = true}));
   const auto refused = sut.onAck({.requestId = 41,
                                   .issuer = "vcu-hmi",
                                   .responder = "vcu-fsm",

@@ -1,0 +1,29 @@
+#pragma once
+// POST /api/command: the JSON a page sends, checked here before anything is sent, then turned
+// into the ipc::CommandRequest the HMI and `vcu` send too (docs/design/web.md). The owning
+// service still decides (the FSM stays the authority); what is checked here is only what makes
+// a request meaningless: the kind, the key, the value.
+//
+//   parseWebCommand(R"({"kind":"operator","key":"internal.operator.StartStop","value":"Start"})", catalog, database)
+//   -> CommandRequest{kind = OperatorSwitch, key = "internal.operator.StartStop", value = 1}
+//   parseWebCommand(R"({"kind":"set","key":"X"})", ...) -> Error "/key: unknown signal 'X'"
+
+#include <string>
+#include <string_view>
+
+#include "openvcu/core/result.hpp"
+#include "openvcu/dbc/model.hpp"
+#include "openvcu/ipc/events.hpp"
+#include "openvcu/signals/catalog.hpp"
+
+namespace openvcu::web {
+
+/// The kinds a page may send: "operator", "set", "clear", "faultReset", "scheduleEnable", "scheduleCycle".
+/// An error is "<JSON path>: <reason>"; the request's id, deadline and issuer are left to the sender.
+Result<ipc::CommandRequest> parseWebCommand(std::string_view body, const signals::Catalog& catalog,
+                                            const dbc::Database& database);
+
+/// One line for the command log: "operator internal.operator.StartStop = 1".
+[[nodiscard]] std::string describeCommand(const ipc::CommandRequest& request);
+
+}  // namespace openvcu::web
