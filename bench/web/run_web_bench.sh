@@ -3,9 +3,10 @@
 # Runs inside tests/harness/run_isolated.sh (private /dev/shm, /tmp, network):
 #   tests/harness/run_isolated.sh --keep $PWD -- env OPENVCU_BIN=$PWD/build/bin bench/web/run_web_bench.sh [SECONDS] [SAMPLES]
 # The HHEA stack under supervisord with the simulated vehicle, driven to Driving (as
-# bench/stack/run_stack_bench.sh). vcu-web is supervisord's program vcu-web when the
-# configuration has one, else started here (--listen 127.0.0.1:$WEB_PORT, default 8088, a data
-# folder and an empty users file in the run folder, --www services/web/www). Then, one after
+# bench/stack/run_stack_bench.sh). vcu-web is supervisord's program `web` (turned on in the
+# copy of openvcu.conf as ./run.sh does, on 127.0.0.1:$WEB_PORT, default 8080; its data folder
+# OPENVCU_RUN/data; no users file: read-only), or, with a configuration that has no such
+# program, started here with the same arguments and --www services/web/www. Then, one after
 # the other:
 #   1. three windows of SECONDS (default 30) with 0, 1 and 10 live pages: bench/web/web_clients.py
 #      holds that many GET /api/live?signals=<4 signals> streams, each read and parsed as a
@@ -15,9 +16,10 @@
 #   2. bench/web/dom_latency.py: headless Chromium (chromium-driver, python3-selenium) opens the
 #      page and measures, for SAMPLES (default 500) changes of a signal's text in the DOM, the
 #      time from the table write (event.t - ageMs) to the DOM change.
-# The 4 signals (WEB_BENCH_SIGNALS overrides): SOC, battery voltage and current (the HMI
-# dashboard's dials) and the PDU's bus voltage, each written every 100 ms by vcu-can-rx from
-# the simulated VIC and PDU.
+# The 4 signals (WEB_BENCH_SIGNALS overrides): the bus signals whose values change while the
+# simulated vehicle drives (a scan of the whole catalog): the battery's SOC (HVESSD2, about 9
+# changes/s) and voltage (HVESSD1, the HMI's voltage dial), the PDU's and the Editron's view of
+# the HV bus voltage (each < 1 change/s); vcu-can-rx writes each every 100 ms.
 # Ends with one line
 #   RESULT web_cpu_pct_1=.. web_cpu_pct_10=.. web_cpu_pct_0=.. web_rss_mb=<max> dom_latency_p50_ms=.. dom_latency_p99_ms=.. events_per_s_per_client=<10-page mean>
 set -uo pipefail
@@ -26,8 +28,8 @@ samples=${2:-500}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 bin=${OPENVCU_BIN:-$root/build/bin}
 config=$root/config/hhea/vehicle.json
-signals=${WEB_BENCH_SIGNALS:-VIC.HVESSD2_PGN61585.HS_FastUpdSOC,VIC.HVESSD1_PGN61584.HS_ULvl,VIC.HVESSD1_PGN61584.HS_I,PDU.PDU_Tx_2.HV_DC_1_U_V}
-port=${WEB_PORT:-8088}
+signals=${WEB_BENCH_SIGNALS:-VIC.HVESSD2_PGN61585.HS_FastUpdSOC,VIC.HVESSD1_PGN61584.HS_ULvl,PDU.PDU_Tx_2.HV_DC_1_U_V,Editron.ST_MOT_3.st_mot_u_dc}
+port=${WEB_PORT:-8080}
 python=/usr/bin/python3  # Debian's, for python3-selenium
 here=$root/bench/web
 if [ "${OPENVCU_ISOLATED:-}" != 1 ]; then
@@ -37,7 +39,10 @@ fi
 if [ ! -x "$bin/vcu-web" ]; then echo "error: $bin/vcu-web is missing (build the target vcu-web)" >&2; exit 2; fi
 run=$(mktemp -d)
 export OPENVCU_BIN=$bin OPENVCU_CONFIG=$config OPENVCU_RUN=$run OPENVCU_ROUDI=$root/config/iceoryx/iox-roudi.sh
-sed -e 's/^;user=root.*/user=root/' "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
+mkdir -p "$run/data"
+sed -e 's/^;user=root.*/user=root/' \
+  -e '/^\[program:web\]/,/^$/{s/^autostart=false/autostart=true/;s/127\.0\.0\.1:8080/127.0.0.1:'"$port"'/}' \
+  "$root/config/supervisor/openvcu.conf" > "$run/openvcu.conf"
 supervisord -n -c "$run/openvcu.conf" > "$run/supervisord.out" 2>&1 &
 webPid=""
 ownWeb=""
@@ -65,24 +70,22 @@ state=$("$bin/vcu" top --once --config "$config" | grep '^FSM')
 [[ "$state" == *Driving* ]] || fail "the FSM is not in Driving: $state"
 
 # vcu-web: supervisord's when its configuration has the program, else ours
-if grep -q '^\[program:vcu-web\]' "$run/openvcu.conf"; then
+if grep -q '^\[program:web\]' "$run/openvcu.conf"; then
   for _ in $(seq 1 20); do
-    webPid=$(supervisorctl -c "$run/openvcu.conf" pid vcu-web 2>/dev/null)
+    webPid=$(supervisorctl -c "$run/openvcu.conf" pid web 2>/dev/null)
     [[ "$webPid" =~ ^[1-9][0-9]*$ ]] && break
     webPid=""
     sleep 0.5
   done
-  [ -n "$webPid" ] || fail "supervisord's vcu-web is not running: $(supervisorctl -c "$run/openvcu.conf" status vcu-web)"
+  [ -n "$webPid" ] || fail "supervisord's vcu-web is not running: $(supervisorctl -c "$run/openvcu.conf" status web; tail -n 3 "$run/web.log")"
   listen=$(tr '\0' '\n' < "/proc/$webPid/cmdline" | sed -n '/^--listen$/{n;p}')
   [ -n "$listen" ] || listen=$(ss -ltnpH 2>/dev/null | awk -v p="pid=$webPid," 'index($0, p) {print $4; exit}')
   [ -n "$listen" ] || fail "cannot tell where supervisord's vcu-web (pid $webPid) listens"
-  how="supervisord's program vcu-web"
+  how="supervisord's program web"
 else
   listen=127.0.0.1:$port
-  mkdir -p "$run/web-data"
-  echo '{"users": []}' > "$run/web-users.json"
-  "$bin/vcu-web" --config "$config" --listen "$listen" --data-folder "$run/web-data" --users "$run/web-users.json" \
-    --www "$root/services/web/www" > "$run/vcu-web.log" 2>&1 &
+  "$bin/vcu-web" --config "$config" --listen "$listen" --data-folder "$run/data" --users "$run/data/web-users.json" \
+    --www "$root/services/web/www" > "$run/web.log" 2>&1 &
   ownWeb=$!
   webPid=$ownWeb
   how="started by the bench ($(basename "$bin")/vcu-web --listen $listen)"
@@ -90,7 +93,7 @@ fi
 url=http://$listen
 for _ in $(seq 1 40); do
   curl -fsS -o /dev/null --max-time 1 "$url/api/info" 2>/dev/null && break
-  kill -0 "$webPid" 2>/dev/null || fail "vcu-web (pid $webPid) ended: $(tail -n 3 "$run/vcu-web.log" 2>/dev/null)"
+  kill -0 "$webPid" 2>/dev/null || fail "vcu-web (pid $webPid) ended: $(tail -n 3 "$run/web.log" 2>/dev/null)"
   sleep 0.5
 done
 curl -fsS -o /dev/null --max-time 2 "$url/api/info" || fail "vcu-web does not answer GET $url/api/info"
@@ -135,6 +138,7 @@ for pages in 0 1 10; do
     rate[$pages]=$(jq -r .eventsPerSMean <<<"$summary")
     line+="; update events/s per page: mean ${rate[$pages]}, min $(jq -r .eventsPerSMin <<<"$summary")"
     line+="; value changes/s per signal (page 0): $(jq -r '.perClient[0].changesPerS | to_entries | map("\(.key | split(".") | last) \(.value)") | join(", ")' <<<"$summary")"
+    line+="; not Ready: $(jq '[.perClient[].notReady] | add' <<<"$summary")"
     if [ "$status" -ne 0 ]; then
       echo "$line"
       fail "$pages live pages: streams failed: $(jq -c .failed <<<"$summary")"

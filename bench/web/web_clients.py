@@ -10,8 +10,9 @@
       EventSource reads it (text/event-stream, events split on blank lines, every `update`
       parsed as JSON). Touches --ready-file once every stream has delivered its first
       `update`; counts from then until SIGTERM/SIGINT (or --max-seconds), then prints one
-      JSON object: per client the events, events/s and, per signal, how many events carried
-      a new value; the streams that failed and why.
+      JSON object: per client the events, events/s, per signal how many events a second
+      carried a new value, how often a picked signal was not "Ready"; the streams that
+      failed and why.
 
 Example (inside the bench): start `streams ... --ready-file r &`, wait for r, measure the
 server over a window, `kill -TERM` the client, read its JSON from stdout.
@@ -75,6 +76,7 @@ class LiveClient(threading.Thread):
         self.changes = {key: 0 for key in keys}  # events carrying a value other than the last one
         self.last_value = {}
         self.bad = 0                  # events that were not JSON or lacked "signals"
+        self.not_ready = 0            # picked signals seen with a status other than "Ready"
         self.error = None             # why the stream ended, if it did
 
     def run(self):
@@ -132,6 +134,8 @@ class LiveClient(threading.Thread):
                 if key not in self.changes:
                     continue
                 value = entry.get("value")
+                if counting and entry.get("status") != "Ready":
+                    self.not_ready += 1
                 if key in self.last_value and self.last_value[key] != value and counting:
                     self.changes[key] += 1
                 self.last_value[key] = value
@@ -144,6 +148,7 @@ class LiveClient(threading.Thread):
                 "eventsPerS": round(self.events / seconds, 2) if seconds > 0 else 0.0,
                 "changesPerS": {key: round(n / seconds, 2) for key, n in self.changes.items()},
                 "badEvents": self.bad,
+                "notReady": self.not_ready,
                 "error": self.error,
             }
 
