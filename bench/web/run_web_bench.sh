@@ -17,7 +17,7 @@
 #      page and measures, for SAMPLES (default 500) changes of a signal's text in the DOM, the
 #      time from the table write (event.t - ageMs) to the DOM change.
 # The 4 signals (WEB_BENCH_SIGNALS overrides): the bus signals whose values change while the
-# simulated vehicle drives (a scan of the whole catalog): the battery's SOC (HVESSD2, about 9
+# simulated vehicle drives (a scan of the received and internal signals): the battery's SOC (HVESSD2, about 9
 # changes/s) and voltage (HVESSD1, the HMI's voltage dial), the PDU's and the Editron's view of
 # the HV bus voltage (each < 1 change/s); vcu-can-rx writes each every 100 ms.
 # Ends with one line
