@@ -4,7 +4,6 @@
 #include <nlohmann/json.hpp>
 #include <string_view>
 
-#include "openvcu/config/services.hpp"
 #include "openvcu/core/clock.hpp"
 
 namespace openvcu::web {
@@ -22,14 +21,6 @@ constexpr std::int64_t COMMON_REUSE_NS = 20'000'000;
 /// Heartbeats are sent once a second: a service not heard for 2.5 s is Stale.
 constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;
 
-std::vector<std::string> expectedServices() {
-  std::vector<std::string> names;
-  for (const std::string_view name : config::SERVICES) {
-    if (name == "hmi" || name == "web") continue;  // optional: a VCU may run without them
-    names.push_back("vcu-" + std::string(name));
-  }
-  return names;
-}
 
 std::string severityName(ipc::FaultSeverity severity) {
   switch (severity) {
@@ -103,7 +94,7 @@ class LiveStream final : public EventSource {
 }  // namespace
 
 LiveState::LiveState(const signals::Catalog& catalog, const signals::SignalTable& table, LiveSetup setup)
-    : m_catalog(catalog), m_table(table), m_setup(std::move(setup)), m_health(expectedServices(), HEARTBEAT_STALE_NS) {
+    : m_catalog(catalog), m_table(table), m_setup(std::move(setup)), m_health(display::expectedServices(), HEARTBEAT_STALE_NS) {
   if (!m_setup.fsmFile.empty()) {
     if (auto rules = display::FsmRules::load(m_setup.fsmFile)) {
       m_rules = std::move(*rules);

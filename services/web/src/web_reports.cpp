@@ -24,41 +24,37 @@ Result<trace::AnalysisSetup> TraceReports::setup() {
   return *m_setup;
 }
 
-Result<std::string> TraceReports::report(const std::string& path, bool folder) {
-  const std::lock_guard lock(m_mutex);
+Result<trace::ReportJob> TraceReports::job(const std::string& path, bool folder) {
   auto vehicle = setup();
   if (!vehicle) return vehicle.error();
-  trace::ReportJob job;
+  trace::ReportJob made;
   if (folder) {
     auto found = trace::jobForFolder(path, std::move(*vehicle));
     if (!found) return found.error();
-    job = std::move(*found);
+    made = std::move(*found);
   } else {
-    job.setup = std::move(*vehicle);
-    job.logs = {path};
+    made.setup = std::move(*vehicle);
+    made.logs = {path};
   }
-  job.maxFrames = MAX_REPORT_FRAMES;
-  auto made = trace::makeReport(job);
+  made.maxFrames = MAX_REPORT_FRAMES;
+  return made;
+}
+
+Result<std::string> TraceReports::report(const std::string& path, bool folder) {
+  const std::lock_guard lock(m_mutex);
+  auto jobResult = job(path, folder);
+  if (!jobResult) return jobResult.error();
+  auto made = trace::makeReport(*jobResult);
   if (!made) return made.error();
   return std::move(made->html);
 }
 
 Result<std::string> TraceReports::summary(const std::string& path, bool folder) {
   const std::lock_guard lock(m_mutex);
-  auto vehicle = setup();
-  if (!vehicle) return vehicle.error();
-  trace::ReportJob job;
-  if (folder) {
-    auto found = trace::jobForFolder(path, std::move(*vehicle));
-    if (!found) return found.error();
-    job = std::move(*found);
-  } else {
-    job.setup = std::move(*vehicle);
-    job.logs = {path};
-  }
-  job.maxFrames = MAX_REPORT_FRAMES;
+  auto jobResult = job(path, folder);
+  if (!jobResult) return jobResult.error();
   std::vector<Error> inputErrors;
-  auto summary = trace::summarize(job, &inputErrors);
+  auto summary = trace::summarize(*jobResult, &inputErrors);
   if (!summary) return summary.error();
   nlohmann::json buses = nlohmann::json::array();
   for (const trace::BusSummary& bus : summary->busLoad) {

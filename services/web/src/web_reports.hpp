@@ -12,6 +12,7 @@
 #include <string>
 
 #include "openvcu/core/result.hpp"
+#include "openvcu/trace/report_job.hpp"
 #include "openvcu/trace/timeline.hpp"
 
 namespace openvcu::web {
@@ -27,6 +28,8 @@ class TraceReports {
 
  private:
   Result<trace::AnalysisSetup> setup();
+  /// The job for a folder or a log, read at most MAX_REPORT_FRAMES frames.
+  Result<trace::ReportJob> job(const std::string& path, bool folder);
   std::string m_vehiclePath;
   std::mutex m_mutex;
   std::optional<trace::AnalysisSetup> m_setup;

@@ -2,7 +2,18 @@
 
 #include <algorithm>
 
+#include "openvcu/config/services.hpp"
+
 namespace openvcu::display {
+
+std::vector<std::string> expectedServices() {
+  std::vector<std::string> names;
+  for (const std::string_view name : config::SERVICES) {
+    if (name == "hmi" || name == "web") continue;  // optional: a VCU may run without them
+    names.push_back("vcu-" + std::string(name));
+  }
+  return names;
+}
 
 HealthTracker::HealthTracker(std::vector<std::string> expected, std::int64_t staleAfterNs)
     : m_staleAfterNs(staleAfterNs) {

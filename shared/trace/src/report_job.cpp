@@ -52,23 +52,6 @@ std::vector<std::string> openableLogs(const ReportJob& job, std::vector<std::str
   return logs;
 }
 
-/// One Error per log with what was skipped (as `vcu trace` has always printed it):
-/// malformed lines are errors of the input, the rest is what the analysis left out.
-void appendSkipped(const std::vector<LogCounts>& counts, std::vector<Error>& errors) {
-  for (const LogCounts& count : counts) {
-    std::string text;
-    const auto add = [&text](std::uint64_t n, const char* what) {
-      if (n == 0) return;
-      text += (text.empty() ? "" : ", ") + std::to_string(n) + what;
-    };
-    add(count.malformedLines, " malformed lines skipped");
-    add(count.untimed, " lines without a time skipped");
-    add(count.backwards, " frames earlier than the frame before them (the periods across them not measured)");
-    if (text.empty()) continue;
-    errors.push_back(Error{std::move(text), Location{count.path, 0, 0, {}},
-                           count.malformedLines > 0 ? openvcu::Severity::Error : openvcu::Severity::Warning});
-  }
-}
 
 Result<FirstPass> readFirstPass(const ReportJob& job, std::vector<Error>& errors) {
   FirstPass pass;
@@ -112,7 +95,7 @@ Result<FirstPass> readFirstPass(const ReportJob& job, std::vector<Error>& errors
                            openvcu::Severity::Warning});
   }
   checker.finish(lastNs, findings);
-  appendSkipped(timeline.counts(), errors);
+  for (Error& skipped : skippedLines(timeline.counts())) errors.push_back(std::move(skipped));
   if (logProblems > MAX_LISTED_LOG_ERRORS) {
     errors.push_back(Error{"only the first " + std::to_string(MAX_LISTED_LOG_ERRORS) + " of " +
                                std::to_string(logProblems) + " log problems were listed",
@@ -245,6 +228,25 @@ Result<ReportJob> jobForFolder(const std::string& folder, AnalysisSetup setup) {
   } catch (const std::exception& exception) {
     return Error{std::string("cannot read: ") + exception.what(), Location{folder, 0, 0, {}}};
   }
+}
+
+std::vector<Error> skippedLines(const std::vector<LogCounts>& counts) {
+  std::vector<Error> errors;
+  for (const LogCounts& count : counts) {
+    std::string text;
+    const auto add = [&text](std::uint64_t n, const char* what) {
+      if (n == 0) return;
+      text += (text.empty() ? "" : ", ") + std::to_string(n) + what;
+    };
+    add(count.malformedLines, " malformed lines skipped");
+    add(count.untimed, " lines without a time skipped");
+    add(count.backwards, " frames earlier than the frame before them (the periods across them not measured)");
+    if (text.empty()) continue;
+    // malformed lines are errors of the input; the rest is what the analysis left out
+    errors.push_back(Error{std::move(text), Location{count.path, 0, 0, {}},
+                           count.malformedLines > 0 ? openvcu::Severity::Error : openvcu::Severity::Warning});
+  }
+  return errors;
 }
 
 }  // namespace openvcu::trace

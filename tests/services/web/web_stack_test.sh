@@ -27,6 +27,7 @@ if [ "$mode" = browser ]; then
 fi
 
 VEHICLE=hhea
+COPY_VEHICLE=1  # the schedule commands of the tests write schedule.overlay.json beside it
 source "$here/../../demo/supervised_stack.sh"
 fail() {
   echo "$NAME: FAIL: $*"

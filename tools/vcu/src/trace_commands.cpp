@@ -91,20 +91,9 @@ std::optional<TraceInput> openTraceInput(const TraceInputOptions& options, Sink&
 }
 
 void reportSkipped(TraceInput& input, Sink& err) {
-  for (const trace::LogCounts& count : input.timeline->counts()) {
-    std::string text;
-    const auto add = [&text](std::uint64_t n, const char* what) {
-      if (n == 0) return;
-      text += (text.empty() ? "" : ", ") + std::to_string(n) + what;
-    };
-    add(count.malformedLines, " malformed lines skipped");
-    add(count.untimed, " lines without a time skipped");
-    add(count.backwards, " frames earlier than the frame before them (the periods across them not measured)");
-    if (text.empty()) continue;
-    // Malformed lines are errors of the input; the rest is what the analysis left out.
-    report(err, Error{std::move(text), Location{count.path, 0, 0, {}},
-                      count.malformedLines > 0 ? Severity::Error : Severity::Warning});
-    if (count.malformedLines > 0) input.failed = true;
+  for (const Error& skipped : trace::skippedLines(input.timeline->counts())) {
+    report(err, skipped);
+    if (skipped.severity == Severity::Error) input.failed = true;  // malformed lines
   }
   if (*input.reportedErrors > MAX_REPORTED_LOG_ERRORS) {
     reportError(err, "only the first " + std::to_string(MAX_REPORTED_LOG_ERRORS) + " of " +

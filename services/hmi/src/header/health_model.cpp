@@ -12,19 +12,11 @@ namespace {
 
 constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;  // services beat once a second
 
-std::vector<std::string> expectedServices() {
-  std::vector<std::string> names;
-  for (const std::string_view name : config::SERVICES) {
-    if (name == "hmi" || name == "web") continue;  // optional: a VCU may run without them
-    names.push_back("vcu-" + std::string(name));
-  }
-  return names;
-}
 
 }  // namespace
 
 HealthModel::HealthModel(QObject* parent)
-    : StatusListModel(parent), m_tracker(expectedServices(), HEARTBEAT_STALE_NS) {
+    : StatusListModel(parent), m_tracker(display::expectedServices(), HEARTBEAT_STALE_NS) {
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::heartbeat, this, &HealthModel::onHeartbeat);
     connect(stack, &StackConnection::displayTick, this, &HealthModel::refresh);

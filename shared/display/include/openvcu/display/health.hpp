@@ -22,6 +22,10 @@ struct ServiceHealth {
   std::int64_t heartbeats{};
 };
 
+/// The services every stack runs ("vcu-can-rx", ...: config::SERVICES but the HMI and
+/// vcu-web, which a VCU may run without): listed from the start, NotConnected until heard.
+[[nodiscard]] std::vector<std::string> expectedServices();
+
 /// Heartbeats -> one row per service. The expected services (from the configuration) are
 /// listed from the start as NotConnected. Beats older than `staleAfterNs` make a service
 /// Stale; three times that, NotConnected; a service whose status starts with "stopping"

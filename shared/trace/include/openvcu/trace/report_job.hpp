@@ -115,4 +115,9 @@ struct ReportOutcome {
 /// not a folder or holds no *.log file.
 [[nodiscard]] Result<ReportJob> jobForFolder(const std::string& folder, AnalysisSetup setup);
 
+/// One Error per log with what was skipped (as `vcu trace` prints it): malformed lines are
+/// errors of the input (severity Error), lines without a time and frames earlier than the one
+/// before them are what the analysis left out (Warning). Logs with nothing skipped give none.
+[[nodiscard]] std::vector<Error> skippedLines(const std::vector<LogCounts>& counts);
+
 }  // namespace openvcu::trace
