@@ -5,14 +5,13 @@
 #include <string_view>
 
 #include "openvcu/core/clock.hpp"
+#include "web_command.hpp"
 
 namespace openvcu::web {
 namespace {
 
 using Json = nlohmann::json;
 
-constexpr std::string_view OPERATOR_PREFIX = "internal.operator.";
-constexpr std::string_view FAULT_RESET_KEY = "internal.operator.FaultReset";
 constexpr std::string_view DM1_PREFIX = "internal.dm1.";
 constexpr std::string_view DM1_SUFFIX = ".activeDtcs";
 /// Pages asking within this long share one build of the common part (each page's own signals

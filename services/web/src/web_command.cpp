@@ -10,8 +10,6 @@ namespace {
 using Json = nlohmann::json;
 
 constexpr std::string_view KINDS = "operator, set, clear, faultReset, scheduleEnable, scheduleCycle";
-constexpr std::string_view OPERATOR_PREFIX = "internal.operator.";
-constexpr std::string_view FAULT_RESET_KEY = "internal.operator.FaultReset";
 
 /// The number of `value`, or the raw value of one of the signal's value texts.
 Result<double> valueOf(const Json& value, const signals::SignalInfo* signal) {

@@ -18,6 +18,10 @@
 
 namespace openvcu::web {
 
+/// The operator switches' keys (the HMI's Vehicle tab) and the FSM's reset switch among them.
+inline constexpr std::string_view OPERATOR_PREFIX = "internal.operator.";
+inline constexpr std::string_view FAULT_RESET_KEY = "internal.operator.FaultReset";
+
 /// The kinds a page may send: "operator", "set", "clear", "faultReset" (SetSignal internal.operator.FaultReset = 1,
 /// as the HMI resets), "scheduleEnable", "scheduleCycle".
 /// An error is "<JSON path>: <reason>"; the request's id, deadline and issuer are left to the sender.

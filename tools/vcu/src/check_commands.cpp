@@ -29,7 +29,7 @@ namespace fs = std::filesystem;
 constexpr const char* DESCRIPTION = "Check every file of a vehicle configuration, as the services load them";
 constexpr const char* FOOTER =
     "Checks vehicle.json and through it the DBC files, the GPIO map, the FSM file, the\n"
-    "schedule, simulation and receive files and the HMI dashboard (dashboard.json beside\n"
+    "schedule, simulation, receive, diagnostics and web files and the HMI dashboard (dashboard.json beside\n"
     "vehicle.json, if present) with the loaders the services use when they start.\n"
     "While vehicle.json itself does not load, the files it names get the JSON syntax check\n"
     "only (a note says so). Then the whole-vehicle checks, which the services also run at\n"
