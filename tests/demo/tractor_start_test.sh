@@ -6,7 +6,9 @@ NAME=tractor_start
 . "$(dirname "$0")/tractor_lib.sh"
 up
 wait_state Standby 5 || fail "not in Standby at start: '$(state)'"
-[ "$(bus BMS.HVESSS1.HS_HiUBusCnctnSts)" = 0 ] || fail "the BMS is connected before the key: $(bus BMS.HVESSS1.HS_HiUBusCnctnSts)"
+# the BMS' first status frame may come a moment after the services beat (a loaded machine)
+wait_bus BMS.HVESSS1.HS_HiUBusCnctnSts == 0 5 ||
+  fail "the BMS is connected before the key (or silent): '$(bus BMS.HVESSS1.HS_HiUBusCnctnSts)'"
 vset internal.gpio.sim.KeySwitch 1
 wait_bus internal.input.Key == 1 3 || fail "the key switch input did not reach internal.input.Key"
 wait_bus VCU.HVESSC1.HS_HiUBusCnctCmd == 1 3 || fail "HVESSC1 never asked to connect"
