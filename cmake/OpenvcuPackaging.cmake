@@ -1,0 +1,1 @@
+# cmake/OpenvcuPackaging.cmake: install layout and CPack (placeholder)

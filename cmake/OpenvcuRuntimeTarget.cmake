@@ -1,0 +1,1 @@
+# cmake/OpenvcuRuntimeTarget.cmake: the openvcu-runtime target (placeholder)
