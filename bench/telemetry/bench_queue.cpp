@@ -1,7 +1,8 @@
 // bench_queue: vcu-telemetry's store-and-forward queue, the segment-file DiskQueue
 // (services/telemetry) against a SQLite prototype of the same contract (this file only):
 // append batches of records with one fsync per batch, then drain everything (peek up to 100,
-// ack the last). Run on the disk the queue will live on:
+// ack the last); the two alternate batch by batch so that both meet the same disk. Rates are
+// per second of time spent in the queue's own calls. Run on the disk the queue will live on:
 //   build/bench/bench_queue [--dir DIR] [--batches N] [--records-per-batch R] [--record-bytes B]
 // Last line: RESULT file_append_batches_per_s=.. file_append_p99_ms=.. sqlite_append_batches_per_s=..
 //   sqlite_append_p99_ms=.. file_drain_records_per_s=.. sqlite_drain_records_per_s=..
@@ -12,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -42,100 +44,136 @@ double seconds(Clock::time_point start) { return std::chrono::duration<double>(C
   std::exit(1);
 }
 
-Measured benchFile(const std::string& folder, int batches, int perBatch, const std::string& record) {
-  std::filesystem::remove_all(folder);
-  auto queue = openvcu::telemetry::DiskQueue::open({.folder = folder, .maxBytes = 1ull << 30});
-  if (!queue) fail(queue.error().toString());
-  std::vector<std::string_view> batch(static_cast<std::size_t>(perBatch), record);
-  std::vector<double> latencies;
-  const auto start = Clock::now();
-  for (int i = 0; i < batches; ++i) {
-    const auto before = Clock::now();
-    if (auto appended = queue->appendBatch(batch); !appended) fail(appended.error().toString());
-    latencies.push_back(seconds(before) * 1e3);
-  }
-  Measured result;
-  result.appendBatchesPerSecond = batches / seconds(start);
-  result.appendP50Ms = percentile(latencies, 0.5);
-  result.appendP99Ms = percentile(latencies, 0.99);
-  const auto drainStart = Clock::now();
-  for (;;) {
-    auto records = queue->peek(100);
-    if (!records) fail(records.error().toString());
-    if (records->empty()) break;
-    result.drained += records->size();
-    if (auto acked = queue->ack(records->back().sequence); !acked) fail(acked.error().toString());
-  }
-  result.drainRecordsPerSecond = static_cast<double>(result.drained) / seconds(drainStart);
-  return result;
-}
+/// One queue under test: append a batch (synced), drain a step (read up to 100, ack them).
+class BenchQueue {
+ public:
+  virtual ~BenchQueue() = default;
+  virtual void appendBatch(const std::vector<std::string_view>& batch) = 0;
+  /// Records read and acked; 0 when empty.
+  virtual std::size_t drainStep() = 0;
+};
 
-void exec(sqlite3* db, const char* sql) {
-  char* message = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &message) != SQLITE_OK) fail(std::string(sql) + ": " + message);
-}
+class FileQueue final : public BenchQueue {
+ public:
+  explicit FileQueue(const std::string& folder) {
+    std::filesystem::remove_all(folder);
+    auto opened = openvcu::telemetry::DiskQueue::open({.folder = folder, .maxBytes = 1ull << 30});
+    if (!opened) fail(opened.error().toString());
+    m_queue.emplace(std::move(*opened));
+  }
+  void appendBatch(const std::vector<std::string_view>& batch) override {
+    if (auto appended = m_queue->appendBatch(batch); !appended) fail(appended.error().toString());
+  }
+  std::size_t drainStep() override {
+    auto records = m_queue->peek(100);
+    if (!records) fail(records.error().toString());
+    if (records->empty()) return 0;
+    if (auto acked = m_queue->ack(records->back().sequence); !acked) fail(acked.error().toString());
+    return records->size();
+  }
+
+ private:
+  std::optional<openvcu::telemetry::DiskQueue> m_queue;
+};
 
 // The SQLite prototype: WAL, synchronous=FULL for appends (the WAL is fsync'ed per commit),
 // NORMAL for acks (as the file queue, an ack is not synced on its own).
-Measured benchSqlite(const std::string& folder, int batches, int perBatch, const std::string& record) {
-  std::filesystem::remove_all(folder);
-  std::filesystem::create_directories(folder);
-  sqlite3* db = nullptr;
-  if (sqlite3_open((folder + "/queue.db").c_str(), &db) != SQLITE_OK) fail("sqlite3_open");
-  exec(db, "PRAGMA journal_mode=WAL");
-  exec(db, "CREATE TABLE q(seq INTEGER PRIMARY KEY, payload BLOB NOT NULL)");
-  sqlite3_stmt* insert = nullptr;
-  sqlite3_stmt* select = nullptr;
-  sqlite3_stmt* remove = nullptr;
-  sqlite3_prepare_v2(db, "INSERT INTO q VALUES(?, ?)", -1, &insert, nullptr);
-  sqlite3_prepare_v2(db, "SELECT seq, payload FROM q WHERE seq > ? ORDER BY seq LIMIT 100", -1, &select, nullptr);
-  sqlite3_prepare_v2(db, "DELETE FROM q WHERE seq <= ?", -1, &remove, nullptr);
-  std::vector<double> latencies;
-  sqlite3_int64 sequence = 1;
-  exec(db, "PRAGMA synchronous=FULL");
-  const auto start = Clock::now();
-  for (int i = 0; i < batches; ++i) {
-    const auto before = Clock::now();
-    exec(db, "BEGIN");
-    for (int r = 0; r < perBatch; ++r) {
-      sqlite3_bind_int64(insert, 1, sequence++);
-      sqlite3_bind_blob(insert, 2, record.data(), static_cast<int>(record.size()), SQLITE_STATIC);
-      if (sqlite3_step(insert) != SQLITE_DONE) fail(sqlite3_errmsg(db));
-      sqlite3_reset(insert);
-    }
-    exec(db, "COMMIT");
-    latencies.push_back(seconds(before) * 1e3);
+class SqliteQueue final : public BenchQueue {
+ public:
+  explicit SqliteQueue(const std::string& folder) {
+    std::filesystem::remove_all(folder);
+    std::filesystem::create_directories(folder);
+    if (sqlite3_open((folder + "/queue.db").c_str(), &m_db) != SQLITE_OK) fail("sqlite3_open");
+    exec("PRAGMA journal_mode=WAL");
+    exec("CREATE TABLE q(seq INTEGER PRIMARY KEY, payload BLOB NOT NULL)");
+    sqlite3_prepare_v2(m_db, "INSERT INTO q VALUES(?, ?)", -1, &m_insert, nullptr);
+    sqlite3_prepare_v2(m_db, "SELECT seq, payload FROM q WHERE seq > ? ORDER BY seq LIMIT 100", -1, &m_select, nullptr);
+    sqlite3_prepare_v2(m_db, "DELETE FROM q WHERE seq <= ?", -1, &m_remove, nullptr);
   }
-  Measured result;
-  result.appendBatchesPerSecond = batches / seconds(start);
-  result.appendP50Ms = percentile(latencies, 0.5);
-  result.appendP99Ms = percentile(latencies, 0.99);
-  exec(db, "PRAGMA synchronous=NORMAL");
-  sqlite3_int64 acked = 0;
-  const auto drainStart = Clock::now();
-  for (;;) {
-    sqlite3_bind_int64(select, 1, acked);
+  ~SqliteQueue() override {
+    sqlite3_finalize(m_insert);
+    sqlite3_finalize(m_select);
+    sqlite3_finalize(m_remove);
+    sqlite3_close(m_db);
+  }
+  void appendBatch(const std::vector<std::string_view>& batch) override {
+    exec("PRAGMA synchronous=FULL");
+    exec("BEGIN");
+    for (const std::string_view record : batch) {
+      sqlite3_bind_int64(m_insert, 1, m_sequence++);
+      sqlite3_bind_blob(m_insert, 2, record.data(), static_cast<int>(record.size()), SQLITE_STATIC);
+      if (sqlite3_step(m_insert) != SQLITE_DONE) fail(sqlite3_errmsg(m_db));
+      sqlite3_reset(m_insert);
+    }
+    exec("COMMIT");
+  }
+  std::size_t drainStep() override {
+    exec("PRAGMA synchronous=NORMAL");
+    sqlite3_bind_int64(m_select, 1, m_acked);
     std::size_t got = 0;
     std::string payload;
-    while (sqlite3_step(select) == SQLITE_ROW) {
-      acked = sqlite3_column_int64(select, 0);
-      payload.assign(static_cast<const char*>(sqlite3_column_blob(select, 1)),
-                     static_cast<std::size_t>(sqlite3_column_bytes(select, 1)));
+    while (sqlite3_step(m_select) == SQLITE_ROW) {
+      m_acked = sqlite3_column_int64(m_select, 0);
+      payload.assign(static_cast<const char*>(sqlite3_column_blob(m_select, 1)),
+                     static_cast<std::size_t>(sqlite3_column_bytes(m_select, 1)));
       ++got;
     }
-    sqlite3_reset(select);
-    if (got == 0) break;
-    result.drained += got;
-    sqlite3_bind_int64(remove, 1, acked);
-    if (sqlite3_step(remove) != SQLITE_DONE) fail(sqlite3_errmsg(db));
-    sqlite3_reset(remove);
+    sqlite3_reset(m_select);
+    if (got == 0) return 0;
+    sqlite3_bind_int64(m_remove, 1, m_acked);
+    if (sqlite3_step(m_remove) != SQLITE_DONE) fail(sqlite3_errmsg(m_db));
+    sqlite3_reset(m_remove);
+    return got;
   }
-  result.drainRecordsPerSecond = static_cast<double>(result.drained) / seconds(drainStart);
-  sqlite3_finalize(insert);
-  sqlite3_finalize(select);
-  sqlite3_finalize(remove);
-  sqlite3_close(db);
-  return result;
+
+ private:
+  void exec(const char* sql) {
+    char* message = nullptr;
+    if (sqlite3_exec(m_db, sql, nullptr, nullptr, &message) != SQLITE_OK) fail(std::string(sql) + ": " + message);
+  }
+  sqlite3* m_db{};
+  sqlite3_stmt* m_insert{};
+  sqlite3_stmt* m_select{};
+  sqlite3_stmt* m_remove{};
+  sqlite3_int64 m_sequence{1};
+  sqlite3_int64 m_acked{};
+};
+
+/// Runs both queues side by side, alternating batch by batch and drain step by drain step, so
+/// that both meet the same disk (this VM's fsync time changes by 10x within minutes).
+std::vector<Measured> benchSideBySide(std::vector<BenchQueue*> queues, int batches, int perBatch,
+                                      const std::string& record) {
+  const std::vector<std::string_view> batch(static_cast<std::size_t>(perBatch), record);
+  std::vector<std::vector<double>> latencies(queues.size());
+  std::vector<Measured> results(queues.size());
+  for (int i = 0; i < batches; ++i) {
+    for (std::size_t q = 0; q < queues.size(); ++q) {
+      const auto before = Clock::now();
+      queues[q]->appendBatch(batch);
+      latencies[q].push_back(seconds(before) * 1e3);
+    }
+  }
+  std::vector<double> drainSeconds(queues.size());
+  std::vector<bool> done(queues.size());
+  while (std::find(done.begin(), done.end(), false) != done.end()) {
+    for (std::size_t q = 0; q < queues.size(); ++q) {
+      if (done[q]) continue;
+      const auto before = Clock::now();
+      const std::size_t got = queues[q]->drainStep();
+      drainSeconds[q] += seconds(before);
+      results[q].drained += got;
+      done[q] = got == 0;
+    }
+  }
+  for (std::size_t q = 0; q < queues.size(); ++q) {
+    double total = 0;
+    for (const double ms : latencies[q]) total += ms;
+    results[q].appendBatchesPerSecond = batches / (total / 1e3);
+    results[q].appendP50Ms = percentile(latencies[q], 0.5);
+    results[q].appendP99Ms = percentile(latencies[q], 0.99);
+    results[q].drainRecordsPerSecond = static_cast<double>(results[q].drained) / drainSeconds[q];
+  }
+  return results;
 }
 
 }  // namespace
@@ -158,8 +196,14 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < record.size(); ++i) record[i] = static_cast<char>('a' + i % 26);
   std::printf("queue bench: %d batches of %d x %d bytes, fsync per batch, in %s\n", batches, perBatch, recordBytes,
               dir.c_str());
-  const Measured file = benchFile(dir + "/file", batches, perBatch, record);
-  const Measured sql = benchSqlite(dir + "/sqlite", batches, perBatch, record);
+  std::vector<Measured> results;
+  {
+    FileQueue fileQueue(dir + "/file");
+    SqliteQueue sqliteQueue(dir + "/sqlite");
+    results = benchSideBySide({&fileQueue, &sqliteQueue}, batches, perBatch, record);
+  }
+  const Measured file = results[0];
+  const Measured sql = results[1];
   std::filesystem::remove_all(dir);
   for (const auto& [name, m] : {std::pair{"segment file", file}, std::pair{"sqlite WAL", sql}}) {
     std::printf("%-13s append %.0f batches/s (p50 %.2f ms, p99 %.2f ms), drain %.0f records/s (%zu records)\n", name,
