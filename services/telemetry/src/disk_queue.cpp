@@ -26,6 +26,9 @@ constexpr std::size_t HEADER_BYTES = 20;
 constexpr std::size_t ACK_SLOT_BYTES = 32;
 constexpr std::uint64_t MIN_SEGMENT_BYTES = 64 * 1024;
 constexpr std::uint64_t MAX_SEGMENT_BYTES = 4ull << 20;
+// the largest record any configuration writes: a smaller limit after a restart must not cut
+// the records written under a larger one
+constexpr std::uint64_t MAX_RECORD_PAYLOAD = MAX_SEGMENT_BYTES;
 constexpr std::uint64_t SEGMENTS_PER_LIMIT = 16;
 constexpr std::uint64_t MIN_SEGMENTS_PER_LIMIT = 4;
 constexpr std::string_view SEGMENT_PREFIX = "seg-";
@@ -111,7 +114,7 @@ Result<QueueRecord> readRecord(int fd, std::uint64_t offset, std::uint64_t fileB
   const auto length = get<std::uint32_t>(header + 4);
   const auto sequence = get<std::uint64_t>(header + 8);
   const auto crc = get<std::uint32_t>(header + 16);
-  if (length > maxPayload) return Error{"record length " + std::to_string(length) + " larger than a segment"};
+  if (length > maxPayload) return Error{"record length " + std::to_string(length) + " larger than any segment"};
   if (fileBytes - offset - HEADER_BYTES < length) return Error{"truncated record payload"};
   QueueRecord record{sequence, std::string(length, '\0')};
   if (length > 0 && !readExactly(fd, record.payload.data(), length, offset + HEADER_BYTES)) {
@@ -240,7 +243,7 @@ Result<DiskQueue> DiskQueue::open(const DiskQueueOptions& options, std::vector<E
     std::uint64_t offset = 0;
     std::uint64_t records = 0;
     while (offset < fileBytes) {
-      auto record = readRecord(fd, offset, fileBytes, segmentBytes);
+      auto record = readRecord(fd, offset, fileBytes, std::max(segmentBytes, MAX_RECORD_PAYLOAD));
       std::string problem;
       if (!record) problem = record.error().message;
       else if (record->sequence <= lastSequence) problem = "sequence " + std::to_string(record->sequence) + " out of order";
@@ -279,7 +282,7 @@ Result<DiskQueue> DiskQueue::open(const DiskQueueOptions& options, std::vector<E
     const int fd = ::open(front.path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) return Error{systemError("cannot open", front.path)};
     while (queue.m_readOffset < front.bytes) {
-      auto record = readRecord(fd, queue.m_readOffset, front.bytes, segmentBytes);
+      auto record = readRecord(fd, queue.m_readOffset, front.bytes, std::max(segmentBytes, MAX_RECORD_PAYLOAD));
       if (!record || record->sequence > queue.m_acked) break;
       queue.m_readOffset += HEADER_BYTES + record->payload.size();
     }
@@ -420,7 +423,7 @@ Result<std::vector<QueueRecord>> DiskQueue::peek(std::size_t maxRecords, std::si
       m_readFd = ::open(segment.path.c_str(), O_RDONLY | O_CLOEXEC);
       if (m_readFd < 0) return Error{systemError("cannot open", segment.path)};
     }
-    auto record = readRecord(m_readFd, offset, segment.bytes, m_options.segmentBytes);
+    auto record = readRecord(m_readFd, offset, segment.bytes, std::max(m_options.segmentBytes, MAX_RECORD_PAYLOAD));
     if (!record) return Error{segment.path + ": byte offset " + std::to_string(offset) + ": " + record.error().message};
     if (!records.empty() && payloadBytes + record->payload.size() > maxBytes) break;
     offset += HEADER_BYTES + record->payload.size();

@@ -213,6 +213,31 @@ TEST_CASE("acked records dropped at the limit are not counted as lost") {
   CHECK(sut->takeDrops().empty());
 }
 
+TEST_CASE("a smaller limit after a restart keeps the records until room is needed, then drops the oldest") {
+  TempFolder folder;
+  constexpr std::size_t LARGE_RECORD = 100 * 1024;  // larger than a segment of the smaller limit
+  {
+    auto sut = DiskQueue::open({.folder = folder.path, .maxBytes = 64ull << 20});
+    REQUIRE(sut);
+    for (std::uint64_t s = 1; s <= 3; ++s) appendRange(*sut, s, 1, LARGE_RECORD);
+  }
+  std::vector<Error> warnings;
+  auto sut = openQueue(folder.path, &warnings);
+  REQUIRE(sut);
+  CHECK(warnings.empty());
+  const auto kept = peekAll(*sut);
+  REQUIRE(kept.size() == 3);
+  checkContiguous(kept, 1);
+  appendRange(*sut, 4, 1);  // 300 KiB on disk, 256 KiB allowed: the old segment goes
+  const auto drops = sut->takeDrops();
+  REQUIRE(drops.size() == 1);
+  CHECK(drops[0].firstSequence == 1);
+  CHECK(drops[0].lastSequence == 3);
+  const auto records = peekAll(*sut);
+  REQUIRE(records.size() == 1);
+  CHECK(records[0].sequence == 4);
+}
+
 TEST_CASE("a truncated last record is cut off on open and named with its file and offset") {
   TempFolder folder;
   std::string segment;
