@@ -237,7 +237,11 @@ Result<DiskQueue> DiskQueue::open(const DiskQueueOptions& options, std::vector<E
     const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
     if (fd < 0) return Error{systemError("cannot open", path)};
     struct stat fileStat {};
-    ::fstat(fd, &fileStat);
+    if (::fstat(fd, &fileStat) != 0) {
+      const int error = errno;
+      ::close(fd);
+      return Error{systemError("cannot stat", path, error)};
+    }
     const auto fileBytes = static_cast<std::uint64_t>(fileStat.st_size);
     Segment segment{path, 0, 0, 0};
     std::uint64_t offset = 0;
