@@ -5,7 +5,7 @@
 #include <string_view>
 
 #include "openvcu/core/clock.hpp"
-#include "web_command.hpp"
+#include "openvcu/commands/command_check.hpp"
 
 namespace openvcu::web {
 namespace {
@@ -108,8 +108,8 @@ LiveState::LiveState(const signals::Catalog& catalog, const signals::SignalTable
     if (info.key.starts_with(DM1_PREFIX) && info.key.ends_with(DM1_SUFFIX)) {
       m_dm1.emplace_back(info.key.substr(DM1_PREFIX.size(), info.key.size() - DM1_PREFIX.size() - DM1_SUFFIX.size()), i);
     }
-    if (!info.key.starts_with(OPERATOR_PREFIX) || info.key == FAULT_RESET_KEY) continue;
-    OperatorRow row{.key = info.key, .label = info.key.substr(OPERATOR_PREFIX.size()), .index = i};
+    if (!info.key.starts_with(commands::OPERATOR_PREFIX) || info.key == commands::FAULT_RESET_KEY) continue;
+    OperatorRow row{.key = info.key, .label = info.key.substr(commands::OPERATOR_PREFIX.size()), .index = i};
     if (info.valueTexts.size() >= 2) {
       row.label = info.valueTexts.back().second;
       row.onValue = static_cast<double>(info.valueTexts.back().first);

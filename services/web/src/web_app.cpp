@@ -12,13 +12,13 @@
 #include "auth.hpp"
 #include "http_server.hpp"
 #include "live_state.hpp"
+#include "openvcu/commands/command_check.hpp"
 #include "openvcu/config/dashboard.hpp"
 #include "openvcu/config/web.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/service/timer.hpp"
 #include "recordings.hpp"
-#include "web_command.hpp"
 #include "web_reports.hpp"
 #include "worker.hpp"
 
@@ -266,12 +266,12 @@ struct WebAppImpl {
     if (request.header("content-type").find("application/json") == std::string::npos) {
       return respond(Response::error(415, "the body must be application/json"));
     }
-    auto parsed = parseWebCommand(request.body, runtime.catalog(), runtime.config().database);
+    auto parsed = commands::parseCommand(request.body, runtime.catalog(), runtime.config().database);
     if (!parsed) return respond(Response::error(400, parsed.error().message));
     ipc::CommandRequest commandRequest = std::move(*parsed);
     commandRequest.issuer = "vcu-web/" + user;
     commandRequest.timestampNs = clock::realtimeNs();
-    const std::string what = describeCommand(commandRequest);
+    const std::string what = commands::describeCommand(commandRequest);
     const bool queued = commands.submit([this, commandRequest, user, what, client = request.clientAddress, respond] {
       auto client_ = ipc::CommandClient::connect(runtime.instance());
       if (!client_) {

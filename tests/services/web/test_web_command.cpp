@@ -1,10 +1,10 @@
-// vcu-web's command check (services/web/src/web_command.*): what a page sends, refused with
+// vcu-web's command check (shared/commands, openvcu::commands::parseCommand): what a page sends, refused with
 // its JSON path before anything reaches the stack, or turned into the request the HMI sends.
 #include <doctest/doctest.h>
 
+#include "openvcu/commands/command_check.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/vehicle.hpp"
-#include "web_command.hpp"
 
 namespace {
 
@@ -27,7 +27,7 @@ const Hhea& hhea() {
 }
 
 Result<ipc::CommandRequest> parse(std::string_view body) {
-  return web::parseWebCommand(body, hhea().catalog, hhea().vehicle.database);
+  return commands::parseCommand(body, hhea().catalog, hhea().vehicle.database);
 }
 
 std::string errorOf(std::string_view body) {
@@ -44,7 +44,7 @@ TEST_CASE("an operator switch by its value text becomes an OperatorSwitch with t
   CHECK(sut->kind == ipc::CommandKind::OperatorSwitch);
   CHECK(sut->key == "internal.operator.StartStop");
   CHECK(sut->value == 1);
-  CHECK(web::describeCommand(*sut) == "operator internal.operator.StartStop = 1");
+  CHECK(commands::describeCommand(*sut) == "operator internal.operator.StartStop = 1");
 }
 
 TEST_CASE("a command is refused with the JSON path of what is wrong") {

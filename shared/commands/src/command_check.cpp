@@ -1,10 +1,10 @@
-#include "web_command.hpp"
+#include "openvcu/commands/command_check.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-namespace openvcu::web {
+namespace openvcu::commands {
 namespace {
 
 using Json = nlohmann::json;
@@ -35,7 +35,7 @@ Result<double> valueOf(const Json& value, const signals::SignalInfo* signal) {
 
 }  // namespace
 
-Result<ipc::CommandRequest> parseWebCommand(std::string_view body, const signals::Catalog& catalog,
+Result<ipc::CommandRequest> parseCommand(std::string_view body, const signals::Catalog& catalog,
                                             const dbc::Database& database) {
   const Json root = Json::parse(body, nullptr, false);
   if (root.is_discarded()) return Error{"/: not JSON"};
@@ -135,4 +135,4 @@ std::string describeCommand(const ipc::CommandRequest& request) {
   return kind + " " + request.key + " = " + value;
 }
 
-}  // namespace openvcu::web
+}  // namespace openvcu::commands
