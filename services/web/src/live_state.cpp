@@ -37,11 +37,9 @@ std::string severityName(ipc::FaultSeverity severity) {
 /// The value and its plane's write time (CLOCK_MONOTONIC ns) as the HMI shows it.
 std::optional<std::pair<double, std::int64_t>> shown(const signals::SignalInfo& info,
                                                      const signals::SlotSnapshot& slot) noexcept {
-  const auto value = display::shownValue(info, slot);
-  if (!value) return std::nullopt;
-  std::int64_t at = slot.bus.updates > 0 ? slot.bus.timestampNs : slot.command.timestampNs;
-  if (slot.override.active) at = slot.override.timestampNs;
-  return std::pair{*value, at};
+  const auto sample = display::shownSample(info, slot);
+  if (!sample) return std::nullopt;
+  return std::pair{sample->value, sample->timestampNs};
 }
 
 /// A page's stream: its signals' values with the common part, when something changed.

@@ -9,7 +9,7 @@ namespace openvcu::display {
 std::vector<std::string> expectedServices() {
   std::vector<std::string> names;
   for (const std::string_view name : config::SERVICES) {
-    if (name == "hmi" || name == "web") continue;  // optional: a VCU may run without them
+    if (name == "hmi" || name == "web" || name == "telemetry") continue;  // optional: a VCU may run without them
     names.push_back("vcu-" + std::string(name));
   }
   return names;

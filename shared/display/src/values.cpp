@@ -46,6 +46,14 @@ std::optional<double> shownValue(const signals::SignalInfo& signal, const signal
   return std::nullopt;
 }
 
+std::optional<ShownSample> shownSample(const signals::SignalInfo& signal, const signals::SlotSnapshot& slot) noexcept {
+  const auto value = shownValue(signal, slot);
+  if (!value) return std::nullopt;
+  std::int64_t at = slot.bus.updates > 0 ? slot.bus.timestampNs : slot.command.timestampNs;
+  if (slot.override.active) at = slot.override.timestampNs;
+  return ShownSample{*value, at};
+}
+
 std::string formatValue(const signals::SignalInfo& signal, double value, std::string_view format) {
   if (auto maybeText = signals::valueText(signal, value)) return *maybeText;
   std::array<char, 64> text{};

@@ -48,6 +48,17 @@ enum class ValueStatus : std::uint8_t {
 [[nodiscard]] std::optional<double> shownValue(const signals::SignalInfo& signal,
                                                const signals::SlotSnapshot& slot) noexcept;
 
+/// shownValue with the CLOCK_MONOTONIC time its plane was written (an active override's
+/// time when one is active, else the bus value's once received, else the command's): what
+/// vcu-web's live pages show as the age and vcu-telemetry stamps a sample with.
+/// @note noexcept, allocation-free.
+struct ShownSample {
+  double value{};
+  std::int64_t timestampNs{};
+};
+[[nodiscard]] std::optional<ShownSample> shownSample(const signals::SignalInfo& signal,
+                                                     const signals::SlotSnapshot& slot) noexcept;
+
 /// "87.5 %" with a printf format for the number ("%.1f"; empty: shortest), the value text
 /// alone when the signal has one for `value` ("Closed"). A format that
 /// config::isSafeNumberFormat refuses falls back to "%g".
