@@ -131,12 +131,13 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
   const RunResult result = runVcu({"check", "--config", (HHEA_FOLDER / "vehicle.json").string()});
   CHECK_MESSAGE(result.exitCode == EXIT_OK, result.err);
   for (const char* file : {"vehicle.json: 0 errors", "hhea.dbc: 0 errors", "gpio.json: 0 errors", "fsm.json: 0 errors",
-                           "schedule.json: 0 errors", "simulation.json: 0 errors", "dashboard.json: 0 errors"}) {
+                           "schedule.json: 0 errors", "simulation.json: 0 errors", "dashboard.json: 0 errors",
+                           "telemetry.json: 0 errors"}) {
     CHECK_MESSAGE(contains(result.out, file), file);
   }
   // the whole-vehicle checks' two warnings (#22): received messages nothing reads, and the
   // DC-DC command the VCU sends with the charger's source address 0xE5 (as the original did)
-  CHECK(contains(result.out, "vehicle 'hhea': 9 files, 0 errors, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 10 files, 0 errors, 2 warnings\n"));
   CHECK(contains(result.err, "vehicle.json: /buses/0/messages: warning: bus 'vehicle': "));
   CHECK(contains(result.err, "hhea.dbc:166: warning: bus 'vehicle': J1939 source address 0xE5 (229)"));
   CHECK_FALSE(contains(result.err, "error:"));
@@ -222,7 +223,7 @@ TEST_CASE("vcu check refuses a receive file naming a message the DBC lacks, with
   CHECK_MESSAGE(contains(result.err, "check_receive/receive.json: /messages/HVESSS1_PGN6159: error: "), result.err);
   CHECK(contains(result.err, "HVESSS1_PGN61590"));  // the suggestion
   CHECK(contains(result.out, "receive.json: 1 error"));
-  CHECK(contains(result.out, "10 files, 1 error"));
+  CHECK(contains(result.out, "11 files, 1 error"));
 }
 
 TEST_CASE("vcu check passes a receive file its loader accepts and counts it") {
@@ -232,7 +233,7 @@ TEST_CASE("vcu check passes a receive file its loader accepts and counts it") {
 
   CHECK_MESSAGE(result.exitCode == EXIT_OK, result.err);
   CHECK(contains(result.out, "receive.json: 0 errors, 0 warnings"));
-  CHECK(contains(result.out, "vehicle 'hhea': 10 files, 0 errors, 2 warnings\n"));  // the whole-vehicle ones (#22)
+  CHECK(contains(result.out, "vehicle 'hhea': 11 files, 0 errors, 2 warnings\n"));  // the whole-vehicle ones (#22)
 }
 
 TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two nodes with one address (#22)") {

@@ -16,6 +16,7 @@
 #include "openvcu/config/json.hpp"
 #include "openvcu/config/receive.hpp"
 #include "openvcu/config/simulation.hpp"
+#include "openvcu/config/telemetry.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/config/web.hpp"
 #include "openvcu/fsm/machine.hpp"
@@ -150,7 +151,7 @@ std::vector<std::string> namedFiles(const std::string& vehiclePath) {
   auto json = config::readJsonFile(vehiclePath);
   if (!json || !json->is_object()) return files;
   const fs::path directory = fs::path(vehiclePath).parent_path();
-  for (const char* key : {"fsm", "schedule", "simulation", "receive", "diagnostics", "web"}) {
+  for (const char* key : {"fsm", "schedule", "simulation", "receive", "diagnostics", "web", "telemetry"}) {
     const auto it = json->find(key);
     if (it == json->end() || !it->is_string()) continue;
     const fs::path file(it->get<std::string>());
@@ -271,6 +272,21 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
       auto web = config::loadWebConfig(vehicle.webFile, &webWarnings);
       if (!web) tally.report(web.error(), options.quiet, streams.err);
       for (const Error& warning : webWarnings) tally.report(warning, options.quiet, streams.err);
+    }
+    if (!vehicle.telemetryFile.empty()) {
+      tally.add(vehicle.telemetryFile);
+      std::vector<Error> telemetryWarnings;
+      auto telemetry = config::loadTelemetryConfig(vehicle.telemetryFile, &telemetryWarnings);
+      if (!telemetry) tally.report(telemetry.error(), options.quiet, streams.err);
+      for (const Error& warning : telemetryWarnings) tally.report(warning, options.quiet, streams.err);
+      if (telemetry) {
+        for (const config::TelemetrySignal& signal : telemetry->signals) {
+          if (!stack->catalog.indexOf(signal.name)) {
+            tally.report(Error{"/signals: unknown signal '" + signal.name + "'", Location{vehicle.telemetryFile, 0, 0, {}}},
+                         options.quiet, streams.err);
+          }
+        }
+      }
     }
     // diagnostics.json is loaded by the whole-vehicle check (it needs the FSM's states)
     if (!vehicle.diagnosticsFile.empty()) tally.add(vehicle.diagnosticsFile);

@@ -1,6 +1,6 @@
 #pragma once
-// vcu-telemetry's settings (telemetry.json; design: docs/design/telemetry.md). Not yet named by
-// vehicle.json: "telemetry" joins its keys and config::SERVICES with the service (issue 25).
+// vcu-telemetry's settings (telemetry.json, named by vehicle.json's "telemetry"; design:
+// docs/design/telemetry.md).
 //
 //   {"broker": "mqtts://fleet.example.com:8883", "vehicleId": "hhea-01",
 //    "username": "hhea-01", "passwordFile": "mqtt-password",

@@ -94,6 +94,7 @@ struct VehicleConfig {
   std::string receiveFile;     ///< can-rx's receive settings (receive.json); empty: defaults
   std::string diagnosticsFile; ///< the VCU's own DTCs and identification (diagnostics.json); empty: none
   std::string webFile;         ///< vcu-web's settings (web.json); empty: its defaults
+  std::string telemetryFile;   ///< vcu-telemetry's settings (telemetry.json); empty: no telemetry
   std::vector<InternalSignal> internalSignals;
   GpioMap gpio;                ///< loaded from gpioFile; empty when not configured
   std::string lcmUrl{DEFAULT_LCM_URL};
