@@ -1,0 +1,239 @@
+#include "sender.hpp"
+
+#include <mosquitto.h>
+
+#include <fstream>
+
+namespace openvcu::telemetry {
+namespace {
+
+constexpr int KEEPALIVE_S = 10;
+constexpr int QOS_AT_LEAST_ONCE = 1;
+/// MQTT v5 reason codes from 0x80 (128) on are failures (e.g. 0x87 not authorized).
+constexpr int FIRST_FAILURE_REASON = 0x80;
+
+/// libmosquitto is set up once per process (lib_init/lib_cleanup are not reference counted).
+void initLibrary() {
+  static const int once = [] { return mosquitto_lib_init(); }();
+  (void)once;
+}
+
+void onConnect(mosquitto* /*mosq*/, void* self, int reasonCode, int /*flags*/,
+                          const mosquitto_property* /*props*/) {
+  static_cast<Sender*>(self)->noteConnect(reasonCode);
+}
+void onDisconnect(mosquitto* /*mosq*/, void* self, int reasonCode, const mosquitto_property* /*props*/) {
+  static_cast<Sender*>(self)->noteDisconnect(reasonCode);
+}
+void onPublish(mosquitto* /*mosq*/, void* self, int mid, int reasonCode, const mosquitto_property* /*props*/) {
+  static_cast<Sender*>(self)->notePublished(mid, reasonCode);
+}
+
+}  // namespace
+
+Sender::Sender(const config::TelemetryConfig& settings, SenderOptions options)
+    : m_topicRoot("openvcu/" + settings.vehicleId + "/"), m_options(std::move(options)) {}
+
+Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& settings, SenderOptions options) {
+  initLibrary();
+  if (options.maxInFlight == 0) return Error{"maxInFlight: at least 1"};
+  std::unique_ptr<Sender> sender(new Sender(settings, std::move(options)));
+  const std::string clientId = "openvcu-" + settings.vehicleId;
+  sender->m_mosq = mosquitto_new(clientId.c_str(), true, sender.get());
+  if (sender->m_mosq == nullptr) return Error{"libmosquitto: cannot create a client (out of memory)"};
+  mosquitto* mosq = sender->m_mosq;
+  mosquitto_int_option(mosq, MOSQ_OPT_PROTOCOL_VERSION, MQTT_PROTOCOL_V5);
+  mosquitto_connect_v5_callback_set(mosq, onConnect);
+  mosquitto_disconnect_v5_callback_set(mosq, onDisconnect);
+  mosquitto_publish_v5_callback_set(mosq, onPublish);
+  mosquitto_reconnect_delay_set(mosq, sender->m_options.reconnectMinS, sender->m_options.reconnectMaxS, true);
+  const std::string willTopic = sender->m_topicRoot + "status";
+  if (const int rc = mosquitto_will_set_v5(mosq, willTopic.c_str(), 7, "offline", QOS_AT_LEAST_ONCE, true, nullptr);
+      rc != MOSQ_ERR_SUCCESS) {
+    return Error{std::string("libmosquitto: the last will: ") + mosquitto_strerror(rc)};
+  }
+  if (!settings.username.empty()) {
+    std::string password;
+    if (!settings.passwordFile.empty()) {
+      std::ifstream in(settings.passwordFile);
+      if (!in || !std::getline(in, password)) return Error{settings.passwordFile + ": cannot read the password"};
+    }
+    if (const int rc = mosquitto_username_pw_set(mosq, settings.username.c_str(),
+                                                 settings.passwordFile.empty() ? nullptr : password.c_str());
+        rc != MOSQ_ERR_SUCCESS) {
+      return Error{std::string("libmosquitto: username: ") + mosquitto_strerror(rc)};
+    }
+  }
+  if (settings.tls) {
+    const config::TelemetryTls& tls = *settings.tls;
+    const bool systemStore = tls.caFile.empty();
+    if (const int rc = mosquitto_tls_set(mosq, systemStore ? nullptr : tls.caFile.c_str(),
+                                         systemStore ? "/etc/ssl/certs" : nullptr,
+                                         tls.certFile.empty() ? nullptr : tls.certFile.c_str(),
+                                         tls.keyFile.empty() ? nullptr : tls.keyFile.c_str(), nullptr);
+        rc != MOSQ_ERR_SUCCESS) {
+      return Error{std::string("libmosquitto: TLS files: ") + mosquitto_strerror(rc)};
+    }
+  }
+  // connect_async records host and port; a refused first attempt is retried by the network thread
+  const int rc = mosquitto_connect_async(mosq, settings.broker.host.c_str(), settings.broker.port, KEEPALIVE_S);
+  if (rc != MOSQ_ERR_SUCCESS && rc != MOSQ_ERR_ERRNO) {
+    return Error{"broker " + settings.brokerUrl + ": " + mosquitto_strerror(rc)};
+  }
+  return sender;
+}
+
+Sender::~Sender() {
+  if (m_mosq == nullptr) return;
+  if (m_started) {
+    mosquitto_disconnect_v5(m_mosq, 0, nullptr);  // a clean disconnect: the broker keeps the will back
+    mosquitto_loop_stop(m_mosq, false);
+  }
+  mosquitto_destroy(m_mosq);
+}
+
+void Sender::setBirth(std::string birth) {
+  const std::lock_guard lock(m_mutex);
+  m_birth = std::move(birth);
+}
+
+Status Sender::start() {
+  if (const int rc = mosquitto_loop_start(m_mosq); rc != MOSQ_ERR_SUCCESS) {
+    return Error{std::string("libmosquitto: network thread: ") + mosquitto_strerror(rc)};
+  }
+  m_started = true;
+  return {};
+}
+
+bool Sender::connected() const {
+  const std::lock_guard lock(m_mutex);
+  return m_connected;
+}
+
+LinkCounters Sender::counters() const {
+  const std::lock_guard lock(m_mutex);
+  return m_counters;
+}
+
+void Sender::publishRetained(const std::string& topic, const std::string& payload) {
+  mosquitto_publish_v5(m_mosq, nullptr, topic.c_str(), static_cast<int>(payload.size()), payload.data(),
+                       QOS_AT_LEAST_ONCE, true, nullptr);
+}
+
+void Sender::noteConnect(int reasonCode) {
+  std::string birth;
+  {
+    const std::lock_guard lock(m_mutex);
+    if (reasonCode != 0) {
+      m_notes.push_back({Note::Kind::Refused, 0, reasonCode});
+      return;
+    }
+    m_connected = true;
+    ++m_counters.connects;
+    m_notes.push_back({Note::Kind::Connected, 0, 0});
+    birth = m_birth;
+  }
+  // on the network thread, before any queued record of this connection
+  publishRetained(m_topicRoot + "status", "online");
+  if (!birth.empty()) publishRetained(m_topicRoot + "birth", birth);
+}
+
+void Sender::noteDisconnect(int reasonCode) {
+  const std::lock_guard lock(m_mutex);
+  m_connected = false;
+  m_notes.push_back({Note::Kind::Disconnected, 0, reasonCode});
+}
+
+void Sender::notePublished(int mid, int reasonCode) {
+  const std::lock_guard lock(m_mutex);
+  if (reasonCode >= FIRST_FAILURE_REASON) ++m_counters.refused;
+  m_notes.push_back({Note::Kind::Published, mid, reasonCode});
+}
+
+void Sender::log(bool warning, const std::string& text) const {
+  const auto& sink = warning ? m_options.logWarning : m_options.logInfo;
+  if (sink) sink(text);
+}
+
+Status Sender::pump(DiskQueue& queue) {
+  std::vector<Note> notes;
+  bool connected = false;
+  {
+    const std::lock_guard lock(m_mutex);
+    notes.swap(m_notes);
+    connected = m_connected;
+  }
+  for (const Note& note : notes) {
+    switch (note.kind) {
+      case Note::Kind::Connected:
+        log(false, "connected to the broker; " + std::to_string(m_handed.size()) + " record(s) in flight, " +
+                       std::to_string(queue.stats().pendingRecords) + " waiting");
+        break;
+      case Note::Kind::Refused:
+        log(true, std::string("the broker refused the connection: ") + mosquitto_reason_string(note.reasonCode));
+        break;
+      case Note::Kind::Disconnected:
+        log(true, "link to the broker lost (" + std::string(mosquitto_strerror(note.reasonCode)) +
+                      "); records wait in the queue");
+        break;
+      case Note::Kind::Published: {
+        const auto it = m_midToSequence.find(note.mid);
+        if (it == m_midToSequence.end()) break;  // status and birth
+        const std::uint64_t sequence = it->second;
+        m_midToSequence.erase(it);
+        for (Handed& handed : m_handed) {
+          if (handed.sequence == sequence) handed.done = true;
+        }
+        if (note.reasonCode >= FIRST_FAILURE_REASON) {
+          log(true, "record " + std::to_string(sequence) + " refused by the broker: " +
+                        mosquitto_reason_string(note.reasonCode) + " (not sent again)");
+        }
+        break;
+      }
+    }
+  }
+  // ack the contiguous prefix of confirmed records
+  std::uint64_t ackUpTo = 0;
+  while (!m_handed.empty() && m_handed.front().done) {
+    ackUpTo = m_handed.front().sequence;
+    m_handed.pop_front();
+  }
+  if (ackUpTo > 0) {
+    if (auto acked = queue.ack(ackUpTo); !acked) return acked.error();
+  }
+  if (!connected || m_handed.size() >= m_options.maxInFlight) return {};
+
+  // the records after the last one handed (the queue peeks from the oldest unacked)
+  auto peeked = queue.peek(m_handed.size() + m_options.maxInFlight);
+  if (!peeked) return peeked.error();
+  for (const QueueRecord& entry : *peeked) {
+    if (m_handed.size() >= m_options.maxInFlight) break;
+    if (entry.sequence <= m_lastHanded) continue;
+    const std::size_t newline = entry.payload.find('\n');
+    if (newline == std::string::npos) {  // not ours: never send it, never block the queue on it
+      log(true, "record " + std::to_string(entry.sequence) + " has no topic line; skipped");
+      m_handed.push_back({entry.sequence, true});
+      m_lastHanded = entry.sequence;
+      continue;
+    }
+    const std::string topic = m_topicRoot + entry.payload.substr(0, newline);
+    const char* body = entry.payload.data() + newline + 1;
+    const int length = static_cast<int>(entry.payload.size() - newline - 1);
+    int mid = 0;
+    // the mid is noted before the PUBACK can be handled: notes are read by this thread only
+    const int rc = mosquitto_publish_v5(m_mosq, &mid, topic.c_str(), length, body, QOS_AT_LEAST_ONCE, false, nullptr);
+    if (rc == MOSQ_ERR_SUCCESS || (rc == MOSQ_ERR_NO_CONN && mid != 0)) {
+      // NO_CONN: the link dropped just now; libmosquitto keeps the message and sends it after the reconnect
+      m_midToSequence[mid] = entry.sequence;
+      m_handed.push_back({entry.sequence, false});
+      m_lastHanded = entry.sequence;
+      if (rc == MOSQ_ERR_NO_CONN) break;
+      continue;
+    }
+    log(true, "publish of record " + std::to_string(entry.sequence) + ": " + mosquitto_strerror(rc));
+    break;
+  }
+  return {};
+}
+
+}  // namespace openvcu::telemetry

@@ -1,0 +1,103 @@
+#pragma once
+// vcu-telemetry's sender (docs/design/telemetry.md, "Store and forward"): the disk queue's
+// records to the broker over libmosquitto, MQTT v5, QoS 1. libmosquitto's network thread
+// connects, reconnects with backoff and calls back; the callbacks only note what happened,
+// and pump() (on the owner's thread, which owns the queue) acts on it:
+//   - while connected, hands libmosquitto the records after the last one handed, at most
+//     maxInFlight unconfirmed at a time (libmosquitto holds whatever it is handed);
+//   - on each PUBACK (or a v5 refusal, counted) marks the record done and acks the queue up to
+//     the highest record below which every record is done;
+//   - never publishes while disconnected: after a reconnect libmosquitto resends what it held.
+// At each connect: the retained status "online" and the retained birth; the last will is the
+// retained status "offline".
+//
+//   auto sender = Sender::create(settings, {.maxInFlight = 20});
+//   sender->setBirth(birthJson);
+//   sender->start();                 // connect in the background
+//   sender->pump(queue);             // often, on the queue's thread
+
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "disk_queue.hpp"
+#include "engine.hpp"
+#include "openvcu/config/telemetry.hpp"
+#include "openvcu/core/result.hpp"
+
+struct mosquitto;
+
+namespace openvcu::telemetry {
+
+struct SenderOptions {
+  std::size_t maxInFlight{20};
+  unsigned reconnectMinS{1};   ///< first reconnect delay; doubles up to reconnectMaxS
+  unsigned reconnectMaxS{30};
+  std::function<void(const std::string&)> logInfo;     ///< called on the pump()'s thread
+  std::function<void(const std::string&)> logWarning;  ///< called on the pump()'s thread
+};
+
+/// @note restricted thread-safe: create, setBirth, start, pump and the destructor on one
+///       thread; libmosquitto's callbacks run on its network thread and only queue notes.
+class Sender {
+ public:
+  /// Errors: libmosquitto cannot be set up (the TLS files, the password file).
+  static Result<std::unique_ptr<Sender>> create(const config::TelemetryConfig& settings, SenderOptions options);
+  ~Sender();
+  Sender(const Sender&) = delete;
+  Sender& operator=(const Sender&) = delete;
+
+  /// The retained birth published at each connect from now on.
+  void setBirth(std::string birth);
+  /// Starts libmosquitto's network thread, which connects (and reconnects) on its own.
+  Status start();
+  /// Acts on what the network thread noted and hands out records; an error only for the queue's I/O.
+  Status pump(DiskQueue& queue);
+
+  [[nodiscard]] bool connected() const;
+  [[nodiscard]] LinkCounters counters() const;
+  [[nodiscard]] std::size_t inFlight() const noexcept { return m_handed.size(); }
+
+  // libmosquitto's callbacks (network thread)
+  void noteConnect(int reasonCode);
+  void noteDisconnect(int reasonCode);
+  void notePublished(int mid, int reasonCode);
+
+ private:
+  Sender(const config::TelemetryConfig& settings, SenderOptions options);
+  struct Handed {
+    std::uint64_t sequence{};
+    bool done{false};
+  };
+  struct Note {
+    enum class Kind { Connected, Refused, Disconnected, Published } kind;
+    int mid{};
+    int reasonCode{};
+  };
+  void publishRetained(const std::string& topic, const std::string& payload);
+  void log(bool warning, const std::string& text) const;
+
+  std::string m_topicRoot;  ///< "openvcu/<id>/"
+  SenderOptions m_options;
+  mosquitto* m_mosq{nullptr};
+  bool m_started{false};
+
+  mutable std::mutex m_mutex;  // guards what the network thread writes:
+  std::vector<Note> m_notes;
+  bool m_connected{false};
+  std::string m_birth;
+  LinkCounters m_counters;
+
+  // the owner's thread only
+  std::deque<Handed> m_handed;            ///< in the order handed
+  std::map<int, std::uint64_t> m_midToSequence;
+  std::uint64_t m_lastHanded{0};          ///< the highest sequence handed to libmosquitto
+  std::map<std::string, bool> m_refusedTopics;  ///< logged once each
+};
+
+}  // namespace openvcu::telemetry
