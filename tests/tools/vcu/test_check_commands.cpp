@@ -158,7 +158,7 @@ TEST_CASE("vcu check reports a broken simulation, dashboard and schedule togethe
   CHECK_FALSE(contains(result.err, "fsm.json: /"));
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));
-  CHECK(contains(result.out, "9 files, 3 errors"));
+  CHECK(contains(result.out, "10 files, 3 errors"));
   CHECK(result.out.find("error:") == std::string::npos);  // diagnostics on stderr only
 }
 
@@ -210,7 +210,7 @@ TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
   CHECK_MESSAGE(contains(result.err, "check_simulation/simulation.json: /battery/initialSoc: error: "), result.err);
   CHECK(contains(result.out, "simulation.json: 1 error"));
-  CHECK(contains(result.out, "9 files, 1 error"));
+  CHECK(contains(result.out, "10 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a receive file naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
@@ -255,7 +255,7 @@ TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two no
                 result.err);
   CHECK(contains(result.err, "OBC (NmStationAddress)"));
   CHECK(contains(result.out, "hhea.dbc: 1 error, 1 warning"));
-  CHECK(contains(result.out, "vehicle 'hhea': 9 files, 1 error, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 10 files, 1 error, 2 warnings\n"));
 }
 
 TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
@@ -274,7 +274,7 @@ TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the
   CHECK_MESSAGE(contains(result.err, "check_schedule/schedule.json: /messages/HVESSC1_PGN691"), result.err);
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));  // its send groups still come from the schedule
-  CHECK(contains(result.out, "9 files, 1 error"));
+  CHECK(contains(result.out, "10 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a dashboard naming a signal the catalog lacks, with the file and the JSON path (#19, #20)") {
@@ -287,7 +287,23 @@ TEST_CASE("vcu check refuses a dashboard naming a signal the catalog lacks, with
   CHECK_MESSAGE(contains(result.err, "check_dashboard/dashboard.json: /items/1/key: error: unknown signal 'internal.relay.Cl16'"),
                 result.err);
   CHECK(contains(result.out, "dashboard.json: 1 error"));
-  CHECK(contains(result.out, "9 files, 1 error"));
+  CHECK(contains(result.out, "10 files, 1 error"));
+}
+
+TEST_CASE("vcu check refuses a telemetry.json naming a signal the catalog lacks, and one its loader refuses (#25)") {
+  const std::string unknown = hheaCopy("check_telemetry", "telemetry.json",
+                                       R"({"broker": "mqtt://127.0.0.1", "vehicleId": "v1", "signals": [{"name": "BMS.Nope"}]})");
+  const RunResult unknownResult = runVcu({"check", "--config", unknown});
+  CHECK(unknownResult.exitCode == EXIT_INPUT_ERROR);
+  CHECK_MESSAGE(contains(unknownResult.err, "check_telemetry/telemetry.json: error: /signals: unknown signal 'BMS.Nope'"),
+                unknownResult.err);
+  CHECK(contains(unknownResult.out, "telemetry.json: 1 error"));
+
+  const std::string refused = hheaCopy("check_telemetry_bad", "telemetry.json", R"({"broker": "http://x", "vehicleId": "v1"})");
+  const RunResult refusedResult = runVcu({"check", "--config", refused});
+  CHECK(refusedResult.exitCode == EXIT_INPUT_ERROR);
+  CHECK_MESSAGE(contains(refusedResult.err, "check_telemetry_bad/telemetry.json: /broker: error: "), refusedResult.err);
+  CHECK(contains(refusedResult.out, "10 files, 1 error"));
 }
 
 TEST_CASE("vcu check still checks the other files when vehicle.json itself has an error") {
