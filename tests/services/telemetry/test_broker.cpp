@@ -1,0 +1,396 @@
+// vcu-telemetry against a real mosquitto (issue 25), inside the sandbox of
+// tests/harness/run_isolated.sh (loopback only): the broker with a password file and an ACL,
+// the real vcu-telemetry on a copy of the HHEA configuration, this test writing the signal
+// table (a writer thread) and publishing events, and a libmosquitto subscriber checking:
+//   - the retained birth and status, the state and faults messages' content;
+//   - the rate limit (consecutive samples of a 2 Hz signal at least ~500 ms apart) and the
+//     deadband (consecutive samples of a 0.5-deadband signal more than 0.5 apart);
+//   - the broker SIGKILLed for OPENVCU_TELEMETRY_OUTAGE_S seconds (default 5; issue 25 says
+//     30, which is this test with OPENVCU_TELEMETRY_OUTAGE_S=30) and restarted: every record
+//     arrives, in order, none twice, also those made during the outage;
+//   - vcu-telemetry SIGKILLed and restarted on its queue: the status turns "offline" (the
+//     will), the sequence goes on without a gap, and what was lost is at most the batch of
+//     the tick it was killed in (the last sample that arrived is at most one tick older
+//     than the kill).
+#include <doctest/doctest.h>
+#include <mosquitto.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <thread>
+
+#include "harness/harness.hpp"
+#include "openvcu/config/catalog.hpp"
+#include "openvcu/config/vehicle.hpp"
+#include "openvcu/core/clock.hpp"
+#include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/signals/table.hpp"
+#include "skip.hpp"
+
+namespace {
+
+using namespace openvcu;
+using namespace std::chrono_literals;
+using Json = nlohmann::json;
+namespace fs = std::filesystem;
+
+constexpr int PORT = 1883;
+constexpr const char* VEHICLE = "hhea-01";
+constexpr const char* VEHICLE_PASSWORD = "vehicle-secret";
+constexpr const char* WATCHER = "fleet-watcher";
+constexpr const char* WATCHER_PASSWORD = "watcher-secret";
+constexpr const char* RATE_KEY = "VIC.HVESSD1_PGN61584.HS_I";            ///< 2 Hz, no deadband
+constexpr const char* DEADBAND_KEY = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC";  ///< 10 Hz, deadband 0.5
+constexpr double RATE_HZ = 2;
+constexpr double DEADBAND = 0.5;
+constexpr auto WRITE_PERIOD = 20ms;
+/// How late a sample may be against its rate limit: the writer's period plus sampling jitter.
+constexpr std::int64_t RATE_SLACK_MS = 60;
+/// One tick (1 s) of records may be lost at a SIGKILL, plus scheduling slack on a loaded machine.
+constexpr std::int64_t ONE_BATCH_MS = 1000 + 500;
+
+int outageSeconds() {
+  const char* text = std::getenv("OPENVCU_TELEMETRY_OUTAGE_S");
+  return text != nullptr ? std::max(1, std::atoi(text)) : 5;
+}
+
+void writeFile(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  REQUIRE(out.good());
+}
+
+struct Message {
+  std::string topic;
+  Json body;
+  bool retained{};
+};
+
+/// A libmosquitto subscriber to openvcu/# (MQTT 3.1.1, QoS 1), reconnecting by itself; with
+/// `persistent` (clean session off) the broker keeps its subscription across a restart.
+class Subscriber {
+ public:
+  Subscriber(const char* clientId, bool persistent) {
+    mosquitto_lib_init();
+    m_mosq = mosquitto_new(clientId, !persistent, this);
+    REQUIRE(m_mosq != nullptr);
+    mosquitto_username_pw_set(m_mosq, WATCHER, WATCHER_PASSWORD);
+    mosquitto_reconnect_delay_set(m_mosq, 1, 1, false);
+    mosquitto_connect_callback_set(m_mosq, [](mosquitto* mosq, void*, int rc) {
+      if (rc == 0) mosquitto_subscribe(mosq, nullptr, "openvcu/#", 1);
+    });
+    mosquitto_message_callback_set(m_mosq, [](mosquitto*, void* self, const mosquitto_message* message) {
+      static_cast<Subscriber*>(self)->add(message);
+    });
+  }
+  ~Subscriber() {
+    mosquitto_disconnect(m_mosq);
+    mosquitto_loop_stop(m_mosq, true);
+    mosquitto_destroy(m_mosq);
+  }
+  bool connect() {
+    if (mosquitto_connect(m_mosq, "127.0.0.1", PORT, 10) != MOSQ_ERR_SUCCESS) return false;
+    return mosquitto_loop_start(m_mosq) == MOSQ_ERR_SUCCESS;
+  }
+  void add(const mosquitto_message* message) {
+    const std::string text(static_cast<const char*>(message->payload), static_cast<std::size_t>(message->payloadlen));
+    Json body = Json::parse(text, nullptr, false);
+    if (body.is_discarded()) body = text;  // the status is plain text
+    const std::lock_guard lock(m_mutex);
+    m_messages.push_back({message->topic, std::move(body), message->retain});
+    m_changed.notify_all();
+  }
+  /// Waits until `done(messages)` holds; false on timeout.
+  template <typename Predicate>
+  bool waitFor(Predicate done, std::chrono::milliseconds timeout) {
+    std::unique_lock lock(m_mutex);
+    return m_changed.wait_for(lock, timeout, [&] { return done(m_messages); });
+  }
+  std::vector<Message> messages() {
+    const std::lock_guard lock(m_mutex);
+    return m_messages;
+  }
+
+ private:
+  mosquitto* m_mosq{nullptr};
+  std::mutex m_mutex;
+  std::condition_variable m_changed;
+  std::vector<Message> m_messages;
+};
+
+std::uint64_t maxSeq(const std::vector<Message>& messages) {
+  std::uint64_t max = 0;
+  for (const Message& message : messages) {
+    if (message.body.is_object() && message.body.contains("seq")) max = std::max(max, message.body["seq"].get<std::uint64_t>());
+  }
+  return max;
+}
+
+bool hasStatus(const std::vector<Message>& messages, std::size_t from, const std::string& status) {
+  for (std::size_t i = from; i < messages.size(); ++i) {
+    if (messages[i].topic == std::string("openvcu/") + VEHICLE + "/status" && messages[i].body == status) return true;
+  }
+  return false;
+}
+
+/// The samples of one signal in arrival order (duplicates by seq skipped): (Unix ms, value).
+std::vector<std::pair<std::int64_t, double>> samplesOf(const std::vector<Message>& messages, const std::string& key) {
+  std::vector<std::pair<std::int64_t, double>> out;
+  std::set<std::uint64_t> seen;
+  for (const Message& message : messages) {
+    if (!message.topic.ends_with("/signals") || !seen.insert(message.body["seq"].get<std::uint64_t>()).second) continue;
+    for (const Json& sample : message.body["samples"]) {
+      if (message.body["names"][sample[0].get<int>()] == key) out.emplace_back(sample[1].get<std::int64_t>(), sample[2].get<double>());
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, nothing lost over a broker outage, at most one batch at a SIGKILL") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  const std::string bin = OPENVCU_BINARY_DIR "/bin";
+  if (!fs::exists("/usr/sbin/mosquitto") || !fs::exists("/usr/bin/mosquitto_passwd")) {
+    OPENVCU_SKIP("skipped: needs mosquitto (Debian's mosquitto package; scripts/install-deps.sh)");
+  }
+  harness::Harness sut;
+  const fs::path work = fs::temp_directory_path() / "telemetry-broker";  // the sandbox's own /tmp
+  fs::remove_all(work);
+  fs::create_directories(work / "vehicle");
+  fs::create_directories(work / "broker");
+
+  // the broker: passwords and an ACL as docs/design/telemetry.md ships them
+  for (const auto& [user, password] : {std::pair{VEHICLE, VEHICLE_PASSWORD}, std::pair{WATCHER, WATCHER_PASSWORD}}) {
+    std::vector<std::string> argv{"mosquitto_passwd", "-b", (work / "broker/passwords").string(), user, password};
+    if (user == VEHICLE) argv.insert(argv.begin() + 1, "-c");  // creates the file
+    const auto added = sut.run(argv);
+    REQUIRE_MESSAGE(added.exitCode() == 0, added.describe());
+  }
+  writeFile(work / "broker/acl", "pattern write openvcu/%u/#\npattern read openvcu/%u/cmd/+\n"
+                                 "user fleet-watcher\ntopic read openvcu/#\n");
+  writeFile(work / "broker/mosquitto.conf",
+            "listener " + std::to_string(PORT) + " 127.0.0.1\nallow_anonymous false\npassword_file " +
+                (work / "broker/passwords").string() + "\nacl_file " + (work / "broker/acl").string() +
+                "\npersistence true\npersistence_location " + (work / "broker").string() +
+                "/\nautosave_interval 1\nuser root\nlog_dest stdout\n");
+  const harness::ProcessSpec brokerSpec{.name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "broker/mosquitto.conf").string()}};
+  auto broker = sut.start(brokerSpec);
+  REQUIRE_STATUS(broker);
+
+  // the vehicle: a copy of config/hhea naming this test's telemetry.json
+  for (const auto& entry : fs::directory_iterator(fs::path(OPENVCU_SOURCE_DIR) / "config/hhea")) {
+    if (entry.is_regular_file()) fs::copy_file(entry.path(), work / "vehicle" / entry.path().filename());
+  }
+  writeFile(work / "vehicle/vehicle-password", std::string(VEHICLE_PASSWORD) + "\n");
+  writeFile(work / "vehicle/telemetry.json", Json{{"broker", "mqtt://127.0.0.1:" + std::to_string(PORT)},
+                                                  {"vehicleId", VEHICLE},
+                                                  {"username", VEHICLE},
+                                                  {"passwordFile", "vehicle-password"},
+                                                  {"queueFolder", (work / "queue").string()},
+                                                  {"maxQueueMB", 4},
+                                                  {"signals", {{{"name", RATE_KEY}, {"maxRateHz", RATE_HZ}, {"deadband", 0}},
+                                                               {{"name", DEADBAND_KEY}, {"maxRateHz", 10}, {"deadband", DEADBAND}}}}}
+                                                .dump(2));
+  const std::string vehiclePath = (work / "vehicle/vehicle.json").string();
+  auto vehicle = config::loadVehicleConfig(vehiclePath);
+  REQUIRE_STATUS(vehicle);
+  auto catalog = config::buildCatalog(*vehicle);
+  REQUIRE_STATUS(catalog);
+  auto table = signals::SignalTable::open(*catalog, vehicle->instance);
+  REQUIRE_STATUS(table);
+  auto events = ipc::EventBus::open(vehicle->lcmUrl, vehicle->instance);
+  REQUIRE_STATUS(events);
+
+  // the writer: the rate signal ramps by 1 and the deadband signal by 0.1 every 20 ms
+  std::atomic<bool> writing{true};
+  std::thread writer([&] {
+    const auto rate = *catalog->indexOf(RATE_KEY);
+    const auto deadband = *catalog->indexOf(DEADBAND_KEY);
+    for (int step = 0; writing; ++step) {
+      const std::int64_t now = clock::monotonicNs();
+      table->writeBus(rate, step % 1000, now, 0xF3, signals::Quality::Valid);
+      table->writeBus(deadband, (step % 500) * 0.1, now, 0xF3, signals::Quality::Valid);
+      std::this_thread::sleep_for(WRITE_PERIOD);
+    }
+  });
+  struct StopWriter {
+    std::atomic<bool>& writing;
+    std::thread& writer;
+    ~StopWriter() {
+      writing = false;
+      writer.join();
+    }
+  } stopWriter{writing, writer};
+
+  Subscriber watcher("telemetry-test-watcher", true);
+  bool connected = false;
+  for (int attempt = 0; attempt < 50 && !(connected = watcher.connect()); ++attempt) std::this_thread::sleep_for(100ms);
+  REQUIRE_MESSAGE(connected, "the broker did not accept the watcher");
+
+  const harness::ProcessSpec bridgeSpec{.name = "vcu-telemetry",
+                                        .argv = {bin + "/vcu-telemetry", "--config", vehiclePath},
+                                        .notifyReadiness = true};
+  auto bridge = sut.start(bridgeSpec);
+  REQUIRE_STATUS(bridge);
+
+  // content: the retained birth and status, then a transition and a fault as they happen
+  REQUIRE(watcher.waitFor([](const std::vector<Message>& messages) { return hasStatus(messages, 0, "online"); }, 15s));
+  REQUIRE(watcher.waitFor([](const std::vector<Message>& messages) { return maxSeq(messages) >= 1; }, 10s));
+  events->publish(ipc::FsmTransition{.timestampNs = 0, .fromState = "Standby", .toState = "Ready", .cause = "test"});
+  events->publish(ipc::FaultEvent{.timestampNs = 0, .name = "Contactor", .source = "telemetry-test",
+                                  .severity = ipc::FaultSeverity::Error, .active = true, .text = "welded"});
+  REQUIRE(watcher.waitFor(
+      [](const std::vector<Message>& messages) {
+        return std::any_of(messages.begin(), messages.end(), [](const Message& m) {
+          return m.topic.ends_with("/faults") && !m.body["active"].empty();
+        });
+      },
+      10s));
+  std::this_thread::sleep_for(3s);  // a few seconds of samples
+  {
+    const auto messages = watcher.messages();
+    const auto birth = std::find_if(messages.begin(), messages.end(), [](const Message& m) { return m.topic.ends_with("/birth"); });
+    REQUIRE(birth != messages.end());
+    // the retained ones as a watcher that connects later gets them
+    Subscriber late("telemetry-test-late", false);
+    REQUIRE(late.connect());
+    CHECK(late.waitFor(
+        [](const std::vector<Message>& retained) {
+          const auto has = [&](const char* suffix) {
+            return std::any_of(retained.begin(), retained.end(),
+                               [&](const Message& m) { return m.retained && m.topic.ends_with(suffix); });
+          };
+          return has("/birth") && has("/status");
+        },
+        10s));
+    CHECK(birth->body["vehicleId"] == VEHICLE);
+    CHECK(birth->body["instance"] == vehicle->instance);
+    CHECK(birth->body["configHash"].get<std::string>().starts_with("sha256:"));
+    CHECK(birth->body["signals"].size() == 2);
+    CHECK(birth->body["commands"]["enabled"] == false);
+    const auto state = std::find_if(messages.begin(), messages.end(), [](const Message& m) { return m.topic.ends_with("/state"); });
+    REQUIRE(state != messages.end());
+    CHECK(state->body["state"] == "Ready");
+    CHECK(state->body["previous"] == "Standby");
+    CHECK(state->body["event"] == "test");
+    const auto fault = std::find_if(messages.begin(), messages.end(),
+                                    [](const Message& m) { return m.topic.ends_with("/faults") && !m.body["active"].empty(); });
+    CHECK(fault->body["active"][0]["name"] == "Contactor");
+    CHECK(fault->body["active"][0]["text"] == "welded");
+    const auto health = std::find_if(messages.begin(), messages.end(), [](const Message& m) { return m.topic.ends_with("/health"); });
+    REQUIRE(health != messages.end());
+    CHECK(health->body["queue"].contains("pending"));
+    CHECK(health->body["link"]["connects"].get<int>() >= 1);
+
+    // rate limit: 2 Hz -> consecutive samples at least ~500 ms apart, and it does send
+    const auto rated = samplesOf(messages, RATE_KEY);
+    REQUIRE(rated.size() >= 4);
+    for (std::size_t i = 1; i < rated.size(); ++i) {
+      CHECK_MESSAGE(rated[i].first - rated[i - 1].first >= 500 - RATE_SLACK_MS, "samples " << i - 1 << " and " << i);
+    }
+    // deadband: every sample more than 0.5 from the one before (the value moves 0.5 per 100 ms)
+    const auto banded = samplesOf(messages, DEADBAND_KEY);
+    REQUIRE(banded.size() >= 4);
+    for (std::size_t i = 1; i < banded.size(); ++i) {
+      CHECK_MESSAGE(std::abs(banded[i].second - banded[i - 1].second) > DEADBAND, "samples " << i - 1 << " and " << i);
+    }
+  }
+
+  // the broker SIGKILLed for the outage, then restarted
+  const int outage = outageSeconds();
+  MESSAGE("broker outage of " << outage << " s (OPENVCU_TELEMETRY_OUTAGE_S)");
+  const std::uint64_t beforeOutage = maxSeq(watcher.messages());
+  REQUIRE((*broker)->signal(SIGKILL));
+  const std::int64_t outageStartMs = clock::realtimeNs() / 1'000'000;
+  std::this_thread::sleep_for(std::chrono::seconds(outage));
+  const std::int64_t outageEndMs = clock::realtimeNs() / 1'000'000;
+  auto restarted = sut.start(brokerSpec);
+  REQUIRE_STATUS(restarted);
+  // until records made after the restart arrive
+  REQUIRE(watcher.waitFor(
+      [&](const std::vector<Message>& messages) {
+        return std::any_of(messages.begin(), messages.end(), [&](const Message& m) {
+          return m.body.is_object() && m.body.contains("seq") && m.body["t"].get<std::int64_t>() > outageEndMs + 1000;
+        });
+      },
+      30s));
+  {
+    const auto messages = watcher.messages();
+    // QoS 1 is at-least-once: a record the broker had passed on in its last second may come
+    // again with its seq after the broker's restart (docs/design/telemetry.md: a consumer drops
+    // a seq it has seen). What must hold: every seq, first arrivals in order, and the records
+    // made during the outage each exactly once, in order.
+    std::vector<std::uint64_t> firstArrivals;
+    std::set<std::uint64_t> distinct;
+    std::vector<std::uint64_t> outageRecords;
+    std::size_t repeats = 0;
+    for (const Message& message : messages) {
+      if (!message.body.is_object() || !message.body.contains("seq")) continue;
+      const std::uint64_t seq = message.body["seq"].get<std::uint64_t>();
+      const std::int64_t t = message.body["t"].get<std::int64_t>();
+      if (t > outageStartMs && t < outageEndMs) outageRecords.push_back(seq);
+      if (distinct.insert(seq).second) {
+        firstArrivals.push_back(seq);
+      } else {
+        ++repeats;
+      }
+    }
+    MESSAGE(outageRecords.size() << " records made during the outage, " << repeats << " repeated seq(s) overall");
+    CHECK_MESSAGE(outageRecords.size() >= static_cast<std::size_t>(outage - 1), "records made during the outage arrived");
+    CHECK_MESSAGE(std::set<std::uint64_t>(outageRecords.begin(), outageRecords.end()).size() == outageRecords.size(),
+                  "no record of the outage twice");
+    CHECK(std::is_sorted(outageRecords.begin(), outageRecords.end()));
+    CHECK(std::is_sorted(firstArrivals.begin(), firstArrivals.end()));
+    REQUIRE(!firstArrivals.empty());
+    CHECK_MESSAGE(*distinct.rbegin() - *distinct.begin() + 1 == distinct.size(),
+                  "no gap from seq " << *distinct.begin() << " to " << *distinct.rbegin());
+    CHECK(*distinct.rbegin() > beforeOutage);
+  }
+
+  // vcu-telemetry SIGKILLed: the will says offline; restarted on its queue, it goes on
+  const std::size_t beforeKill = watcher.messages().size();
+  REQUIRE((*bridge)->signal(SIGKILL));
+  const std::int64_t killMs = clock::realtimeNs() / 1'000'000;
+  REQUIRE(watcher.waitFor([&](const std::vector<Message>& messages) { return hasStatus(messages, beforeKill, "offline"); }, 30s));
+  auto bridgeAgain = sut.start(bridgeSpec);
+  REQUIRE_STATUS(bridgeAgain);
+  std::uint64_t nextSeqOfRestart = 0;
+  REQUIRE(watcher.waitFor(
+      [&](const std::vector<Message>& messages) {
+        for (std::size_t i = beforeKill; i < messages.size(); ++i) {
+          if (messages[i].topic.ends_with("/birth")) nextSeqOfRestart = messages[i].body["nextSeq"].get<std::uint64_t>();
+        }
+        return nextSeqOfRestart > 0 && maxSeq(messages) > nextSeqOfRestart + 2;
+      },
+      30s));
+  {
+    const auto messages = watcher.messages();
+    std::set<std::uint64_t> distinct;
+    std::int64_t lastSampleBeforeKill = 0;
+    for (const Message& message : messages) {
+      if (!message.body.is_object() || !message.body.contains("seq")) continue;
+      const std::uint64_t seq = message.body["seq"].get<std::uint64_t>();
+      distinct.insert(seq);
+      if (seq < nextSeqOfRestart && message.topic.ends_with("/signals")) {
+        for (const Json& sample : message.body["samples"]) lastSampleBeforeKill = std::max(lastSampleBeforeKill, sample[1].get<std::int64_t>());
+      }
+    }
+    // the queue's records before the kill all arrived (some perhaps twice: QoS 1, same seq)
+    CHECK_MESSAGE(*distinct.rbegin() - *distinct.begin() + 1 == distinct.size(), "no gap in seq across the SIGKILL");
+    MESSAGE("the last sample of the killed bridge is " << killMs - lastSampleBeforeKill << " ms older than the SIGKILL");
+    CHECK_MESSAGE(killMs - lastSampleBeforeKill <= ONE_BATCH_MS,
+                  "the last sample before the kill is " << killMs - lastSampleBeforeKill << " ms older than the kill");
+  }
+  writing = false;
+}
