@@ -169,8 +169,9 @@ std::vector<std::string> Engine::tick(std::uint64_t firstSequence, const TickInp
   }
 
   std::string signature = healthSignature(now);
+  const bool linkChanged = inputs.link.connects != m_sentLink.connects || inputs.link.refused != m_sentLink.refused;
   if (signature != m_sentHealth || m_healthSentNs < 0 || now - m_healthSentNs >= HEALTH_PERIOD_NS ||
-      !inputs.drops.empty()) {
+      !inputs.drops.empty() || linkChanged) {
     Json services = Json::array();
     for (const display::ServiceHealth& service : m_health.services()) {
       services.push_back({{"name", service.name},
@@ -188,6 +189,7 @@ std::vector<std::string> Engine::tick(std::uint64_t firstSequence, const TickInp
                        {"link", {{"connects", inputs.link.connects}, {"refused", inputs.link.refused}}}};
     records.push_back(record("health", sequence++, clocks.unixMs, members(body)));
     m_sentHealth = std::move(signature);
+    m_sentLink = inputs.link;
     m_healthSentNs = now;
   }
 

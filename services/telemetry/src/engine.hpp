@@ -29,7 +29,8 @@ namespace openvcu::telemetry {
 
 /// A signal that does not move is sent again after this long, so a consumer sees it alive.
 inline constexpr std::int64_t SIGNAL_KEEPALIVE_NS = 60'000'000'000;
-/// The health message goes out at least this often (and on any change of a service's status).
+/// The health message goes out at least this often (and on any change of a service's status,
+/// of the link's counters, or a drop at the queue's limit).
 inline constexpr std::int64_t HEALTH_PERIOD_NS = 10'000'000'000;
 /// A signals message is cut at this many bytes (a queue record must fit one segment).
 inline constexpr std::size_t MAX_SIGNALS_MESSAGE_BYTES = 32 * 1024;
@@ -69,7 +70,7 @@ class Engine {
   void sample(std::int64_t nowMonoNs);
 
   /// The records of this tick in order (state transitions, faults when the active set changed,
-  /// health when due, the signal samples), numbered from `firstSequence`.
+  /// health when due or changed, the signal samples), numbered from `firstSequence`.
   std::vector<std::string> tick(std::uint64_t firstSequence, const TickInputs& inputs);
 
   /// Samples kept since the start (for the heartbeat).
@@ -110,6 +111,7 @@ class Engine {
   display::HealthTracker m_health;
   std::string m_sentFaults;  ///< the faults body last sent
   std::string m_sentHealth;  ///< the health signature last sent
+  LinkCounters m_sentLink;   ///< the link counters last sent
   std::int64_t m_healthSentNs{-1};
   std::uint64_t m_samplesKept{};
 };

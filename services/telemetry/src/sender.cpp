@@ -2,6 +2,7 @@
 
 #include <mosquitto.h>
 
+#include <algorithm>
 #include <fstream>
 
 namespace openvcu::telemetry {
@@ -32,7 +33,9 @@ void onPublish(mosquitto* /*mosq*/, void* self, int mid, int reasonCode, const m
 }  // namespace
 
 Sender::Sender(const config::TelemetryConfig& settings, SenderOptions options)
-    : m_topicRoot("openvcu/" + settings.vehicleId + "/"), m_options(std::move(options)) {}
+    : m_topicRoot("openvcu/" + settings.vehicleId + "/"),
+      m_options(std::move(options)),
+      m_retryDelay(std::chrono::seconds(m_options.reconnectMinS)) {}
 
 Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& settings, SenderOptions options) {
   initLibrary();
@@ -75,11 +78,9 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
       return Error{std::string("libmosquitto: TLS files: ") + mosquitto_strerror(rc)};
     }
   }
-  // connect_async records host and port; a refused first attempt is retried by the network thread
-  const int rc = mosquitto_connect_async(mosq, settings.broker.host.c_str(), settings.broker.port, KEEPALIVE_S);
-  if (rc != MOSQ_ERR_SUCCESS && rc != MOSQ_ERR_ERRNO) {
-    return Error{"broker " + settings.brokerUrl + ": " + mosquitto_strerror(rc)};
-  }
+  sender->m_host = settings.broker.host;
+  sender->m_port = settings.broker.port;
+  sender->m_brokerUrl = settings.brokerUrl;
   return sender;
 }
 
@@ -98,10 +99,31 @@ void Sender::setBirth(std::string birth) {
 }
 
 Status Sender::start() {
-  if (const int rc = mosquitto_loop_start(m_mosq); rc != MOSQ_ERR_SUCCESS) {
-    return Error{std::string("libmosquitto: network thread: ") + mosquitto_strerror(rc)};
+  m_wanted = true;
+  return tryConnect();
+}
+
+Status Sender::tryConnect() {
+  // libmosquitto's network thread reconnects a link that was up once, but does not retry a
+  // first connect that failed (seen with 2.0.11): until the first one succeeds, this thread retries
+  const auto now = std::chrono::steady_clock::now();
+  const int rc = mosquitto_connect_async(m_mosq, m_host.c_str(), m_port, KEEPALIVE_S);
+  if (rc == MOSQ_ERR_SUCCESS) {
+    if (const int started = mosquitto_loop_start(m_mosq); started != MOSQ_ERR_SUCCESS) {
+      return Error{std::string("libmosquitto: network thread: ") + mosquitto_strerror(started)};
+    }
+    m_started = true;
+    return {};
   }
-  m_started = true;
+  if (rc != MOSQ_ERR_ERRNO && rc != MOSQ_ERR_EAI) {
+    return Error{"broker " + m_brokerUrl + ": " + mosquitto_strerror(rc)};
+  }
+  if (m_firstRetry) {
+    log(true, "broker " + m_brokerUrl + " not reachable (" + mosquitto_strerror(rc) + "); retrying, records wait in the queue");
+    m_firstRetry = false;
+  }
+  m_nextAttempt = now + m_retryDelay;
+  m_retryDelay = std::min(m_retryDelay * 2, std::chrono::seconds(m_options.reconnectMaxS));
   return {};
 }
 
@@ -156,6 +178,9 @@ void Sender::log(bool warning, const std::string& text) const {
 }
 
 Status Sender::pump(DiskQueue& queue) {
+  if (m_wanted && !m_started && std::chrono::steady_clock::now() >= m_nextAttempt) {
+    if (auto tried = tryConnect(); !tried) return tried.error();
+  }
   std::vector<Note> notes;
   bool connected = false;
   {

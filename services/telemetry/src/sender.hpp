@@ -13,9 +13,10 @@
 //
 //   auto sender = Sender::create(settings, {.maxInFlight = 20});
 //   sender->setBirth(birthJson);
-//   sender->start();                 // connect in the background
+//   sender->start();                 // connect in the background (pump() retries a refused first connect)
 //   sender->pump(queue);             // often, on the queue's thread
 
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -54,9 +55,12 @@ class Sender {
 
   /// The retained birth published at each connect from now on.
   void setBirth(std::string birth);
-  /// Starts libmosquitto's network thread, which connects (and reconnects) on its own.
+  /// Connects in the background: libmosquitto's network thread once the first connect is under
+  /// way (it reconnects from then on); until then pump() retries with the same backoff.
+  /// Error: the broker address cannot be used at all.
   Status start();
-  /// Acts on what the network thread noted and hands out records; an error only for the queue's I/O.
+  /// Retries a first connect when due, acts on what the network thread noted and hands out
+  /// records; an error for the queue's I/O or an unusable broker address.
   Status pump(DiskQueue& queue);
 
   [[nodiscard]] bool connected() const;
@@ -80,12 +84,20 @@ class Sender {
     int reasonCode{};
   };
   void publishRetained(const std::string& topic, const std::string& payload);
+  Status tryConnect();
   void log(bool warning, const std::string& text) const;
 
   std::string m_topicRoot;  ///< "openvcu/<id>/"
   SenderOptions m_options;
   mosquitto* m_mosq{nullptr};
-  bool m_started{false};
+  std::string m_host;
+  int m_port{};
+  std::string m_brokerUrl;
+  bool m_wanted{false};   ///< start() was called
+  bool m_started{false};  ///< the network thread runs (after the first connect was under way)
+  bool m_firstRetry{true};
+  std::chrono::seconds m_retryDelay;
+  std::chrono::steady_clock::time_point m_nextAttempt{};
 
   mutable std::mutex m_mutex;  // guards what the network thread writes:
   std::vector<Note> m_notes;

@@ -101,7 +101,7 @@ struct TelemetryAppImpl {
   void pump() {
     if (auto pumped = sender->pump(queue); !pumped && !queueFailed) {
       queueFailed = true;  // logged once; the service goes on (the link side may still recover)
-      runtime.log().error("telemetry queue: " + pumped.error().toString());
+      runtime.log().error("telemetry: " + pumped.error().toString());
     }
   }
 

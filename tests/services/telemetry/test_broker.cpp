@@ -2,6 +2,7 @@
 // tests/harness/run_isolated.sh (loopback only): the broker with a password file and an ACL,
 // the real vcu-telemetry on a copy of the HHEA configuration, this test writing the signal
 // table (a writer thread) and publishing events, and a libmosquitto subscriber checking:
+//   - the bridge started before the broker connects once the broker is up;
 //   - the retained birth and status, the state and faults messages' content;
 //   - the rate limit (consecutive samples of a 2 Hz signal at least ~500 ms apart) and the
 //     deadband (consecutive samples of a 0.5-deadband signal more than 0.5 apart);
@@ -185,8 +186,6 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
                 "\npersistence true\npersistence_location " + (work / "broker").string() +
                 "/\nautosave_interval 1\nuser root\nlog_dest stdout\n");
   const harness::ProcessSpec brokerSpec{.name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "broker/mosquitto.conf").string()}};
-  auto broker = sut.start(brokerSpec);
-  REQUIRE_STATUS(broker);
 
   // the vehicle: a copy of config/hhea naming this test's telemetry.json
   for (const auto& entry : fs::directory_iterator(fs::path(OPENVCU_SOURCE_DIR) / "config/hhea")) {
@@ -233,16 +232,21 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
     }
   } stopWriter{writing, writer};
 
-  Subscriber watcher("telemetry-test-watcher", true);
-  bool connected = false;
-  for (int attempt = 0; attempt < 50 && !(connected = watcher.connect()); ++attempt) std::this_thread::sleep_for(100ms);
-  REQUIRE_MESSAGE(connected, "the broker did not accept the watcher");
-
+  // the bridge first, with no broker yet: it is ready, queues, and connects once the broker is up
   const harness::ProcessSpec bridgeSpec{.name = "vcu-telemetry",
                                         .argv = {bin + "/vcu-telemetry", "--config", vehiclePath},
                                         .notifyReadiness = true};
   auto bridge = sut.start(bridgeSpec);
   REQUIRE_STATUS(bridge);
+  std::this_thread::sleep_for(1500ms);  // the condition under test: its first connects are refused
+  auto broker = sut.start(brokerSpec);
+  REQUIRE_STATUS(broker);
+
+  Subscriber watcher("telemetry-test-watcher", true);
+  bool connected = false;
+  for (int attempt = 0; attempt < 50 && !(connected = watcher.connect()); ++attempt) std::this_thread::sleep_for(100ms);
+  REQUIRE_MESSAGE(connected, "the broker did not accept the watcher");
+
 
   // content: the retained birth and status, then a transition and a fault as they happen
   REQUIRE(watcher.waitFor([](const std::vector<Message>& messages) { return hasStatus(messages, 0, "online"); }, 15s));
@@ -288,8 +292,9 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
                                     [](const Message& m) { return m.topic.ends_with("/faults") && !m.body["active"].empty(); });
     CHECK(fault->body["active"][0]["name"] == "Contactor");
     CHECK(fault->body["active"][0]["text"] == "welded");
-    const auto health = std::find_if(messages.begin(), messages.end(), [](const Message& m) { return m.topic.ends_with("/health"); });
-    REQUIRE(health != messages.end());
+    // the newest health (the first ones were made before the broker was up: connects 0)
+    const auto health = std::find_if(messages.rbegin(), messages.rend(), [](const Message& m) { return m.topic.ends_with("/health"); });
+    REQUIRE(health != messages.rend());
     CHECK(health->body["queue"].contains("pending"));
     CHECK(health->body["link"]["connects"].get<int>() >= 1);
 

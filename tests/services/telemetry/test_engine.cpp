@@ -142,8 +142,16 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
   CHECK(second[0].second["dm1"][0]["node"] == "BMS");
   CHECK(second[0].second["dm1"][0]["activeDtcs"] == 2);
 
-  // health again after 10 s
-  const auto later = bench.tick(46, START_NS + 10'600 * MS);
+  // health at once when the link's counters change, else again after 10 s
+  telemetry::TickInputs connected;
+  connected.clocks = {.monoNs = START_NS + 3500 * MS, .unixMs = START_UNIX_MS + 3500};
+  connected.link.connects = 1;
+  const auto linked = bench.sut->tick(46, connected);
+  REQUIRE(linked.size() == 1);
+  CHECK(linked[0].starts_with("health\n"));
+  CHECK(linked[0].find("\"connects\":1") != std::string::npos);
+  CHECK(bench.sut->tick(47, connected).empty());
+  const auto later = bench.tick(47, START_NS + 13'600 * MS);  // connects back to 0: a change too
   REQUIRE(later.size() == 1);
   CHECK(later[0].first == "health");
 }
