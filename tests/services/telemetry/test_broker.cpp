@@ -12,7 +12,9 @@
 //   - vcu-telemetry SIGKILLed and restarted on its queue: the status turns "offline" (the
 //     will), the sequence goes on without a gap, and what was lost is at most the batch of
 //     the tick it was killed in (the last sample that arrived is at most one tick older
-//     than the kill).
+//     than the kill);
+//   - a bridge publishing under another vehicle's id is refused by the ACL (v5 reason 0x87,
+//     logged) and nothing of it reaches the watcher.
 #include <doctest/doctest.h>
 #include <mosquitto.h>
 #include <signal.h>
@@ -27,6 +29,7 @@
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <set>
 #include <thread>
 
@@ -364,6 +367,9 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
   }
 
   // vcu-telemetry SIGKILLed: the will says offline; restarted on its queue, it goes on
+  // at a random point of a tick (the wait above returns just after one was published)
+  const int killDelayMs = static_cast<int>(std::random_device{}() % 1000);
+  std::this_thread::sleep_for(std::chrono::milliseconds(killDelayMs));
   const std::size_t beforeKill = watcher.messages().size();
   REQUIRE((*bridge)->signal(SIGKILL));
   const std::int64_t killMs = clock::realtimeNs() / 1'000'000;
@@ -393,9 +399,27 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
     }
     // the queue's records before the kill all arrived (some perhaps twice: QoS 1, same seq)
     CHECK_MESSAGE(*distinct.rbegin() - *distinct.begin() + 1 == distinct.size(), "no gap in seq across the SIGKILL");
-    MESSAGE("the last sample of the killed bridge is " << killMs - lastSampleBeforeKill << " ms older than the SIGKILL");
+    MESSAGE("the last sample of the killed bridge is " << killMs - lastSampleBeforeKill << " ms older than the SIGKILL ("
+                                                        << killDelayMs << " ms after a tick was seen)");
     CHECK_MESSAGE(killMs - lastSampleBeforeKill <= ONE_BATCH_MS,
                   "the last sample before the kill is " << killMs - lastSampleBeforeKill << " ms older than the kill");
   }
+
+  // a vehicle publishing under another vehicle's id: the ACL (pattern write openvcu/%u/#)
+  // refuses every record with MQTT v5 reason 0x87; the bridge logs it and its queue moves on
+  auto impostor = sut.start({.name = "vcu-telemetry-impostor",
+                             .argv = {bin + "/vcu-telemetry", "--config", vehiclePath, "--vehicle-id", "hhea-02",
+                                      "--queue-folder", (work / "queue-impostor").string()},
+                             .notifyReadiness = true});
+  REQUIRE_STATUS(impostor);
+  bool refusedLogged = false;
+  for (int attempt = 0; attempt < 100 && !refusedLogged; ++attempt) {
+    std::this_thread::sleep_for(100ms);
+    refusedLogged = (*impostor)->output().find("refused by the broker: Not authorized") != std::string::npos;
+  }
+  CHECK_MESSAGE(refusedLogged, (*impostor)->output());
+  const auto messages = watcher.messages();
+  CHECK_FALSE(std::any_of(messages.begin(), messages.end(),
+                          [](const Message& m) { return m.topic.starts_with("openvcu/hhea-02/"); }));
   writing = false;
 }
