@@ -67,12 +67,6 @@ close_later() {
 }
 
 if getent group "$GROUP" >/dev/null 2>&1; then
-  # A0. Not root and already running with group openvcu (the package's user openvcu under
-  #     supervisord's user=openvcu): RouDi's group is openvcu as it is; setpriv's
-  #     --clear-groups would need CAP_SETGID, so it only sets the parent-death signal.
-  if [ "$(id -u)" -ne 0 ] && [ "$own_group" = "$GROUP" ]; then
-    exec setpriv --pdeathsig TERM -- iox-roudi -c "$config" "${args[@]}"
-  fi
   if id -Gn "$user" | tr ' ' '\n' | grep -qx "$GROUP"; then
     exec setpriv --pdeathsig TERM --regid "$GROUP" --clear-groups -- iox-roudi -c "$config" "${args[@]}"
   fi

@@ -5,7 +5,7 @@
 # Checks: every file of the layout; the examples byte for byte as in config/; conffiles =
 # the files under /etc/openvcu; control scripts 0755; files root-owned; ELF files stripped;
 # every ExecStart of a unit names a file of the packages (or Debian's iox-roudi) and every
-# service runs as user openvcu; Depends has no -dev package, names the iceoryx and LCM
+# service but RouDi runs as user openvcu (RouDi: root, group openvcu, CAP_DAC_OVERRIDE only); Depends has no -dev package, names the iceoryx and LCM
 # libraries, iceoryx and adduser; openvcu-hmi depends on openvcu (= VERSION); no file in both.
 set -euo pipefail
 dir=${1:?packages folder} version=${2:?version} arch=${3:?architecture}
@@ -117,7 +117,13 @@ for unit in "$data"/lib/systemd/system/*.service; do
   if [ "$exec" != /usr/bin/iox-roudi ] && [ ! -x "$data$exec" ]; then
     fail "openvcu: $name: ExecStart=$exec is not in the package"
   fi
-  grep -qx 'User=openvcu' "$unit" || fail "openvcu: $name does not run as User=openvcu"
+  if [ "$name" = openvcu-roudi.service ]; then
+    # RouDi: root with group openvcu and CAP_DAC_OVERRIDE alone (docs/design/packaging.md)
+    grep -qx 'Group=openvcu' "$unit" || fail "openvcu: $name does not run with Group=openvcu"
+    grep -qx 'CapabilityBoundingSet=CAP_DAC_OVERRIDE' "$unit" || fail "openvcu: $name is not limited to CAP_DAC_OVERRIDE"
+  else
+    grep -qx 'User=openvcu' "$unit" || fail "openvcu: $name does not run as User=openvcu"
+  fi
   grep -q '/etc/openvcu' <(grep '^ReadWritePaths' "$unit") && fail "openvcu: $name may write /etc/openvcu"
   if [ "$name" = openvcu-can-tx.service ]; then
     grep -qx 'AmbientCapabilities=CAP_SYS_NICE' "$unit" || fail "openvcu: can-tx lacks CAP_SYS_NICE"
