@@ -53,13 +53,14 @@ APT=(apt-get -o Acquire::Retries=0 -o Acquire::http::Timeout=1 -o Acquire::https
      -o Acquire::Languages=none -o APT::Get::Download=false -o DPkg::Lock::Timeout=10)
 # What the VM changed in its root: run-vm.sh shows the overlay's layers read-only under
 # /run/vm-root (lower = the host's root, upper = every write since the boot). One line per
-# changed path: "new PATH", "newdir PATH", "modified PATH" (a host file written) or
+# changed path: "new PATH", "newdir PATH", "modified PATH" (a host file whose content, owner
+# or mode differ; a copy-up alone, e.g. of a lock file, is no change) or
 # "deleted PATH" (a whiteout: a host file removed). Folders only copied up for a change
 # inside them are left out. Cheap: the upper layer holds only the changes (listing the
 # whole root over 9p took 206 s under emulation).
 changes() {
   $PY - <<'PYEOF' | LC_ALL=C sort
-import os, stat
+import filecmp, os, stat
 upper, lower = "/run/vm-root/upper", "/run/vm-root/lower"
 for root, dirs, files in os.walk(upper):
     for name in dirs + files:
@@ -71,8 +72,17 @@ for root, dirs, files in os.walk(upper):
         elif stat.S_ISDIR(st.st_mode):
             if not os.path.lexists(lower + rel):
                 print("newdir", rel)
-        else:
-            print("modified" if os.path.lexists(lower + rel) else "new", rel)
+        elif not os.path.lexists(lower + rel):
+            print("new", rel)
+        else:   # copied up: a change only if the content, owner or mode differ from the host's
+            low = os.lstat(lower + rel)
+            same = (st.st_mode, st.st_uid, st.st_gid) == (low.st_mode, low.st_uid, low.st_gid)
+            if same and stat.S_ISLNK(st.st_mode):
+                same = os.readlink(full) == os.readlink(lower + rel)
+            elif same and stat.S_ISREG(st.st_mode):
+                same = st.st_size == low.st_size and filecmp.cmp(full, lower + rel, shallow=False)
+            if not same:
+                print("modified", rel)
 PYEOF
 }
 
@@ -218,16 +228,19 @@ for u in "${units[@]}"; do
   started+=("${u%.service}")
 done
 ms=$(( ($(date +%s%N) - t0) / 1000000 ))
-# each runs as openvcu; can-tx holds CAP_SYS_NICE (its unit's AmbientCapabilities), the others nothing
+# each runs as its unit's User=/Group= (root when the unit names no user), from the installed
+# binary; can-tx holds CAP_SYS_NICE (its unit's AmbientCapabilities)
 who=(); bad=()
 for i in "${!pids[@]}"; do
   # the generated script execs unshare, bash, env, setpriv, sh and the service: one PID
   pid=${pids[$i]}
-  exe=$(tr '\0' '\n' < "/proc/$pid/cmdline" | head -1); user=$(ps -o user= -p "$pid" | tr -d ' ')
+  want=$(awk -v u="${names[$i]}:" '$1 == u {sub(",", "", $3); print $3}' "$OUT/units.txt")
+  exe=$(tr '\0' '\n' < "/proc/$pid/cmdline" | head -1)
+  user=$(ps -o user=,group= -p "$pid" | awk '{print $1 ":" $2}')
   capeff=$(awk '/^CapEff/ {print $2}' "/proc/$pid/status")
   who+=("${names[$i]#openvcu-}=$user:${exe##*/}:CapEff$capeff")
   # argv[0] an installed path, and the process image that very file
-  [[ $user == openvcu && $exe == /usr/bin/* && /proc/$pid/exe -ef $exe ]] || bad+=("${names[$i]} runs '$exe' as '$user'")
+  [[ $user == "$want" && $exe == /usr/bin/* && /proc/$pid/exe -ef $exe ]] || bad+=("${names[$i]} runs '$exe' as '$user' (unit: '$want')")
 done
 if [[ ${#bad[@]} == 0 ]]; then
   result services_started PASS "${started[*]} ready in $ms ms from the units' ExecStart lines ($(tr '\n' ';' < "$OUT/units.txt")); processes: ${who[*]}"
@@ -309,7 +322,7 @@ fi
 leftover=()
 while read -r f; do
   [[ -e $f || -L $f ]] || continue
-  [[ -d $f && ! -L $f && -d /run/vm-root/lower$f ]] && continue
+  [[ -d $f && -d /run/vm-root/lower$f ]] && continue   # -d follows /lib -> usr/lib (merged /usr)
   leftover+=("$f")
 done < "$OUT/package-files.txt"
 gone=()

@@ -177,7 +177,10 @@ def script_for(path):
     if not argv[0].startswith("/"):
         fail(path, f"ExecStart {argv[0]}: not an absolute path")
 
-    priv = ["setpriv", f"--reuid={user}", f"--regid={group or account.pw_gid}", "--init-groups"]
+    # systemd sets the supplementary groups from User= (initgroups); without User= it runs as
+    # root with none but SupplementaryGroups=
+    priv = ["setpriv", f"--reuid={user}", f"--regid={group or account.pw_gid}",
+            "--init-groups" if one("User") else "--clear-groups"]
     if service.get("SupplementaryGroups"):
         fail(path, "SupplementaryGroups= is not supported by unit_exec.py")
     if one("NoNewPrivileges", "no") in ("yes", "true", "1", "on"):
