@@ -1,11 +1,11 @@
 #!/bin/bash
 # Runs INSIDE the QEMU VM (started by run-vm.sh, ctest kernel_vm_install): installs the amd64
 # Debian packages openvcu (+ openvcu-hmi when built) with dpkg -i and an offline
-# `apt-get install -f`, checks the installed layout (docs: /tmp/h/layout.md = docs/design/
-# packaging.md), points the installed vehicle bus at vcan0, starts the installed units' own
-# ExecStart lines as user openvcu (tests/kernel/unit_exec.py; the VM's PID 1 is not systemd)
-# plus the simulated vehicle, drives Start -> Ready, stops, purges and checks that nothing
-# is left but what Debian policy allows. The VM's root is a tmpfs overlay of the host's:
+# `apt-get install -f`, checks the installed layout (docs/design/packaging.md), points the
+# installed vehicle bus at vcan0, starts the installed units' own ExecStart lines as their
+# User=/Group= (tests/kernel/unit_exec.py; the VM's PID 1 is not systemd) plus the simulated
+# vehicle, drives Start -> Ready, stops, purges and checks that nothing is left but what
+# Debian policy allows. The VM's root is a tmpfs overlay of the host's:
 # nothing of this reaches the host.
 #
 #   guest-install.sh OUTDIR     (OUTDIR/guest.env: DEB_DIR=folder of the .deb files, SRC=source tree)
@@ -47,10 +47,12 @@ stop_services() { # SIGTERM to what we started, newest first (RouDi last), by PI
   pids=(); names=()
 }
 trap stop_services EXIT
-# apt without the network: no index download, no package download (fails instead), no
-# lock wait; the VM has no network device at all (-nic none), this makes apt say so itself
-APT=(apt-get -o Acquire::Retries=0 -o Acquire::http::Timeout=1 -o Acquire::https::Timeout=1
-     -o Acquire::Languages=none -o APT::Get::Download=false -o DPkg::Lock::Timeout=10)
+# apt offline: no package source at all (an empty sources list), so apt can only configure and
+# remove what is installed, never fetch (and it skips parsing the host's index files: ~25 s per
+# run under emulation); --no-download on top where it installs. A missing dependency fails as
+# "not installable". The VM has no network device either (-nic none).
+APT=(apt-get -o Dir::Etc::SourceList=/dev/null -o Dir::Etc::SourceParts=/nonexistent
+     -o APT::Get::List-Cleanup=false -o Acquire::Retries=0 -o DPkg::Lock::Timeout=10)
 # What the VM changed in its root: run-vm.sh shows the overlay's layers read-only under
 # /run/vm-root (lower = the host's root, upper = every write since the boot). One line per
 # changed path: "new PATH", "newdir PATH", "modified PATH" (a host file whose content, owner
@@ -62,6 +64,9 @@ changes() {
   $PY - <<'PYEOF' | LC_ALL=C sort
 import filecmp, os, stat
 upper, lower = "/run/vm-root/upper", "/run/vm-root/lower"
+# logs, dpkg's, apt's and debconf's state: reported as written, not compared (apt's caches are
+# large and the host's copy is read over 9p)
+STATE = ("/var/log/", "/var/cache/apt/", "/var/cache/debconf/", "/var/lib/apt/", "/var/lib/dpkg/")
 for root, dirs, files in os.walk(upper):
     for name in dirs + files:
         full = os.path.join(root, name)
@@ -74,6 +79,8 @@ for root, dirs, files in os.walk(upper):
                 print("newdir", rel)
         elif not os.path.lexists(lower + rel):
             print("new", rel)
+        elif rel.startswith(STATE):
+            print("modified", rel)
         else:   # copied up: a change only if the content, owner or mode differ from the host's
             low = os.lstat(lower + rel)
             same = (st.st_mode, st.st_uid, st.st_gid) == (low.st_mode, low.st_uid, low.st_gid)
@@ -101,6 +108,7 @@ gr_before=$(getent group openvcu | cut -d: -f3)   # scripts/install-deps.sh make
 pkgs=(openvcu); [[ ${#hmi[@]} == 1 ]] && pkgs=(openvcu-hmi openvcu)
 [[ -d /run/vm-root/upper && -d /run/vm-root/lower/usr ]] || abort root_before "/run/vm-root/{lower,upper} missing (run-vm.sh shows the overlay's layers there)"
 changes > /tmp/root-before.txt
+dpkg-query -W -f='${Package}:${Architecture}=${Version} ${db:Status-Abbrev}\n' | LC_ALL=C sort > /tmp/dpkg-before.txt
 if getent passwd openvcu >/dev/null || [[ -e /etc/openvcu || -e /var/lib/openvcu ]] || dpkg -s openvcu >/dev/null 2>&1; then
   abort root_before "the VM's root already has openvcu (user, /etc/openvcu, /var/lib/openvcu or the package): the host is not clean"
 fi
@@ -133,6 +141,7 @@ else
 fi
 
 # ---------------------------------------------------------------- 3. the system user, the layout
+t "layout"
 pw=$(getent passwd openvcu); gr=$(getent group openvcu)
 IFS=: read -r _ _ uid gid _ home shell <<< "$pw"
 state_dir=$(stat -c '%U:%G %a' /var/lib/openvcu 2>&1)
@@ -204,6 +213,7 @@ else
 fi
 
 # ---------------------------------------------------------------- 5. the services from the installed units
+t "services"
 # The units openvcu.target wants (its own Wants= line), RouDi first as its Before= says, then
 # the simulated vehicle (openvcu-ecu-sim.service, installed but not enabled).
 wanted=$(awk -F= '$1 == "Wants" {print $2}' /lib/systemd/system/openvcu.target)
@@ -214,19 +224,22 @@ if ! $PY "$HERE/unit_exec.py" /tmp/units "${units[@]/#//lib/systemd/system/}" > 
   abort services_started "unit_exec.py: $(tail -3 "$OUT/units.txt" | tr '\n' '|')"
 fi
 cp /tmp/units/*.sh "$OUT/" 2>/dev/null
-start_unit() { # unit: its generated script in the background, log in OUT; wait for its ready line
-  local name=${1%.service} pattern=ready
-  [[ $name == openvcu-roudi ]] && pattern="RouDi is ready"
+start_unit() { # unit: its generated script in the background, its output in OUT/NAME.log
+  local name=${1%.service}
   bash "/tmp/units/$name.sh" > "$OUT/$name.log" 2>&1 &
   pids+=($!); names+=("$name")
-  wait_for 40 grep -q "$pattern" "$OUT/$name.log" && return 0
-  echo "$name did not get ready:"; tail -20 "$OUT/$name.log"; return 1
+  [[ $name != openvcu-roudi ]] || wait_for 40 grep -q "RouDi is ready" "$OUT/$name.log"
 }
-started=(); t0=$(date +%s%N)
+t0=$(date +%s%N)
+# RouDi first (the services' After=openvcu-roudi.service), then the others together, as systemd does
+start_unit "${units[0]}" || abort services_started "${units[0]%.service} did not get ready ($(tail -3 "$OUT/${units[0]%.service}.log" | tr '\n' '|'))"
+for u in "${units[@]:1}"; do start_unit "$u"; done
+started=(); late=()
 for u in "${units[@]}"; do
-  start_unit "$u" || abort services_started "${u%.service} did not get ready ($(tail -3 "$OUT/${u%.service}.log" | tr '\n' '|')); started before it: ${started[*]}"
-  started+=("${u%.service}")
+  name=${u%.service}; pattern=ready; [[ $name == openvcu-roudi ]] && pattern="RouDi is ready"
+  if wait_for 60 grep -q "$pattern" "$OUT/$name.log"; then started+=("$name"); else late+=("$name: $(tail -3 "$OUT/$name.log" | tr '\n' '|')"); fi
 done
+[[ ${#late[@]} == 0 ]] || abort services_started "not ready within 60 s: ${late[*]}; ready: ${started[*]}"
 ms=$(( ($(date +%s%N) - t0) / 1000000 ))
 # each runs as its unit's User=/Group= (root when the unit names no user), from the installed
 # binary; can-tx holds CAP_SYS_NICE (its unit's AmbientCapabilities)
@@ -249,6 +262,7 @@ else
 fi
 
 # ---------------------------------------------------------------- 6. Start -> Ready
+t "Start"
 # state indexes from the installed FSM file (the one vehicle.json names), looked up
 fsm_file=$($PY -c "import json,os,sys; c=json.load(open(sys.argv[1])); print(os.path.join(os.path.dirname(sys.argv[1]), c['fsm']))" "$CFG")
 declare -A STATE
@@ -269,12 +283,19 @@ fi
 
 # ---------------------------------------------------------------- 7. vcu status names the services
 vcu status --config "$CFG" > "$OUT/status.txt" 2>&1; status_rc=$?
-absent=()
-for s in can-rx can-tx fsm gpio ecu-sim; do grep "vcu-$s\b" "$OUT/status.txt" | grep -q ready || absent+=("vcu-$s"); done
+# every service we started is listed with the very PID we started (the status text is free:
+# vcu-gpio shows its back end), RouDi is no openvcu service
+absent=(); listed=()
+for i in "${!pids[@]}"; do
+  [[ ${names[$i]} == openvcu-roudi ]] && continue
+  svc=vcu-${names[$i]#openvcu-}
+  shown=$(awk -v s="$svc" '$1 == s {print $2; exit}' "$OUT/status.txt")
+  if [[ $shown == "${pids[$i]}" ]]; then listed+=("$svc=$shown"); else absent+=("$svc (pid ${pids[$i]}, shown '${shown}')"); fi
+done
 if [[ $status_rc == 0 && ${#absent[@]} == 0 ]]; then
-  result vcu_status PASS "vcu status (status 0) shows vcu-can-rx, -can-tx, -fsm, -gpio, -ecu-sim ready: $(grep -E 'vcu-(can-rx|can-tx|fsm|gpio|ecu-sim)' "$OUT/status.txt" | head -6 | tr -s ' ' | tr '\n' '|')"
+  result vcu_status PASS "vcu status (status 0) lists each started service with its PID: ${listed[*]}"
 else
-  result vcu_status FAIL "status $status_rc, not ready or missing: ${absent[*]}; $(head -5 "$OUT/status.txt" | tr '\n' '|')"
+  result vcu_status FAIL "status $status_rc, missing or another PID: ${absent[*]}; $(head -8 "$OUT/status.txt" | cut -c1-60 | tr '\n' '|')"
 fi
 
 # ---------------------------------------------------------------- 8. a member of group openvcu commands Stop
@@ -291,6 +312,7 @@ fi
 deluser --system operator1 >> "$OUT/operator.log" 2>&1; delgroup --system operator1 >> "$OUT/operator.log" 2>&1
 
 # ---------------------------------------------------------------- 9. stop
+t "stop"
 t0=$(date +%s%N)
 still=(); codes=()
 for ((i = ${#pids[@]} - 1; i >= 0; i--)); do kill "${pids[$i]}" 2>/dev/null; wait "${pids[$i]}"; codes+=("${names[$i]#openvcu-}=$?"); done
@@ -305,6 +327,7 @@ else
 fi
 
 # ---------------------------------------------------------------- 10. apt-get purge
+t "purge"
 for p in "${pkgs[@]}"; do dpkg -L "$p"; done | LC_ALL=C sort -u > "$OUT/package-files.txt"
 "${APT[@]}" purge -y "${pkgs[@]}" > "$OUT/apt-purge.log" 2>&1; purge_rc=$?
 removed=$(grep -E '^(Removing|Purging) ' "$OUT/apt-purge.log" | tr '\n' '|')
@@ -334,6 +357,7 @@ else
 fi
 
 # ---------------------------------------------------------------- 12. the root after = before, but for policy
+t "root comparison"
 changes > /tmp/root-after.txt
 comm -13 /tmp/root-before.txt /tmp/root-after.txt > "$OUT/root-changes.txt"
 # What policy allows to stay changed: the system user and group openvcu (the account files and
@@ -343,12 +367,15 @@ allowed='^(modified|new) /etc/(passwd|group|shadow|gshadow)-?$|^[a-z]+ /var/(log
 extra=$(grep -Ev "$allowed" "$OUT/root-changes.txt")
 # dpkg's own records of the packages must be gone too
 records=$(grep -E "^new /var/lib/dpkg/info/($(IFS='|'; echo "${pkgs[*]}"))[.:]" "$OUT/root-changes.txt")
+# dpkg's database lists the same packages, versions and states as before the install
+dpkg-query -W -f='${Package}:${Architecture}=${Version} ${db:Status-Abbrev}\n' | LC_ALL=C sort > /tmp/dpkg-after.txt
+dpkg_diff=$(diff /tmp/dpkg-before.txt /tmp/dpkg-after.txt | grep '^[<>]' | sed 's/^/dpkg database: /')
 user_left=$(getent passwd openvcu)
 accounts=$(grep -E '^(modified|new) /etc/' "$OUT/root-changes.txt" | awk '{print $2}' | tr '\n' ' ')
-if [[ -z $extra && -z $records ]]; then
-  result root_after_purge PASS "changed since the boot, beyond what was before the install: $(grep -c . "$OUT/root-changes.txt") path(s), all allowed: account files ${accounts:-none} (the system user stays, Debian practice: ${user_left:-none}), plus $(grep -cE ' /var/' "$OUT/root-changes.txt") in logs and dpkg/apt/debconf state; no package record left in /var/lib/dpkg/info"
+if [[ -z $extra && -z $records && -z $dpkg_diff ]]; then
+  result root_after_purge PASS "changed since the boot, beyond what was before the install: $(grep -c . "$OUT/root-changes.txt") path(s), all allowed: account files ${accounts:-none} (the system user stays, Debian practice: ${user_left:-none}), plus $(grep -cE ' /var/' "$OUT/root-changes.txt") in logs and dpkg/apt/debconf state; no package record left in /var/lib/dpkg/info; dpkg's package list ($(wc -l < /tmp/dpkg-after.txt) packages) as before"
 else
-  result root_after_purge FAIL "left behind: $(head -15 <<< "$extra$records" | tr '\n' ' ') (all: root-changes.txt)"
+  result root_after_purge FAIL "left behind: $(printf '%s\n' "$extra" "$records" "$dpkg_diff" | grep . | head -15 | tr '\n' ' ') (all: root-changes.txt)"
 fi
 
 t "checks done"
