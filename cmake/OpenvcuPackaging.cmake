@@ -142,9 +142,11 @@ set(CPACK_DEBIAN_OPENVCU_PACKAGE_CONTROL_EXTRA
 
 set(CPACK_DEBIAN_HMI_PACKAGE_NAME openvcu-hmi)
 set(CPACK_DEBIAN_HMI_PACKAGE_SECTION misc)
-# the QML modules vcu-hmi imports (QtQuick, .Controls, .Layouts) and what those load
+# what no linker sees: the QML modules vcu-hmi imports (QtQuick, .Controls, .Layouts) and what
+# those load, and the eglfs platform plugin with its KMS integration (libqt6opengl6) that
+# openvcu-hmi.service selects
 set(CPACK_DEBIAN_HMI_PACKAGE_DEPENDS
-    "openvcu (= ${OPENVCU_DEB_VERSION}), qml6-module-qtquick, qml6-module-qtquick-controls, qml6-module-qtquick-layouts, qml6-module-qtquick-templates, qml6-module-qtquick-window, qml6-module-qtqml-workerscript")
+    "openvcu (= ${OPENVCU_DEB_VERSION}), qml6-module-qtquick, qml6-module-qtquick-controls, qml6-module-qtquick-layouts, qml6-module-qtquick-templates, qml6-module-qtquick-window, qml6-module-qtqml-workerscript, libqt6opengl6")
 set(CPACK_DEBIAN_HMI_DESCRIPTION "touchscreen dashboard of the openvcu stack
 vcu-hmi is the Qt 6 Quick touchscreen HMI of an openvcu vehicle control
 unit: dashboard, CAN data, ECU setup, debug and trace pages. It runs on the
