@@ -60,8 +60,12 @@ add_custom_target(openvcu-packaging-files ALL
   DEPENDS ${etcOut}/vehicle.json ${OPENVCU_PACKAGING_OUT}/conffiles ${OPENVCU_PACKAGING_OUT}/changelog.Debian.gz)
 
 # --- package openvcu -----------------------------------------------------------------------
+# Rules with absolute destinations (/etc, /lib) and the Debian documents are EXCLUDE_FROM_ALL:
+# only a component install (CPack's) takes them, so a plain `cmake --install BUILD --prefix
+# /usr/local` installs programs and /usr/local/share/openvcu and never replaces a configured
+# /etc/openvcu or the system's units.
 set(comp COMPONENT openvcu)
-install(DIRECTORY ${etcOut}/ DESTINATION /etc/openvcu ${comp})
+install(DIRECTORY ${etcOut}/ DESTINATION /etc/openvcu ${comp} EXCLUDE_FROM_ALL)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/hhea/ DESTINATION share/openvcu/vehicles/hhea ${comp})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/tractor/ DESTINATION share/openvcu/vehicles/tractor ${comp})
 install(PROGRAMS ${PROJECT_SOURCE_DIR}/config/iceoryx/iox-roudi.sh DESTINATION share/openvcu/iceoryx ${comp})
@@ -71,19 +75,19 @@ set(openvcuUnits openvcu.target openvcu-roudi.service openvcu-can-rx.service ope
     openvcu-fsm.service openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service
     openvcu-bench.target)
 list(TRANSFORM openvcuUnits PREPEND ${PROJECT_SOURCE_DIR}/config/systemd/ OUTPUT_VARIABLE unitFiles)
-install(FILES ${unitFiles} DESTINATION /lib/systemd/system ${comp})
-install(FILES ${OPENVCU_PACKAGING_DIR}/60-openvcu.rules DESTINATION /lib/udev/rules.d ${comp})
+install(FILES ${unitFiles} DESTINATION /lib/systemd/system ${comp} EXCLUDE_FROM_ALL)
+install(FILES ${OPENVCU_PACKAGING_DIR}/60-openvcu.rules DESTINATION /lib/udev/rules.d ${comp} EXCLUDE_FROM_ALL)
 install(FILES ${OPENVCU_PACKAGING_DIR}/copyright ${OPENVCU_PACKAGING_OUT}/changelog.Debian.gz
-        DESTINATION share/doc/openvcu ${comp})
+        DESTINATION share/doc/openvcu ${comp} EXCLUDE_FROM_ALL)
 
 # --- package openvcu-hmi (when vcu-hmi is built: Qt 6 found) --------------------------------
 set(OPENVCU_PACKAGE_COMPONENTS openvcu)
 if(TARGET vcu-hmi)
   list(APPEND OPENVCU_PACKAGE_COMPONENTS hmi)
   install(FILES ${PROJECT_SOURCE_DIR}/config/systemd/openvcu-hmi.service DESTINATION /lib/systemd/system
-          COMPONENT hmi)
+          COMPONENT hmi EXCLUDE_FROM_ALL)
   install(FILES ${OPENVCU_PACKAGING_DIR}/copyright ${OPENVCU_PACKAGING_OUT}/changelog.Debian.gz
-          DESTINATION share/doc/openvcu-hmi COMPONENT hmi)
+          DESTINATION share/doc/openvcu-hmi COMPONENT hmi EXCLUDE_FROM_ALL)
 endif()
 
 # --- CPack: Debian packages ----------------------------------------------------------------
@@ -138,9 +142,11 @@ set(CPACK_DEBIAN_OPENVCU_PACKAGE_CONTROL_EXTRA
 
 set(CPACK_DEBIAN_HMI_PACKAGE_NAME openvcu-hmi)
 set(CPACK_DEBIAN_HMI_PACKAGE_SECTION misc)
-# the QML modules vcu-hmi imports (QtQuick, .Controls, .Layouts) and what those load
+# what no linker sees: the QML modules vcu-hmi imports (QtQuick, .Controls, .Layouts) and what
+# those load, and the eglfs platform plugin with its KMS integration (libqt6opengl6) that
+# openvcu-hmi.service selects
 set(CPACK_DEBIAN_HMI_PACKAGE_DEPENDS
-    "openvcu (= ${OPENVCU_DEB_VERSION}), qml6-module-qtquick, qml6-module-qtquick-controls, qml6-module-qtquick-layouts, qml6-module-qtquick-templates, qml6-module-qtquick-window, qml6-module-qtqml-workerscript")
+    "openvcu (= ${OPENVCU_DEB_VERSION}), qml6-module-qtquick, qml6-module-qtquick-controls, qml6-module-qtquick-layouts, qml6-module-qtquick-templates, qml6-module-qtquick-window, qml6-module-qtqml-workerscript, libqt6opengl6")
 set(CPACK_DEBIAN_HMI_DESCRIPTION "touchscreen dashboard of the openvcu stack
 vcu-hmi is the Qt 6 Quick touchscreen HMI of an openvcu vehicle control
 unit: dashboard, CAN data, ECU setup, debug and trace pages. It runs on the

@@ -57,11 +57,17 @@ if [ ! -f "$build/CMakeCache.txt" ]; then
   if [ "$arch" = "$native" ]; then
     step 1/4 "no build tree in $build: configuring (Release) and building openvcu-runtime"
     cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-    cmake --build "$build" --target openvcu-runtime
+    if cmake --build "$build" --target help 2>/dev/null | grep -q '^openvcu-runtime:'; then
+      cmake --build "$build" --target openvcu-runtime
+    else  # a tree without the aggregate target: the programs by name
+      targets=(vcu vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web)
+      if cmake --build "$build" --target help 2>/dev/null | grep -q '^vcu-hmi:'; then targets+=(vcu-hmi); fi
+      cmake --build "$build" --target "${targets[@]}"
+    fi
   elif [ "$arch" = arm64 ]; then
     [ -x "$root/scripts/cross-arm64.sh" ] || die "no build tree in $build and no scripts/cross-arm64.sh to make one"
-    step 1/4 "no build tree in $build: scripts/cross-arm64.sh --build-dir $build"
-    "$root/scripts/cross-arm64.sh" --build-dir "$build"
+    step 1/4 "no build tree in $build: scripts/cross-arm64.sh --build-dir $build --no-tests --no-package"
+    "$root/scripts/cross-arm64.sh" --build-dir "$build" --no-tests --no-package
   fi
 else
   step 1/4 "build tree $build"

@@ -142,6 +142,7 @@ if [ -f "$hmi" ]; then
   has_dependency openvcu-hmi "$hdepends" "^openvcu \(= ${version//./\\.}\)$"
   has_dependency openvcu-hmi "$hdepends" '^libqt6quick6'
   has_dependency openvcu-hmi "$hdepends" '^qml6-module-qtquick-controls'
+  has_dependency openvcu-hmi "$hdepends" '^libqt6opengl6'   # eglfs, the unit's platform
   # a file (not a folder) in both packages would make dpkg refuse the second
   both=$(comm -12 <(files_only "$main") <(files_only "$hmi"))
   [ -z "$both" ] || fail "in both packages: $both"
