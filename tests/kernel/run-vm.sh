@@ -140,6 +140,11 @@ mount -t configfs configfs $R/sys/kernel/config
 mount -t tmpfs tmpfs $R/run; mount -t tmpfs tmpfs $R/tmp
 for d in $(echo "$vmkeep" | tr ',' ' '); do mkdir -p $R$d && mount -o bind /hostro$d $R$d; done
 mkdir -p $R$vmout && mount -t 9p -o trans=virtio,version=9p2000.L,msize=512000 vmout $R$vmout
+# the overlay's layers, read-only, for a guest that checks what it changed in the root
+# (guest-install.sh): lower = the host's root, upper = every write of the VM (whiteouts = deletions)
+mkdir -p $R/run/vm-root/lower $R/run/vm-root/upper
+mount -o bind /hostro $R/run/vm-root/lower
+mount -o bind /rw/upper $R/run/vm-root/upper && mount -o remount,bind,ro $R/run/vm-root/upper
 ip link set lo up
 echo "VM $(cut -d' ' -f1 /proc/uptime) s: kernel up, running the guest script"
 chroot $R /bin/sh -c "cd '$vmcwd' && exec /bin/bash '$vmtest' '$vmout'" </dev/null
