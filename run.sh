@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The first command: installs what is missing, builds, and runs the openvcu stack on the
-# simulated HHEA vehicle under supervisord, in the foreground, until Ctrl-C.
+# The first command: installs what is missing, builds what it runs (target openvcu-runtime:
+# the services, vcu, vcu-hmi; not the tests, which ./test.sh builds) with its progress shown,
+# and runs the openvcu stack on the simulated HHEA vehicle under supervisord until Ctrl-C.
 #   ./run.sh                      the stack + the simulated vehicle, a live status view, and
 #                                 the Qt HMI when a display is available (DISPLAY/WAYLAND_DISPLAY)
 #   ./run.sh --scenario drive     also drive it: Start -> Connect Driving -> AC charging -> Stop
@@ -95,9 +96,15 @@ fi
 
 if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   scripts/install-deps.sh --quiet
+  echo "== configuring build/"
   cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-  echo "== building (build/)"
-  cmake --build build -j "$(nproc 2>/dev/null || echo 2)" | tail -1
+  # Only what this script runs: the services, vcu, vcu-hmi and the LCM types jar (the target
+  # openvcu-runtime, cmake/OpenvcuRuntimeTarget.cmake). ./test.sh builds the tests in the same
+  # build/, reusing these objects. The progress: scripts/build-progress.sh.
+  note=""
+  [ -x build/bin/vcu ] || note="the first build: several minutes, about 8 on a 2-core VM (README.md)"
+  BUILD_PROGRESS_NOTE=$note scripts/build-progress.sh build openvcu-runtime ||
+    { echo "run.sh: the build failed (the compilers' output above)" >&2; exit 1; }
 fi
 
 # --dbc: the vehicle folder from the DBC (vcu init checks every file before writing any)
