@@ -73,7 +73,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/config/iceoryx/roudi.toml DESTINATION share/
 install(FILES ${OPENVCU_PACKAGING_DIR}/supervisor/openvcu.conf DESTINATION share/openvcu/supervisor ${comp})
 set(openvcuUnits openvcu.target openvcu-roudi.service openvcu-can-rx.service openvcu-can-tx.service
     openvcu-fsm.service openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service
-    openvcu-bench.target)
+    openvcu-telemetry.service openvcu-bench.target)
 list(TRANSFORM openvcuUnits PREPEND ${PROJECT_SOURCE_DIR}/config/systemd/ OUTPUT_VARIABLE unitFiles)
 install(FILES ${unitFiles} DESTINATION /lib/systemd/system ${comp} EXCLUDE_FROM_ALL)
 install(FILES ${OPENVCU_PACKAGING_DIR}/60-openvcu.rules DESTINATION /lib/udev/rules.d ${comp} EXCLUDE_FROM_ALL)

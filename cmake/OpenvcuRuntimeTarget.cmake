@@ -1,14 +1,14 @@
 # The `openvcu-runtime` target: every built artifact ./run.sh and the Debian packages use at
 # run time, and nothing else (no tests, benchmarks or fuzz corpus replays), so that the first
 # ./run.sh builds what it runs (`cmake --build build --target openvcu-runtime`).
-#   the services     vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web
+#   the services     vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web vcu-telemetry
 #   the tool         vcu (run.sh's check, status, top, signal set, record and init)
 #   the HMI          vcu-hmi, when services/hmi found Qt 6 (else that target does not exist)
 #   the LCM types    openvcu_lcm_jar, the Java types `vcu spy` hands lcm-spy (when a JDK is found)
 # Included from the top CMakeLists.txt after shared/, services/ and tools/. A target that a
 # configuration leaves out (OPENVCU_BUILD_HMI=OFF, no Qt, no JDK) is skipped; a missing
 # service or vcu is skipped too, with a warning (run.sh would then say what is not built).
-set(OPENVCU_RUNTIME_REQUIRED vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web vcu)
+set(OPENVCU_RUNTIME_REQUIRED vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web vcu-telemetry vcu)
 set(OPENVCU_RUNTIME_OPTIONAL vcu-hmi openvcu_lcm_jar)
 
 set(runtimeDeps "")

@@ -10,6 +10,7 @@ needs (docs/design/packaging.md):
   * schedule.json: "overlay": "/var/lib/openvcu/schedule.overlay.json"
   * diagnostics.json: "countsFile": "/var/lib/openvcu/dtc_counts.json"
   * web.json: "dataFolder": "/var/lib/openvcu/web", "usersFile": "/etc/openvcu/web-users.json"
+  (telemetry.json is copied as it is: its "queueFolder" is already /var/lib/openvcu/telemetry)
 The edits are made in the text so that the files keep the repository's layout (an engineer can
 diff them against /usr/share/openvcu/vehicles/hhea); each edited file is then parsed and
 compared with the original plus the intended change, so an edit that missed fails the build.
@@ -60,7 +61,7 @@ def main():
 
     # the files vehicle.json names (relative to its folder), and the HMI's dashboard.json beside it
     names = list(vehicle.get("dbc", []))
-    for key in ("schedule", "fsm", "gpio", "simulation", "diagnostics", "web"):
+    for key in ("schedule", "fsm", "gpio", "simulation", "diagnostics", "web", "telemetry"):
         if isinstance(vehicle.get(key), str):
             names.append(vehicle[key])
     names.append("dashboard.json")

@@ -46,7 +46,7 @@ PACKAGES=(
   # vcu-web (services/web): Boost.Beast/Asio, libxcrypt's crypt(3), libarchive for the archives;
   # its browser test drives Debian's chromium through chromium-driver and python3-selenium
   libboost-dev libcrypt-dev libarchive-dev chromium-driver python3-selenium
-  mosquitto mosquitto-clients libmosquitto-dev  # vcu-telemetry (issue 25): libmosquitto; the broker and its clients for tests and demo
+  mosquitto mosquitto-clients libmosquitto-dev libssl-dev  # vcu-telemetry (issue 25): libmosquitto, OpenSSL (SHA-256 of the configuration); the broker and its clients for tests and demo
 )
 
 missing=()

@@ -155,9 +155,9 @@ fi
 missing=()
 expect_exec() { [[ -x $1 && -f $1 ]] || missing+=("$1 (executable)"); }
 expect_file() { [[ -f $1 && -s $1 ]] || missing+=("$1"); }
-for b in vcu vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web; do expect_exec "/usr/bin/$b"; done
+for b in vcu vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web vcu-telemetry; do expect_exec "/usr/bin/$b"; done
 for u in openvcu.target openvcu-roudi.service openvcu-can-rx.service openvcu-can-tx.service openvcu-fsm.service \
-         openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service; do expect_file "/lib/systemd/system/$u"; done
+         openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service openvcu-telemetry.service; do expect_file "/lib/systemd/system/$u"; done
 for f in /usr/share/openvcu/vehicles/hhea/vehicle.json /usr/share/openvcu/vehicles/tractor/vehicle.json \
          /usr/share/openvcu/iceoryx/iox-roudi.sh /usr/share/openvcu/iceoryx/roudi.toml \
          /usr/share/openvcu/supervisor/openvcu.conf /lib/udev/rules.d/60-openvcu.rules \
@@ -169,7 +169,7 @@ if [[ ${#hmi[@]} == 1 ]]; then expect_exec /usr/bin/vcu-hmi; expect_file /lib/sy
 named=$($PY - "$CFG" <<'PYEOF' 2>&1
 import json, os, sys
 config = json.load(open(sys.argv[1]))
-names = list(config.get("dbc", [])) + [config[k] for k in ("schedule", "fsm", "gpio", "simulation", "diagnostics", "web", "receive") if isinstance(config.get(k), str)]
+names = list(config.get("dbc", [])) + [config[k] for k in ("schedule", "fsm", "gpio", "simulation", "diagnostics", "web", "telemetry", "receive") if isinstance(config.get(k), str)]
 print(" ".join(os.path.join(os.path.dirname(sys.argv[1]), n) for n in names + ["dashboard.json"]))
 link = [b["link"] for b in config["buses"] if b["name"] == "vehicle"]
 print("LINK", link[0] if link else "none")
@@ -185,7 +185,7 @@ env_line=$(grep -E '^OPENVCU_CONFIG=' /etc/openvcu/openvcu.env 2>/dev/null)
 [[ $env_line == "OPENVCU_CONFIG=$CFG" ]] || missing+=("openvcu.env: '$env_line' (want OPENVCU_CONFIG=$CFG)")
 [[ $installed_link == socketcan:can0 ]] || missing+=("vehicle.json's vehicle bus '$installed_link' (want socketcan:can0)")
 if [[ ${#missing[@]} == 0 ]]; then
-  result installed_layout PASS "7 binaries in /usr/bin, 8 units in /lib/systemd/system, udev rule, docs, examples, supervisor profile, www; $(wc -l <<< "$conffiles") conffiles incl. openvcu.env and every file vehicle.json names; bus vehicle on $installed_link${hmi:+; vcu-hmi + its unit}"
+  result installed_layout PASS "8 binaries in /usr/bin, 9 units in /lib/systemd/system, udev rule, docs, examples, supervisor profile, www; $(wc -l <<< "$conffiles") conffiles incl. openvcu.env and every file vehicle.json names; bus vehicle on $installed_link${hmi:+; vcu-hmi + its unit}"
 else
   result installed_layout FAIL "missing or wrong: ${missing[*]}"
 fi

@@ -66,11 +66,12 @@ has_dependency() {  # NAME DEPENDS REGEX
 
 # --- openvcu ---
 etc=(openvcu.env vehicle.json hhea.dbc fsm.json schedule.json diagnostics.json gpio.json dashboard.json
-     simulation.json web.json)
+     simulation.json web.json telemetry.json)
 units=(openvcu.target openvcu-roudi.service openvcu-can-rx.service openvcu-can-tx.service openvcu-fsm.service
-       openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service)
+       openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service
+       openvcu-telemetry.service)
 expected=(/usr/bin/vcu /usr/bin/vcu-can-rx /usr/bin/vcu-can-tx /usr/bin/vcu-fsm /usr/bin/vcu-gpio
-          /usr/bin/vcu-ecu-sim /usr/bin/vcu-web /usr/share/openvcu/www/index.html
+          /usr/bin/vcu-ecu-sim /usr/bin/vcu-web /usr/bin/vcu-telemetry /usr/share/openvcu/www/index.html
           /usr/share/openvcu/iceoryx/iox-roudi.sh /usr/share/openvcu/iceoryx/roudi.toml
           /usr/share/openvcu/supervisor/openvcu.conf /lib/udev/rules.d/60-openvcu.rules
           /usr/share/doc/openvcu/copyright /usr/share/doc/openvcu/changelog.Debian.gz)
