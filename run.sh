@@ -102,7 +102,7 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
   # openvcu-runtime, cmake/OpenvcuRuntimeTarget.cmake). ./test.sh builds the tests in the same
   # build/, reusing these objects. The progress: scripts/build-progress.sh.
   note=""
-  [ -x build/bin/vcu ] || note="the first build: several minutes, about 8 on a 2-core VM (README.md)"
+  [ -x build/bin/vcu ] || note="the first build: minutes, 6 on a 2-core VM (README.md)"
   BUILD_PROGRESS_NOTE=$note scripts/build-progress.sh build openvcu-runtime ||
     { echo "run.sh: the build failed (the compilers' output above)" >&2; exit 1; }
 fi
