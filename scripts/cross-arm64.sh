@@ -171,6 +171,12 @@ hmi="no"; grep -q '^Qt6_DIR:PATH=/' "$build/CMakeCache.txt" && hmi="yes"
 # --- 4. build ------------------------------------------------------------------------------------
 step 4 "build (ninja -j$jobs; shared lock /tmp/openvcu-cpu.lock)"
 t0=$(date +%s)
+# the installed programs first (what the packages need), then the tests
+runtime=(vcu vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web)
+[ "$hmi" = yes ] && runtime+=(vcu-hmi)
+flock -s /tmp/openvcu-cpu.lock cmake --build "$build" -j "$jobs" --target "${runtime[@]}" ||
+  die "build of ${runtime[*]} failed"
+echo "programs built after $(( $(date +%s) - t0 )) s; now the rest (tests)"
 flock -s /tmp/openvcu-cpu.lock cmake --build "$build" -j "$jobs" || die "build failed"
 build_s=$(( $(date +%s) - t0 ))
 note "build: ${build_s} s"
