@@ -176,8 +176,13 @@ runtime=(vcu vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web)
 [ "$hmi" = yes ] && runtime+=(vcu-hmi)
 flock -s /tmp/openvcu-cpu.lock cmake --build "$build" -j "$jobs" --target "${runtime[@]}" ||
   die "build of ${runtime[*]} failed"
-echo "programs built after $(( $(date +%s) - t0 )) s; now the rest (tests)"
-flock -s /tmp/openvcu-cpu.lock cmake --build "$build" -j "$jobs" || die "build failed"
+note "programs (${runtime[*]}) built in $(( $(date +%s) - t0 )) s"
+if [ $run_tests -eq 1 ]; then
+  # the vcu CLI tests next, then everything else (the other unit tests, fuzz corpus replays...)
+  flock -s /tmp/openvcu-cpu.lock cmake --build "$build" -j "$jobs" --target test_vcu ||
+    die "build of test_vcu failed"
+  flock -s /tmp/openvcu-cpu.lock cmake --build "$build" -j "$jobs" || die "build failed"
+fi
 build_s=$(( $(date +%s) - t0 ))
 note "build: ${build_s} s"
 file "$build/bin/vcu" | grep -q "ARM aarch64" || die "$build/bin/vcu is not an aarch64 program"
