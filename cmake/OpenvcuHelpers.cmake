@@ -47,6 +47,10 @@ function(openvcu_test name)
   doctest_discover_tests(${name} PROPERTIES LABELS "${labels}" RUN_SERIAL ${serial} SKIP_RETURN_CODE 77)
 endfunction()
 
+# What installs without a COMPONENT goes into the Debian package openvcu (the HMI names its
+# own, hmi: cmake/OpenvcuPackaging.cmake).
+set(CMAKE_INSTALL_DEFAULT_COMPONENT_NAME openvcu)
+
 # openvcu_executable(<installed name> SOURCES ... DEPS ...)
 function(openvcu_executable name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})

@@ -41,6 +41,8 @@ PACKAGES=(
   libgl-dev fonts-dejavu-core x11-apps imagemagick
   # vcu trace report: opened in Debian's headless Chromium by its test, pixels read with PIL
   chromium python3-pil
+  # the Debian packages (scripts/package.sh, tests/packaging): lintian checks them
+  lintian
   # vcu-web (services/web): Boost.Beast/Asio, libxcrypt's crypt(3), libarchive for the archives;
   # its browser test drives Debian's chromium through chromium-driver and python3-selenium
   libboost-dev libcrypt-dev libarchive-dev chromium-driver python3-selenium

@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <grp.h>
 #include <poll.h>
+#include <pwd.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -108,6 +109,16 @@ std::optional<std::uint32_t> groupId(const std::string& name) {
     return std::nullopt;
   }
   return found->gr_gid;
+}
+
+std::optional<std::uint32_t> userId(const std::string& name) {
+  passwd entry{};
+  passwd* found = nullptr;
+  std::array<char, 16384> buffer{};
+  if (::getpwnam_r(name.c_str(), &entry, buffer.data(), buffer.size(), &found) != 0 || found == nullptr) {
+    return std::nullopt;
+  }
+  return found->pw_uid;
 }
 
 bool mayCommand(const PeerCredentials& peer, std::optional<std::uint32_t> group) {
@@ -390,8 +401,12 @@ Result<CommandClient> CommandClient::connect(std::string_view instance) {
     }
     return Error{"cannot reach " + impl->directory + ": " + errnoText(errno) + who};
   }
-  // Trust only a folder that root or this user owns and nobody else can write.
-  if ((folder.st_uid != 0 && folder.st_uid != ::geteuid()) || (folder.st_mode & 0022) != 0) {
+  // Trust only a folder that root, this user or the installed stack's user owns and nobody
+  // else can write.
+  const std::optional<std::uint32_t> stackUser = userId(STACK_USER);
+  const bool trustedOwner = folder.st_uid == 0 || folder.st_uid == ::geteuid() ||
+                            (stackUser && folder.st_uid == *stackUser);
+  if (!trustedOwner || (folder.st_mode & 0022) != 0) {
     return Error{"refusing " + impl->directory + ": owned by uid " + std::to_string(folder.st_uid) +
                  " or writable by others, so its sockets cannot be trusted"};
   }

@@ -11,9 +11,11 @@
 //
 // An issuer (CommandClient) connects to every socket of the instance, sends the request to
 // each and takes the answer of the one service that owns the command; the others answer
-// `owner = false`. It believes only answers from a socket served by root or by the owner of
-// the folder, on its own connection, to its own random request id: a forged answer has no
-// way in.
+// `owner = false`. It trusts only a folder owned by root, by itself or by the system user
+// `openvcu` (STACK_USER: the Debian package's services run as that user, created by the
+// package; docs/design/packaging.md), and believes only answers from a socket served by root
+// or by the owner of the folder, on its own connection, to its own random request id: a
+// forged answer has no way in.
 //
 //   auto clientResult = ipc::CommandClient::connect("hhea");
 //   if (!clientResult) return fail(clientResult.error());            // no stack, no access
@@ -62,6 +64,13 @@ struct PeerCredentials {
   std::uint32_t uid{};
   std::uint32_t gid{};
 };
+
+/// The system user the installed stack runs as (package openvcu). A command folder it owns
+/// is trusted like one owned by root: only root can create or rename that user.
+inline constexpr const char* STACK_USER = "openvcu";
+
+/// The user `name`'s id, or nothing when no such user exists.
+[[nodiscard]] std::optional<std::uint32_t> userId(const std::string& name);
 
 /// The group `name`'s id, or nothing when no such group exists.
 [[nodiscard]] std::optional<std::uint32_t> groupId(const std::string& name);
