@@ -221,10 +221,10 @@ EOF
 
 failed=0
 if [ $run_tests -eq 1 ]; then
-  step 5 "arm64 unit tests under qemu-user (ctest -L unit, without tests/tools/vcu)"
-  ctest_part "unit tests" other || failed=1
-  step 6 "vcu CLI tests under qemu-user (tests/tools/vcu: test_vcu)"
+  step 5 "vcu CLI tests under qemu-user (tests/tools/vcu: test_vcu)"
   ctest_part "vcu CLI tests" vcu || failed=1
+  step 6 "the other arm64 unit tests under qemu-user (ctest -L unit, without tests/tools/vcu)"
+  ctest_part "other unit tests" other || failed=1
   [ -z "$EXCLUDE_REGEX" ] || note "excluded: $EXCLUDE_REGEX ($EXCLUDE_REASON)"
 else
   step 5 "tests skipped (--no-tests)"; step 6 "tests skipped (--no-tests)"
