@@ -125,6 +125,14 @@ set(CPACK_DEBIAN_OPENVCU_PACKAGE_NAME openvcu)
 set(CPACK_DEBIAN_OPENVCU_PACKAGE_SECTION misc)
 # iox-roudi (package iceoryx) is run, not linked; adduser makes the system user in postinst
 set(CPACK_DEBIAN_OPENVCU_PACKAGE_DEPENDS "iceoryx, adduser")
+# The arm64 cross build (scripts/cross-arm64.sh) links liblcm1:arm64 unpacked outside dpkg
+# (liblcm1 is not Multi-Arch: same, so it cannot sit beside the amd64 one): dpkg-shlibdeps
+# finds the library there but no package owns it, so its dependency is named here, as
+# liblcm1's own shlibs file ("liblcm 1 liblcm1") names it.
+if(OPENVCU_ARM64_EXTRA_ROOT)
+  set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${OPENVCU_ARM64_EXTRA_ROOT}/usr/lib/aarch64-linux-gnu)
+  string(APPEND CPACK_DEBIAN_OPENVCU_PACKAGE_DEPENDS ", liblcm1")
+endif()
 set(CPACK_DEBIAN_OPENVCU_PACKAGE_RECOMMENDS "can-utils")
 set(CPACK_DEBIAN_OPENVCU_PACKAGE_SUGGESTS "supervisor")
 set(CPACK_DEBIAN_OPENVCU_DESCRIPTION "open vehicle-control-unit stack
