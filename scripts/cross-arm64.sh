@@ -55,6 +55,7 @@ ARM64_PACKAGES=(
   crossbuild-essential-arm64 qemu-user-static binfmt-support
   libc6-dev:arm64 libiceoryx-posh-dev:arm64 libiceoryx-hoofs-dev:arm64 libglib2.0-dev:arm64
   libgpiod-dev:arm64 libboost-dev:arm64 libcrypt-dev:arm64 libarchive-dev:arm64
+  libmosquitto-dev:arm64 libssl-dev:arm64   # vcu-telemetry: libmosquitto, OpenSSL's SHA-256
   # the HMI (vcu-hmi) and, to run its tests under qemu, the QML modules and the offscreen plugin
   qt6-base-dev:arm64 qt6-declarative-dev:arm64 libgl-dev:arm64
   qml6-module-qtquick:arm64 qml6-module-qtqml:arm64 qml6-module-qtquick-controls:arm64
