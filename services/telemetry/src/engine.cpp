@@ -13,23 +13,8 @@ using Json = nlohmann::json;
 
 constexpr std::string_view DM1_PREFIX = "internal.dm1.";
 constexpr std::string_view DM1_SUFFIX = ".activeDtcs";
-/// Heartbeats come once a second: a service not heard for 2.5 s is Stale (as vcu-web).
-constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;
 /// A DBC signal not received for this long is Stale (dashboard.json's default).
 constexpr std::int64_t BUS_STALE_NS = 2'000'000'000;
-
-std::string severityName(ipc::FaultSeverity severity) {
-  switch (severity) {
-    case ipc::FaultSeverity::Info:
-      return "info";
-    case ipc::FaultSeverity::Warning:
-      return "warning";
-    case ipc::FaultSeverity::Error:
-      return "error";
-    default:
-      return "critical";
-  }
-}
 
 std::int64_t toUnixMs(std::int64_t monoNs, const ClockPair& clocks) {
   return clocks.unixMs + (monoNs - clocks.monoNs) / 1'000'000;
@@ -59,7 +44,7 @@ std::string members(const Json& object) {
 }  // namespace
 
 Engine::Engine(const signals::Catalog& catalog, const signals::SignalTable& table)
-    : m_catalog(&catalog), m_table(&table), m_health(display::expectedServices(), HEARTBEAT_STALE_NS) {}
+    : m_catalog(&catalog), m_table(&table), m_health(display::expectedServices(), display::HEARTBEAT_STALE_NS) {}
 
 Result<Engine> Engine::create(const config::TelemetryConfig& settings, const signals::Catalog& catalog,
                               const signals::SignalTable& table) {
@@ -127,7 +112,7 @@ void Engine::sample(std::int64_t nowMonoNs) {
 std::string Engine::faultsBody(std::int64_t /*nowMonoNs*/) const {
   Json active = Json::array();
   for (const auto& [key, fault] : m_faults) {
-    active.push_back({{"source", fault.source}, {"name", fault.name}, {"severity", severityName(fault.severity)},
+    active.push_back({{"source", fault.source}, {"name", fault.name}, {"severity", std::string(display::faultSeverityName(fault.severity))},
                       {"text", fault.text}, {"sinceUnixMs", fault.timestampNs / 1'000'000}});
   }
   Json dm1 = Json::array();

@@ -17,22 +17,6 @@ constexpr std::string_view DM1_SUFFIX = ".activeDtcs";
 /// Pages asking within this long share one build of the common part (each page's own signals
 /// are read fresh on every update): ten pages at 20 updates/s build it at most 50 times a second.
 constexpr std::int64_t COMMON_REUSE_NS = 20'000'000;
-/// Heartbeats are sent once a second: a service not heard for 2.5 s is Stale.
-constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;
-
-
-std::string severityName(ipc::FaultSeverity severity) {
-  switch (severity) {
-    case ipc::FaultSeverity::Info:
-      return "info";
-    case ipc::FaultSeverity::Warning:
-      return "warning";
-    case ipc::FaultSeverity::Error:
-      return "error";
-    default:
-      return "critical";
-  }
-}
 
 /// The value and its plane's write time (CLOCK_MONOTONIC ns) as the HMI shows it.
 std::optional<std::pair<double, std::int64_t>> shown(const signals::SignalInfo& info,
@@ -91,7 +75,7 @@ class LiveStream final : public EventSource {
 }  // namespace
 
 LiveState::LiveState(const signals::Catalog& catalog, const signals::SignalTable& table, LiveSetup setup)
-    : m_catalog(catalog), m_table(table), m_setup(std::move(setup)), m_health(display::expectedServices(), HEARTBEAT_STALE_NS) {
+    : m_catalog(catalog), m_table(table), m_setup(std::move(setup)), m_health(display::expectedServices(), display::HEARTBEAT_STALE_NS) {
   if (!m_setup.fsmFile.empty()) {
     if (auto rules = display::FsmRules::load(m_setup.fsmFile)) {
       m_rules = std::move(*rules);
@@ -198,7 +182,7 @@ void LiveState::rebuild(std::int64_t nowMonoNs) {
 
   Json faults = Json::array();
   for (const auto& [key, fault] : m_faults) {
-    faults.push_back({{"name", fault.name}, {"source", fault.source}, {"severity", severityName(fault.severity)},
+    faults.push_back({{"name", fault.name}, {"source", fault.source}, {"severity", std::string(display::faultSeverityName(fault.severity))},
                       {"text", fault.text}, {"sinceUnixMs", fault.timestampNs / 1'000'000}});
   }
   for (const auto& [node, index] : m_dm1) {

@@ -59,4 +59,17 @@ const ServiceHealth* HealthTracker::find(std::string_view name) const noexcept {
   return nullptr;
 }
 
+std::string_view faultSeverityName(ipc::FaultSeverity severity) noexcept {
+  switch (severity) {
+    case ipc::FaultSeverity::Info:
+      return "info";
+    case ipc::FaultSeverity::Warning:
+      return "warning";
+    case ipc::FaultSeverity::Error:
+      return "error";
+    default:
+      return "critical";
+  }
+}
+
 }  // namespace openvcu::display

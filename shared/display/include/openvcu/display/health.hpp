@@ -26,6 +26,14 @@ struct ServiceHealth {
 /// vcu-web, which a VCU may run without): listed from the start, NotConnected until heard.
 [[nodiscard]] std::vector<std::string> expectedServices();
 
+/// Heartbeats come once a second: a service not heard for 2.5 s is Stale (vcu-web's live
+/// pages and vcu-telemetry's health messages use this; the HMI has its own setting).
+inline constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;
+
+/// A fault's severity as the pages and the telemetry messages name it: "info", "warning",
+/// "error", "critical".
+[[nodiscard]] std::string_view faultSeverityName(ipc::FaultSeverity severity) noexcept;
+
 /// Heartbeats -> one row per service. The expected services (from the configuration) are
 /// listed from the start as NotConnected. Beats older than `staleAfterNs` make a service
 /// Stale; three times that, NotConnected; a service whose status starts with "stopping"
