@@ -178,7 +178,7 @@ hmi="no"; grep -q '^Qt6_DIR:PATH=/' "$build/CMakeCache.txt" && hmi="yes"
 step 4 "build (ninja -j$jobs; shared lock /tmp/openvcu-cpu.lock)"
 t0=$(date +%s)
 # the installed programs first (what the packages need), then the tests
-runtime=(vcu vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web)
+runtime=(vcu vcu-can-rx vcu-can-tx vcu-fsm vcu-gpio vcu-ecu-sim vcu-web vcu-telemetry)
 [ "$hmi" = yes ] && runtime+=(vcu-hmi)
 flock -s /tmp/openvcu-cpu.lock cmake --build "$build" -j "$jobs" --target "${runtime[@]}" ||
   die "build of ${runtime[*]} failed"
