@@ -317,7 +317,10 @@ t0=$(date +%s%N)
 still=(); codes=()
 for ((i = ${#pids[@]} - 1; i >= 0; i--)); do kill "${pids[$i]}" 2>/dev/null; wait "${pids[$i]}"; codes+=("${names[$i]#openvcu-}=$?"); done
 pids=(); names=()
-sleep 0.5
+# every started process was waited for; a process of the user outside them (a child that
+# outlived its service) gets 3 s to end before it counts as left behind
+no_stack_process() { ! pgrep -u openvcu >/dev/null; }
+wait_for 3 no_stack_process || true
 mapfile -t still < <(pgrep -u openvcu -a)
 if [[ ${#still[@]} == 0 ]]; then
   result services_stopped PASS "SIGTERM, newest first: exit codes ${codes[*]} in $(( ($(date +%s%N) - t0) / 1000000 )) ms; no process of user openvcu left"
