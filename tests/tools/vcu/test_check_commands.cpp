@@ -30,7 +30,7 @@ const fs::path HHEA_FOLDER = fs::path(OPENVCU_SOURCE_DIR) / "config/hhea";
 /// A copy of config/hhea in the scratch folder under `name`, with `file` replaced by
 /// `content` when given; returns the copy's vehicle.json.
 std::string hheaCopy(const std::string& name, const std::string& file = {}, const std::string& content = {}) {
-  const fs::path folder = fs::path(VCU_TEST_WORK_DIR) / name;
+  const fs::path folder = scratchFolder() / name;
   fs::remove_all(folder);
   fs::create_directories(folder);
   for (const auto& entry : fs::directory_iterator(HHEA_FOLDER)) {
@@ -323,7 +323,7 @@ TEST_CASE("vcu check still checks the other files when vehicle.json itself has a
 }
 
 TEST_CASE("vcu check without any configuration or running stack is a usage error") {
-  ScopedEnvironment root("OPENVCU_RUN_DIR", (fs::path(VCU_TEST_WORK_DIR) / "no_stacks").string());
+  ScopedEnvironment root("OPENVCU_RUN_DIR", (scratchFolder() / "no_stacks").string());
   ::unsetenv("OPENVCU_CONFIG");
   const RunResult result = runVcu({"check"});
   CHECK(result.exitCode == EXIT_USAGE);
@@ -343,7 +343,7 @@ TEST_CASE("vcu fsm check writes diagnostics to stderr and blames a broken schedu
 }
 
 TEST_CASE("vcu finds the configuration of the one running stack through its command socket (#19)") {
-  const fs::path root = fs::path(VCU_TEST_WORK_DIR) / "run_one";
+  const fs::path root = scratchFolder() / "run_one";
   fs::remove_all(root);
   ScopedEnvironment rootVariable("OPENVCU_RUN_DIR", root.string());
   ::unsetenv("OPENVCU_CONFIG");
@@ -364,7 +364,7 @@ TEST_CASE("vcu finds the configuration of the one running stack through its comm
 }
 
 TEST_CASE("vcu refuses to guess between two running stacks and ignores a socket nobody serves") {
-  const fs::path root = fs::path(VCU_TEST_WORK_DIR) / "run_two";
+  const fs::path root = scratchFolder() / "run_two";
   fs::remove_all(root);
   ScopedEnvironment rootVariable("OPENVCU_RUN_DIR", root.string());
   ::unsetenv("OPENVCU_CONFIG");

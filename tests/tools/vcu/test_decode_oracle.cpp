@@ -79,7 +79,7 @@ TEST_CASE("decode agrees with the canmatrix oracle on a synthetic J1939 log") {
   if (shell(std::string(PYTHON) + " -c 'import canmatrix' >/dev/null 2>&1") != 0) {
     OPENVCU_SKIP("skipped: " << PYTHON << " cannot import canmatrix");
   }
-  const std::filesystem::path work = std::filesystem::path(VCU_TEST_WORK_DIR) / "oracle";
+  const std::filesystem::path work = scratchFolder() / "oracle";
   std::filesystem::create_directories(work);
   const std::filesystem::path dbc = work / "synthetic_j1939.dbc";
   const std::filesystem::path log = work / "synthetic_j1939.log";

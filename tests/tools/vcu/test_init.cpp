@@ -29,7 +29,7 @@ const char* const WRITTEN[] = {"vehicle.json",   "schedule.json", "receive.json"
 
 /// An empty scratch folder path (not created).
 fs::path freshFolder(const std::string& name) {
-  const fs::path folder = fs::path(VCU_TEST_WORK_DIR) / "init" / name;
+  const fs::path folder = scratchFolder() / "init" / name;
   fs::remove_all(folder);
   fs::create_directories(folder.parent_path());
   return folder;

@@ -108,7 +108,7 @@ std::string sheetWith(std::string_view rows) {
 
 /// A scratch folder of its own, emptied.
 std::filesystem::path scratchFolder(std::string_view name) {
-  const std::filesystem::path folder = std::filesystem::path(VCU_TEST_WORK_DIR) / name;
+  const std::filesystem::path folder = openvcu::cli::test::scratchFolder() / name;
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
   return folder;

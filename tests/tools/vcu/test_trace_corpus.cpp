@@ -53,7 +53,7 @@ TEST_CASE("vcu trace stats, check and report run on every python-can ASC log of 
     CHECK(check.exitCode != EXIT_USAGE);
     CHECK_FALSE(nlohmann::json::parse(check.out, nullptr, false).is_discarded());
 
-    const std::string html = (std::filesystem::path(VCU_TEST_WORK_DIR) / "corpus_report.html").string();
+    const std::string html = (scratchFolder() / "corpus_report.html").string();
     const RunResult report = runVcu({"trace", "report", "--dbc", dbc, log, "-o", html});
     CHECK(report.exitCode != EXIT_USAGE);
     std::ifstream file(html);

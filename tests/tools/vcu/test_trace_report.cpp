@@ -41,7 +41,7 @@ std::string readText(const std::filesystem::path& path) {
 }  // namespace
 
 TEST_CASE("vcu trace report on a vcu record folder puts the FSM states and faults on the time axis") {
-  const std::filesystem::path folder = std::filesystem::path(VCU_TEST_WORK_DIR) / "report_record";
+  const std::filesystem::path folder = scratchFolder() / "report_record";
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
   const std::string dbc = writeScratchFile("report_obc.dbc", REPORT_DBC);
@@ -62,7 +62,7 @@ TEST_CASE("vcu trace report on a vcu record folder puts the FSM states and fault
     CHECK(busResult->publish(ipc::FaultEvent{START_NS + 2'000'000'000, "BMS_IsolationFault", "0xF3",
                                              ipc::FaultSeverity::Critical, true, "isolation low"}));
   }
-  const std::string html = (std::filesystem::path(VCU_TEST_WORK_DIR) / "report_record.html").string();
+  const std::string html = (scratchFolder() / "report_record.html").string();
   // the signal by its table key (NODE.MESSAGE.SIGNAL, as `vcu signal list` shows it)
   const RunResult result =
       runVcu({"trace", "report", "--dbc", dbc, folder.string(), "-o", html, "--signals", "OBC.OBC.Voltage"});
@@ -80,7 +80,7 @@ TEST_CASE("vcu trace report on a vcu record folder puts the FSM states and fault
 TEST_CASE("vcu trace report names an unknown signal and a missing log") {
   const std::string dbc = writeScratchFile("report_obc.dbc", REPORT_DBC);
   const std::string log = writeScratchFile("report_one.log", "(1700000000.000000) can0 18FF50E5#A00F000000000000\n");
-  const std::string html = (std::filesystem::path(VCU_TEST_WORK_DIR) / "report_one.html").string();
+  const std::string html = (scratchFolder() / "report_one.html").string();
   const RunResult unknown = runVcu({"trace", "report", "--dbc", dbc, log, "-o", html, "--signals", "OBC.Current"});
   CHECK(unknown.exitCode == EXIT_INPUT_ERROR);
   CHECK(contains(unknown.err, "OBC.Current: no such signal"));

@@ -159,7 +159,7 @@ TEST_CASE("vcu trace stats of a log that does not exist exits 1 naming it") {
 }
 
 TEST_CASE("vcu trace stats of a vcu record folder reads its logs as one timeline, a bus per channel") {
-  std::filesystem::create_directories(std::string(VCU_TEST_WORK_DIR) + "/record");
+  std::filesystem::create_directories(scratchFolder() / "record");
   const std::string vehicle = writeScratchFile("record/vehicle.log",
                                                "(1.000000) vehicle 18FF50E5#01\n(1.020000) vehicle 18FF50E5#01\n");
   writeScratchFile("record/powertrain.log", "(1.010000) powertrain 123#01\n(1.040000) powertrain 123#01\n");

@@ -3,6 +3,8 @@
 
 #include <doctest/doctest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -33,10 +35,28 @@ inline std::string dataPath(std::string_view name) {
   return std::string(VCU_TEST_DATA) + "/" + std::string(name);
 }
 
-/// A scratch file in the build tree (its folder is created), overwritten with `content`.
+/// This test process's scratch folder in the build tree, created: work/<pid>. ctest runs each
+/// test case as its own process in parallel, so cases writing the same file name must not share
+/// a folder (one truncates the file while another reads it).
+/// The folder is removed when the process that made it exits.
+inline std::filesystem::path scratchFolder() {
+  struct Folder {
+    pid_t owner = ::getpid();
+    std::filesystem::path path = std::filesystem::path(VCU_TEST_WORK_DIR) / std::to_string(owner);
+    ~Folder() {
+      if (::getpid() != owner) return;  // a forked child leaving through exit()
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  };
+  static const Folder folder;
+  std::filesystem::create_directories(folder.path);
+  return folder.path;
+}
+
+/// A file in scratchFolder(), overwritten with `content`.
 inline std::string writeScratchFile(std::string_view name, std::string_view content) {
-  const std::filesystem::path folder(VCU_TEST_WORK_DIR);
-  std::filesystem::create_directories(folder);
+  const std::filesystem::path folder = scratchFolder();
   const std::filesystem::path path = folder / name;
   std::ofstream file(path, std::ios::binary | std::ios::trunc);
   file << content;
