@@ -6,8 +6,8 @@
 //   - the retained birth and status, the state and faults messages' content;
 //   - the rate limit (consecutive samples of a 2 Hz signal at least ~500 ms apart) and the
 //     deadband (consecutive samples of a 0.5-deadband signal more than 0.5 apart);
-//   - the broker SIGKILLed for OPENVCU_TELEMETRY_OUTAGE_S seconds (default 5; issue 25 says
-//     30, which is this test with OPENVCU_TELEMETRY_OUTAGE_S=30) and restarted: every record
+//   - the broker SIGKILLed for OPENVCU_TELEMETRY_OUTAGE_S seconds (default 30, as issue 25
+//     asks) and restarted: every record
 //     arrives, in order, none twice, also those made during the outage;
 //   - vcu-telemetry SIGKILLed and restarted on its queue: the status turns "offline" (the
 //     will), the sequence goes on without a gap, and what was lost is at most the batch of
@@ -65,7 +65,7 @@ constexpr std::int64_t ONE_BATCH_MS = 1000 + 500;
 
 int outageSeconds() {
   const char* text = std::getenv("OPENVCU_TELEMETRY_OUTAGE_S");
-  return text != nullptr ? std::max(1, std::atoi(text)) : 5;
+  return text != nullptr ? std::max(1, std::atoi(text)) : 30;
 }
 
 void writeFile(const fs::path& path, const std::string& text) {
