@@ -12,6 +12,7 @@
 #include "address_map.hpp"
 #include "openvcu/j1939/address_claim.hpp"
 #include "openvcu/j1939/dm1.hpp"
+#include "openvcu/j1939/dm_encode.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/j1939/request.hpp"
 #include "openvcu/j1939/safety.hpp"
@@ -352,15 +353,11 @@ struct ReceiverImpl {
       message.bus = buses[busIndex].name;
       message.node = state.label;
       message.source = source;
-      const j1939::LampStates& lamps = dm1Message.lamps;
-      message.lamps = static_cast<std::uint8_t>(static_cast<unsigned>(lamps.malfunction) << 6 |
-                                                static_cast<unsigned>(lamps.redStop) << 4 |
-                                                static_cast<unsigned>(lamps.amberWarning) << 2 |
-                                                static_cast<unsigned>(lamps.protect));
-      message.flash = static_cast<std::uint8_t>(static_cast<unsigned>(lamps.malfunctionFlash) << 6 |
-                                                static_cast<unsigned>(lamps.redStopFlash) << 4 |
-                                                static_cast<unsigned>(lamps.amberWarningFlash) << 2 |
-                                                static_cast<unsigned>(lamps.protectFlash));
+      std::array<std::uint8_t, j1939::DM1_MIN_LENGTH + 2> lampBytes{};  // the two lamp bytes, as on the bus
+      if (j1939::encodeDm1(dm1Message.lamps, {}, lampBytes) >= j1939::DM1_LAMP_BYTES) {
+        message.lamps = lampBytes[0];
+        message.flash = lampBytes[1];
+      }
       message.dtcs.reserve(dm1Message.dtcCount);
       for (const j1939::Dtc& dtc : dm1Message.activeDtcs()) {
         message.dtcs.push_back(ipc::NodeDtc{.spn = dtc.spn,
