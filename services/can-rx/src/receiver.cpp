@@ -69,7 +69,7 @@ struct SafetyState {
 struct Dm1State {
   j1939::Dm1 last{};
   bool has{};
-  std::int64_t publishedNs{};  ///< when outputs.dm1() last got this node's DM1
+  std::int64_t publishedNs{};                                   ///< when outputs.dm1() last got this node's DM1
   std::array<std::int32_t, config::DM1_FIELDS.size()> slots{};  ///< NO_SLOT when the node has none
   std::string label;  ///< node name, or "SA 0x.."
 };
@@ -335,8 +335,8 @@ struct ReceiverImpl {
         before, now,
         [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, true); },
         [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, false); });
-    const bool changed = !state->has || now.lamps != before.lamps ||
-                         !std::ranges::equal(now.activeDtcs(), before.activeDtcs());
+    const bool changed =
+        !state->has || now.lamps != before.lamps || !std::ranges::equal(now.activeDtcs(), before.activeDtcs());
     if (changed || nowNs - state->publishedNs >= DM1_REPUBLISH_NS) {
       publishDm1(busIndex, source, *state, now);
       state->publishedNs = nowNs;
@@ -347,7 +347,8 @@ struct ReceiverImpl {
   }
 
   /// The node's whole DM1 for other processes (vcu-telemetry): lamps and every active DTC.
-  void publishDm1(std::size_t busIndex, std::uint8_t source, const Dm1State& state, const j1939::Dm1& dm1Message) noexcept {
+  void publishDm1(std::size_t busIndex, std::uint8_t source, const Dm1State& state,
+                  const j1939::Dm1& dm1Message) noexcept {
     try {
       ipc::NodeDm1 message;
       message.bus = buses[busIndex].name;

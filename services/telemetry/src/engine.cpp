@@ -122,12 +122,14 @@ std::string Engine::faultsBody(std::int64_t /*nowMonoNs*/) const {
     };
     OrderedJson dtcs = OrderedJson::array();
     for (const ipc::NodeDtc& dtc : last.dtcs) {
-      dtcs.push_back({{"spn", dtc.spn}, {"fmi", dtc.fmi}, {"oc", dtc.occurrences}, {"cm", dtc.conversionMethod ? 1 : 0}});
+      dtcs.push_back(
+          {{"spn", dtc.spn}, {"fmi", dtc.fmi}, {"oc", dtc.occurrences}, {"cm", dtc.conversionMethod ? 1 : 0}});
     }
-    dm1.push_back({{"node", node},
-                   {"activeDtcs", last.dtcs.size()},
-                   {"lamps", {{"malfunction", lamp(6)}, {"redStop", lamp(4)}, {"amberWarning", lamp(2)}, {"protect", lamp(0)}}},
-                   {"dtcs", std::move(dtcs)}});
+    dm1.push_back(
+        {{"node", node},
+         {"activeDtcs", last.dtcs.size()},
+         {"lamps", {{"malfunction", lamp(6)}, {"redStop", lamp(4)}, {"amberWarning", lamp(2)}, {"protect", lamp(0)}}},
+         {"dtcs", std::move(dtcs)}});
   }
   return members(OrderedJson{{"active", std::move(active)}, {"dm1", std::move(dm1)}});
 }

@@ -227,10 +227,10 @@ struct J1939Network {
 
 /// One active DTC of another node's DM1 (J1939-73; j1939::Dtc without the decoder).
 struct NodeDtc {
-  std::uint32_t spn{};          ///< 0..524287
-  std::uint8_t fmi{};           ///< 0..31
-  std::uint8_t occurrences{};   ///< 0..126; 127 = not available
-  bool conversionMethod{};      ///< the CM bit
+  std::uint32_t spn{};         ///< 0..524287
+  std::uint8_t fmi{};          ///< 0..31
+  std::uint8_t occurrences{};  ///< 0..126; 127 = not available
+  bool conversionMethod{};     ///< the CM bit
   bool operator==(const NodeDtc&) const = default;
 };
 
