@@ -93,7 +93,12 @@ const VehicleView* FleetView::find(std::string_view vehicleId) const {
 
 std::int64_t activeFaultCount(const VehicleView& vehicle) noexcept {
   if (!vehicle.faults) return 0;
-  std::int64_t count = static_cast<std::int64_t>(vehicle.faults->active.size());
+  return static_cast<std::int64_t>(vehicle.faults->active.size()) + activeDtcCount(vehicle);
+}
+
+std::int64_t activeDtcCount(const VehicleView& vehicle) noexcept {
+  if (!vehicle.faults) return 0;
+  std::int64_t count = 0;
   for (const Dm1Count& node : vehicle.faults->dm1) count += node.activeDtcs;
   return count;
 }
@@ -103,9 +108,6 @@ std::optional<FaultLevel> worstFaultLevel(const VehicleView& vehicle) noexcept {
   std::optional<FaultLevel> worst;
   for (const ActiveFault& fault : vehicle.faults->active) {
     if (!worst || fault.level > *worst) worst = fault.level;
-  }
-  for (const Dm1Count& node : vehicle.faults->dm1) {
-    if (node.activeDtcs > 0 && (!worst || FaultLevel::Error > *worst)) worst = FaultLevel::Error;
   }
   return worst;
 }

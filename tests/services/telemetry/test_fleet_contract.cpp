@@ -63,6 +63,7 @@ TEST_CASE("fleet contract: the engine's state, faults, health and signals record
   CHECK(vehicle->state->previous == "Ready");
   CHECK(vehicle->state->seq == 41);
   CHECK(fleet::activeFaultCount(*vehicle) == 3);  // one fault event, two DM1 DTCs
+  CHECK(fleet::activeDtcCount(*vehicle) == 2);
   CHECK(fleet::worstFaultLevel(*vehicle) == fleet::FaultLevel::Critical);
   CHECK(fleet::fleetValue(*vehicle, "faults") == "3 active, worst critical: vcu-fsm/Contactor welded; DM1 BMS 2 DTC(s)");
   CHECK(fleet::fleetValue(*vehicle, "BMS.SOC") == "87.5");

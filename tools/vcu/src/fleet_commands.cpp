@@ -47,10 +47,10 @@ constexpr const char* WATCH_FOOTER =
     "Subscribes to openvcu/+/status, birth, state, faults, health and signals (the topics\n"
     "of docs/design/telemetry.md) and shows one line per vehicle: VEHICLE, LINK (online or\n"
     "offline: the retained status, the last will when the link died; ? before one came),\n"
-    "STATE (the FSM state of its last transition), FAULTS (active faults and DM1 DTCs, with\n"
-    "the worst severity), SOC (the newest value of --soc-signal NAME, else of the first of\n"
-    "its telemetry signals whose name ends in SOC), LAST (age of its newest message's time\n"
-    "stamp \"t\", the vehicle's clock).\n"
+    "STATE (the FSM state of its last transition), FAULTS (active fault events with the\n"
+    "worst severity, and the DM1 DTCs of its nodes: \"2 error + 1 DTC\"), SOC (the newest\n"
+    "value of --soc-signal NAME, else of the first of its telemetry signals whose name ends\n"
+    "in SOC), LAST (age of its newest message's time stamp \"t\", the vehicle's clock).\n"
     "Only status and birth are retained by the broker: the state, faults, health and signals\n"
     "of a vehicle show once it sends them (a transition, a change, health every 10 s).\n"
     "On a terminal the table is redrawn (at most twice a second); in a pipe one line per\n"
@@ -262,8 +262,12 @@ std::vector<std::string> cellsOf(const fleet::VehicleView& vehicle, const std::s
   if (vehicle.online) link = *vehicle.online ? std::string(fleet::STATUS_ONLINE) : std::string(fleet::STATUS_OFFLINE);
   std::string faults = "-";
   if (vehicle.faults) {
-    faults = std::to_string(fleet::activeFaultCount(vehicle));
+    // "0", "2 error" (fault events and the worst severity), "1 DTC" (DM1), "2 error + 1 DTC"
+    const std::int64_t dtcs = fleet::activeDtcCount(vehicle);
+    const std::int64_t events = fleet::activeFaultCount(vehicle) - dtcs;
+    faults = events > 0 || dtcs == 0 ? std::to_string(events) : std::string();
     if (const auto worst = fleet::worstFaultLevel(vehicle)) faults += " " + std::string(fleet::faultLevelName(*worst));
+    if (dtcs > 0) faults += (faults.empty() ? "" : " + ") + std::to_string(dtcs) + " DTC";
   }
   std::string soc = "-";
   const std::string socName = fleet::socSignalOf(vehicle, socOption);

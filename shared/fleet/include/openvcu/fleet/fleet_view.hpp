@@ -54,7 +54,9 @@ class FleetView {
 
 /// Active faults: the fault events plus the DM1 DTCs of every node.
 [[nodiscard]] std::int64_t activeFaultCount(const VehicleView& vehicle) noexcept;
-/// The worst severity among the active fault events (DM1 DTCs count as "error"); empty when none.
+/// The active DM1 DTCs of every node (the faults message counts them per node, no severity).
+[[nodiscard]] std::int64_t activeDtcCount(const VehicleView& vehicle) noexcept;
+/// The worst severity among the active fault events (DM1 DTCs carry none); empty when none.
 [[nodiscard]] std::optional<FaultLevel> worstFaultLevel(const VehicleView& vehicle) noexcept;
 
 /// The signal that stands for the state of charge: `wanted` when given, else the first of
