@@ -151,7 +151,8 @@ std::optional<std::string> fleetValue(const VehicleView& vehicle, std::string_vi
     if (const auto worst = worstFaultLevel(vehicle)) out += ", worst " + std::string(faultLevelName(*worst));
     std::string list;
     for (const ActiveFault& fault : vehicle.faults->active) {
-      list += (list.empty() ? "" : "; ") + fault.source + "/" + fault.name + (fault.text.empty() ? "" : " " + fault.text);
+      list +=
+          (list.empty() ? "" : "; ") + fault.source + "/" + fault.name + (fault.text.empty() ? "" : " " + fault.text);
     }
     for (const Dm1Count& node : vehicle.faults->dm1) {
       list += (list.empty() ? "" : "; ") + ("DM1 " + node.node + " " + std::to_string(node.activeDtcs) + " DTC(s)");

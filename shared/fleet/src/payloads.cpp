@@ -20,7 +20,8 @@ Result<Json> parseObject(std::string_view payload) {
   const auto version = json.find("v");
   if (version == json.end() || !version->is_number_integer()) return Error{"/v: missing (the format version)"};
   if (version->get<int>() != PAYLOAD_VERSION) {
-    return Error{"/v: version " + std::to_string(version->get<int>()) + " (this reads " + std::to_string(PAYLOAD_VERSION) + ")"};
+    return Error{"/v: version " + std::to_string(version->get<int>()) + " (this reads " +
+                 std::to_string(PAYLOAD_VERSION) + ")"};
   }
   return json;
 }
@@ -87,7 +88,9 @@ std::optional<FaultLevel> faultLevelFromName(std::string_view name) noexcept {
   return std::nullopt;
 }
 
-std::string_view faultLevelName(FaultLevel level) noexcept { return LEVEL_NAMES.at(static_cast<std::size_t>(level)); }
+std::string_view faultLevelName(FaultLevel level) noexcept {
+  return LEVEL_NAMES.at(static_cast<std::size_t>(level));
+}
 
 Result<bool> parseStatus(std::string_view payload) {
   if (payload == STATUS_ONLINE) return true;

@@ -36,7 +36,9 @@ std::optional<Topic> topicFromSuffix(std::string_view suffix) noexcept {
   return std::nullopt;
 }
 
-bool isRetained(Topic topic) noexcept { return topic == Topic::Status || topic == Topic::Birth; }
+bool isRetained(Topic topic) noexcept {
+  return topic == Topic::Status || topic == Topic::Birth;
+}
 
 std::string vehicleTopicRoot(std::string_view vehicleId) {
   std::string out(TOPIC_ROOT);
@@ -50,7 +52,9 @@ std::string vehicleTopic(std::string_view vehicleId, Topic topic) {
   return vehicleTopicRoot(vehicleId) + std::string(topicSuffix(topic));
 }
 
-std::string fleetFilter(Topic topic) { return vehicleTopic("+", topic); }
+std::string fleetFilter(Topic topic) {
+  return vehicleTopic("+", topic);
+}
 
 std::optional<TopicName> parseTopic(std::string_view topic) {
   if (!topic.starts_with(TOPIC_ROOT) || topic.size() <= TOPIC_ROOT.size() || topic[TOPIC_ROOT.size()] != '/') {

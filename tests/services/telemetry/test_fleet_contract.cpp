@@ -23,19 +23,26 @@ constexpr const char* VEHICLE = "hhea-07";
 
 TEST_CASE("fleet contract: the engine's state, faults, health and signals records are read back by FleetView") {
   signals::testing::ScopedInstance instance{"fleet-contract"};
-  const signals::Catalog catalog = signals::testing::makeCatalog({"BMS.SOC", "BMS.Current", "internal.dm1.BMS.activeDtcs"});
+  const signals::Catalog catalog =
+      signals::testing::makeCatalog({"BMS.SOC", "BMS.Current", "internal.dm1.BMS.activeDtcs"});
   auto table = signals::SignalTable::open(catalog, instance.name());
   REQUIRE(table.ok());
   config::TelemetryConfig settings;
-  settings.signals = {{.name = "BMS.Current", .maxRateHz = 10, .deadband = 0}, {.name = "BMS.SOC", .maxRateHz = 10, .deadband = 0}};
+  settings.signals = {{.name = "BMS.Current", .maxRateHz = 10, .deadband = 0},
+                      {.name = "BMS.SOC", .maxRateHz = 10, .deadband = 0}};
   auto engine = telemetry::Engine::create(settings, catalog, *table);
   REQUIRE(engine);
   REQUIRE(table->writeBus(*catalog.indexOf("BMS.SOC"), 87.5, START_NS, 0xF3, signals::Quality::Valid));
   REQUIRE(table->writeBus(*catalog.indexOf("BMS.Current"), -12.25, START_NS, 0xF3, signals::Quality::Valid));
   REQUIRE(table->writeBus(*catalog.indexOf("internal.dm1.BMS.activeDtcs"), 2, START_NS, 0xF3, signals::Quality::Valid));
-  engine->onTransition(ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Driving", .cause = "drive"});
-  engine->onFault(ipc::FaultEvent{.timestampNs = 0, .name = "Contactor", .source = "vcu-fsm",
-                                  .severity = ipc::FaultSeverity::Critical, .active = true, .text = "welded"});
+  engine->onTransition(
+      ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Driving", .cause = "drive"});
+  engine->onFault(ipc::FaultEvent{.timestampNs = 0,
+                                  .name = "Contactor",
+                                  .source = "vcu-fsm",
+                                  .severity = ipc::FaultSeverity::Critical,
+                                  .active = true,
+                                  .text = "welded"});
   engine->sample(START_NS);
   telemetry::TickInputs inputs;
   inputs.clocks = {.monoNs = START_NS, .unixMs = START_UNIX_MS};
@@ -65,7 +72,8 @@ TEST_CASE("fleet contract: the engine's state, faults, health and signals record
   CHECK(fleet::activeFaultCount(*vehicle) == 3);  // one fault event, two DM1 DTCs
   CHECK(fleet::activeDtcCount(*vehicle) == 2);
   CHECK(fleet::worstFaultLevel(*vehicle) == fleet::FaultLevel::Critical);
-  CHECK(fleet::fleetValue(*vehicle, "faults") == "3 active, worst critical: vcu-fsm/Contactor welded; DM1 BMS 2 DTC(s)");
+  CHECK(fleet::fleetValue(*vehicle, "faults") ==
+        "3 active, worst critical: vcu-fsm/Contactor welded; DM1 BMS 2 DTC(s)");
   CHECK(fleet::fleetValue(*vehicle, "BMS.SOC") == "87.5");
   CHECK(fleet::fleetValue(*vehicle, "BMS.Current") == "-12.25");
   CHECK(fleet::socSignalOf(*vehicle) == "BMS.SOC");
@@ -93,7 +101,8 @@ TEST_CASE("fleet view: a payload that is not the format is an error naming the t
   const auto badVersion = sut.apply("openvcu/hhea-07/faults", R"({"v":2,"seq":1,"t":1,"active":[]})");
   REQUIRE_FALSE(badVersion.ok());
   CHECK(badVersion.error().message == "openvcu/hhea-07/faults: /v: version 2 (this reads 1)");
-  const auto badSample = sut.apply("openvcu/hhea-07/signals", R"({"v":1,"seq":1,"t":1,"names":["A"],"samples":[[3,1,2.0]]})");
+  const auto badSample =
+      sut.apply("openvcu/hhea-07/signals", R"({"v":1,"seq":1,"t":1,"names":["A"],"samples":[[3,1,2.0]]})");
   REQUIRE_FALSE(badSample.ok());
   CHECK(badSample.error().message == "openvcu/hhea-07/signals: /samples/0: name index 3 beyond /names");
   const auto badStatus = sut.apply("openvcu/hhea-07/status", "maybe");
@@ -120,8 +129,9 @@ TEST_CASE("fleet topics: names built and parsed the same way") {
 
 TEST_CASE("fleet view: the SOC column takes the option, else the birth's signal ending in SOC") {
   fleet::FleetView sut;
-  REQUIRE(*sut.apply("openvcu/v1/birth",
-                     R"({"v":1,"vehicleId":"v1","signals":[{"name":"VIC.HS_I","unit":"A"},{"name":"VIC.HS_FastUpdSOC","unit":"%"}]})"));
+  REQUIRE(*sut.apply(
+      "openvcu/v1/birth",
+      R"({"v":1,"vehicleId":"v1","signals":[{"name":"VIC.HS_I","unit":"A"},{"name":"VIC.HS_FastUpdSOC","unit":"%"}]})"));
   const fleet::VehicleView& vehicle = *sut.find("v1");
   CHECK(fleet::socSignalOf(vehicle) == "VIC.HS_FastUpdSOC");
   CHECK(fleet::socSignalOf(vehicle, "BMS.Other") == "BMS.Other");

@@ -70,10 +70,12 @@ struct Vehicle {
 
 }  // namespace
 
-TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online, offline by the last will, state, SOC") {
+TEST_CASE(
+    "vcu fleet watch and get show the vehicles of a real mosquitto: online, offline by the last will, state, SOC") {
   if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
   const std::string bin = OPENVCU_BINARY_DIR "/bin";
-  if (!fs::exists("/usr/sbin/mosquitto")) OPENVCU_SKIP("skipped: needs mosquitto (Debian's mosquitto package; scripts/install-deps.sh)");
+  if (!fs::exists("/usr/sbin/mosquitto"))
+    OPENVCU_SKIP("skipped: needs mosquitto (Debian's mosquitto package; scripts/install-deps.sh)");
   harness::Harness sut;
   const fs::path work = fs::temp_directory_path() / "fleet-watch";  // the sandbox's own /tmp
   fs::remove_all(work);
@@ -83,12 +85,15 @@ TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online
   // no broker yet: a clear error, exit 1
   const auto absent = sut.run({vcu, "fleet", "watch", "--once", "--broker", BROKER});
   CHECK_MESSAGE(absent.exitCode() == 1, absent.describe());
-  CHECK_MESSAGE(absent.err.find("cannot reach the broker mqtt://127.0.0.1:1883: Connection refused") != std::string::npos,
-                absent.describe());
+  CHECK_MESSAGE(
+      absent.err.find("cannot reach the broker mqtt://127.0.0.1:1883: Connection refused") != std::string::npos,
+      absent.describe());
 
-  writeFile(work / "mosquitto.conf", "listener " + std::to_string(PORT) + " 127.0.0.1\nallow_anonymous true\n"
-                                     "persistence false\nuser root\nlog_dest stdout\n");
-  REQUIRE_STATUS(sut.start({.name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "mosquitto.conf").string()}}));
+  writeFile(work / "mosquitto.conf", "listener " + std::to_string(PORT) +
+                                         " 127.0.0.1\nallow_anonymous true\n"
+                                         "persistence false\nuser root\nlog_dest stdout\n");
+  REQUIRE_STATUS(
+      sut.start({.name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "mosquitto.conf").string()}}));
   bool up = false;
   for (int attempt = 0; attempt < 100 && !(up = listening(PORT)); ++attempt) std::this_thread::sleep_for(50ms);
   REQUIRE_MESSAGE(up, "mosquitto does not listen on 127.0.0.1:1883");
@@ -98,7 +103,9 @@ TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online
     if (entry.is_regular_file()) fs::copy_file(entry.path(), work / "vehicle" / entry.path().filename());
   }
   writeFile(work / "vehicle/telemetry.json",
-            Json{{"broker", BROKER}, {"vehicleId", "unused"}, {"queueFolder", (work / "queue").string()},
+            Json{{"broker", BROKER},
+                 {"vehicleId", "unused"},
+                 {"queueFolder", (work / "queue").string()},
                  {"signals", {{{"name", SOC_KEY}, {"maxRateHz", 10}, {"deadband", 0}}}}}
                 .dump(2));
   const std::string vehiclePath = (work / "vehicle/vehicle.json").string();
@@ -120,10 +127,11 @@ TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online
     auto events = ipc::EventBus::open(config->lcmUrl, vehicle.instance);
     REQUIRE_STATUS(events);
     vehicle.events.emplace(std::move(*events));
-    auto bridge = sut.start({.name = "vcu-telemetry-" + vehicle.id,
-                             .argv = {bin + "/vcu-telemetry", "--config", vehiclePath, "--instance", vehicle.instance,
-                                      "--vehicle-id", vehicle.id, "--queue-folder", (work / ("queue-" + vehicle.id)).string()},
-                             .notifyReadiness = true});
+    auto bridge =
+        sut.start({.name = "vcu-telemetry-" + vehicle.id,
+                   .argv = {bin + "/vcu-telemetry", "--config", vehiclePath, "--instance", vehicle.instance,
+                            "--vehicle-id", vehicle.id, "--queue-folder", (work / ("queue-" + vehicle.id)).string()},
+                   .notifyReadiness = true});
     REQUIRE_STATUS(bridge);
     bridges.push_back(*bridge);
   }
@@ -132,7 +140,8 @@ TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online
   std::thread writer([&] {
     for (int step = 0; writing; ++step) {
       for (Vehicle& vehicle : vehicles) {
-        vehicle.table->writeBus(soc, vehicle.soc + (step % 2) * 0.1, clock::monotonicNs(), 0xF3, signals::Quality::Valid);
+        vehicle.table->writeBus(soc, vehicle.soc + (step % 2) * 0.1, clock::monotonicNs(), 0xF3,
+                                signals::Quality::Valid);
       }
       std::this_thread::sleep_for(50ms);
     }
@@ -152,8 +161,10 @@ TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online
                           .captureOutput = true});
   REQUIRE_STATUS(watch);
   REQUIRE((*watch)->waitForLine("veh-c online", 10s));  // subscribed and the vehicles are up
-  vehicles[0].events->publish(ipc::FsmTransition{.timestampNs = 0, .fromState = "Standby", .toState = "Ready", .cause = "test"});
-  vehicles[1].events->publish(ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Driving", .cause = "test"});
+  vehicles[0].events->publish(
+      ipc::FsmTransition{.timestampNs = 0, .fromState = "Standby", .toState = "Ready", .cause = "test"});
+  vehicles[1].events->publish(
+      ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Driving", .cause = "test"});
   CHECK_MESSAGE((*watch)->waitForLine("veh-a online Ready", 10s).has_value(), (*watch)->output());
   CHECK_MESSAGE((*watch)->waitForLine("veh-b online Driving", 10s).has_value(), (*watch)->output());
   REQUIRE(bridges[2]->signal(SIGKILL));
@@ -193,7 +204,8 @@ TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online
   // state messages are not retained: transitions until the waiting get has seen one
   std::optional<harness::ExitStatus> ended;
   for (int attempt = 0; attempt < 40 && !ended; ++attempt) {
-    vehicles[0].events->publish(ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Charging", .cause = "test"});
+    vehicles[0].events->publish(
+        ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Charging", .cause = "test"});
     ended = (*getState)->waitForExit(250ms);
   }
   REQUIRE(ended.has_value());
@@ -202,9 +214,10 @@ TEST_CASE("vcu fleet watch and get show the vehicles of a real mosquitto: online
   CHECK_MESSAGE((*getState)->output() == "Charging\n", (*getState)->output());
   const auto unknown = sut.run({vcu, "fleet", "get", "veh-zz", "status", "--broker", BROKER, "--wait", "1"});
   CHECK(unknown.exitCode() == 1);
-  CHECK_MESSAGE(unknown.err.find("vehicle 'veh-zz' is not on the broker mqtt://127.0.0.1:1883 (known: veh-a, veh-b, veh-c)") !=
-                    std::string::npos,
-                unknown.describe());
+  CHECK_MESSAGE(
+      unknown.err.find("vehicle 'veh-zz' is not on the broker mqtt://127.0.0.1:1883 (known: veh-a, veh-b, veh-c)") !=
+          std::string::npos,
+      unknown.describe());
   const auto untold = sut.run({vcu, "fleet", "get", "veh-c", "state", "--broker", BROKER, "--wait", "1"});
   CHECK(untold.exitCode() == 1);
   CHECK_MESSAGE(untold.err.find("vehicle 'veh-c' has not told 'state'") != std::string::npos, untold.describe());

@@ -112,12 +112,14 @@ class FleetClient {
     mosquitto_disconnect_v5_callback_set(m_mosq, [](mosquitto*, void* self, int, const mosquitto_property*) {
       static_cast<FleetClient*>(self)->m_connected = false;
     });
-    mosquitto_subscribe_v5_callback_set(m_mosq, [](mosquitto*, void* self, int, int, const int*, const mosquitto_property*) {
-      ++static_cast<FleetClient*>(self)->m_subscribed;
-    });
-    mosquitto_message_v5_callback_set(m_mosq, [](mosquitto*, void* self, const mosquitto_message* message, const mosquitto_property*) {
-      static_cast<FleetClient*>(self)->onMessage(message);
-    });
+    mosquitto_subscribe_v5_callback_set(m_mosq,
+                                        [](mosquitto*, void* self, int, int, const int*, const mosquitto_property*) {
+                                          ++static_cast<FleetClient*>(self)->m_subscribed;
+                                        });
+    mosquitto_message_v5_callback_set(
+        m_mosq, [](mosquitto*, void* self, const mosquitto_message* message, const mosquitto_property*) {
+          static_cast<FleetClient*>(self)->onMessage(message);
+        });
     if (!options.username.empty()) {
       std::string password;
       if (!options.passwordFile.empty()) {
@@ -148,8 +150,9 @@ class FleetClient {
     while (m_subscribed < static_cast<int>(fleet::ALL_TOPICS.size())) {
       if (!m_refusal.empty()) return Error{"the broker " + m_url + " refused the connection: " + m_refusal};
       if (Clock::now() >= deadline) {
-        return Error{"the broker " + m_url + (m_connected ? " did not acknowledge the subscriptions" : " did not answer") +
-                     " within " + std::to_string(CONNECT_TIMEOUT.count()) + " s"};
+        return Error{"the broker " + m_url +
+                     (m_connected ? " did not acknowledge the subscriptions" : " did not answer") + " within " +
+                     std::to_string(CONNECT_TIMEOUT.count()) + " s"};
       }
       if (stopRequested()) return Error{"stopped"};
       if (const int looped = mosquitto_loop(m_mosq, LOOP_TIMEOUT_MS, 1); looped != MOSQ_ERR_SUCCESS) {
@@ -218,7 +221,8 @@ class FleetClient {
 
   void onMessage(const mosquitto_message* message) {
     m_lastMessage = Clock::now();
-    const std::string_view payload(static_cast<const char*>(message->payload), static_cast<std::size_t>(message->payloadlen));
+    const std::string_view payload(static_cast<const char*>(message->payload),
+                                   static_cast<std::size_t>(message->payloadlen));
     auto applied = m_fleet.apply(message->topic, payload);
     if (!applied) {
       m_errors.push_back(applied.error().message);
@@ -257,7 +261,8 @@ std::string ageText(std::int64_t unixMs, std::int64_t nowUnixMs) {
 const std::vector<std::string> COLUMNS{"VEHICLE", "LINK", "STATE", "FAULTS", "SOC", "LAST"};
 
 /// The cells of a vehicle's line (COLUMNS).
-std::vector<std::string> cellsOf(const fleet::VehicleView& vehicle, const std::string& socOption, std::int64_t nowUnixMs) {
+std::vector<std::string> cellsOf(const fleet::VehicleView& vehicle, const std::string& socOption,
+                                 std::int64_t nowUnixMs) {
   std::string link = "?";
   if (vehicle.online) link = *vehicle.online ? std::string(fleet::STATUS_ONLINE) : std::string(fleet::STATUS_OFFLINE);
   std::string faults = "-";
@@ -279,7 +284,11 @@ std::vector<std::string> cellsOf(const fleet::VehicleView& vehicle, const std::s
       }
     }
   }
-  return {vehicle.vehicleId, link, vehicle.state ? vehicle.state->state : "-", faults, soc,
+  return {vehicle.vehicleId,
+          link,
+          vehicle.state ? vehicle.state->state : "-",
+          faults,
+          soc,
           ageText(vehicle.newestUnixMs, nowUnixMs)};
 }
 
@@ -302,8 +311,8 @@ std::string socNote(const fleet::FleetView& fleet, const std::string& socOption)
 
 std::string tableText(const fleet::FleetView& fleet, const FleetOptions& options) {
   const std::int64_t now = clock::realtimeNs() / 1'000'000;
-  std::string out = "openvcu fleet: " + options.broker + ", " + std::to_string(fleet.vehicles().size()) + " vehicle(s), " +
-                    formatUtc(clock::realtimeNs()) + "\n";
+  std::string out = "openvcu fleet: " + options.broker + ", " + std::to_string(fleet.vehicles().size()) +
+                    " vehicle(s), " + formatUtc(clock::realtimeNs()) + "\n";
   TextTable table(COLUMNS);
   for (const auto& [id, vehicle] : fleet.vehicles()) table.addRow(cellsOf(vehicle, options.socSignal, now));
   if (table.empty()) {
@@ -326,7 +335,8 @@ void collect(FleetClient& client, double waitSeconds, Done done) {
 }
 
 void reportBadPayloads(FleetClient& client, Sink& err) {
-  for (const std::string& problem : client.takeErrors()) err.write("vcu fleet: warning: ignored a message: " + problem + "\n");
+  for (const std::string& problem : client.takeErrors())
+    err.write("vcu fleet: warning: ignored a message: " + problem + "\n");
 }
 
 std::string timeOfDay() {
@@ -350,17 +360,18 @@ ExitCode runFleetWatch(const FleetOptions& options, Streams streams, bool termin
     streams.out.write(tableText(client.fleet(), options));
     return ExitCode::Ok;
   }
-  const auto end = options.forSeconds > 0
-                       ? Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.forSeconds))
-                       : Clock::time_point::max();
+  const auto end = options.forSeconds > 0 ? Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                               std::chrono::duration<double>(options.forSeconds))
+                                          : Clock::time_point::max();
   std::map<std::string, std::vector<std::string>> shown;  ///< pipe: each vehicle's last line without its age
   auto lastDraw = Clock::time_point{};
   bool dirty = true;
-  if (!terminal) streams.out.write("# TIME " + [] {
-    std::string header;
-    for (const std::string& column : COLUMNS) header += (header.empty() ? "" : " ") + column;
-    return header;
-  }() + "\n");
+  if (!terminal)
+    streams.out.write("# TIME " + [] {
+      std::string header;
+      for (const std::string& column : COLUMNS) header += (header.empty() ? "" : " ") + column;
+      return header;
+    }() + "\n");
   while (!stopRequested() && Clock::now() < end) {
     client.pump(LOOP_TIMEOUT_MS);
     reportBadPayloads(client, streams.err);
@@ -380,7 +391,8 @@ ExitCode runFleetWatch(const FleetOptions& options, Streams streams, bool termin
       }
       continue;
     }
-    if (linkChanged) streams.out.write(timeOfDay() + (up ? " # broker link back\n" : " # broker link lost; reconnecting\n"));
+    if (linkChanged)
+      streams.out.write(timeOfDay() + (up ? " # broker link back\n" : " # broker link lost; reconnecting\n"));
     const std::int64_t nowMs = clock::realtimeNs() / 1'000'000;
     for (const std::string& id : changed) {
       const fleet::VehicleView* vehicle = client.fleet().find(id);
@@ -398,7 +410,8 @@ ExitCode runFleetWatch(const FleetOptions& options, Streams streams, bool termin
   return ExitCode::Ok;
 }
 
-ExitCode runFleetGet(const FleetOptions& options, const std::string& vehicleId, const std::string& key, Streams streams) {
+ExitCode runFleetGet(const FleetOptions& options, const std::string& vehicleId, const std::string& key,
+                     Streams streams) {
   const StopSignalScope stopScope;
   FleetClient client;
   if (Status opened = client.open(options); !opened) {
@@ -436,11 +449,15 @@ void registerFleetCommands(CLI::App& app, CommandContext& context) {
   CLI::App* fleetCommand = app.add_subcommand("fleet", FLEET_DESCRIPTION);
   fleetCommand->require_subcommand(1);
   const auto addBrokerOptions = [](CLI::App& command, FleetOptions& options) {
-    command.add_option("--broker", options.broker, "mqtt://HOST[:PORT] (1883) or mqtts://HOST[:PORT] (8883)")->required();
+    command.add_option("--broker", options.broker, "mqtt://HOST[:PORT] (1883) or mqtts://HOST[:PORT] (8883)")
+        ->required();
     command.add_option("--username", options.username, "log in as this user");
-    command.add_option("--password-file", options.passwordFile, "the password: the first line of FILE")->check(CLI::ExistingFile);
-    command.add_option("--ca-file", options.caFile, "mqtts://: the broker's CA (default: the system's store)")->check(CLI::ExistingFile);
-    command.add_option("--wait", options.waitSeconds, "--once and get: collect at most SECONDS (default 3)")->check(nonNegativeNumber());
+    command.add_option("--password-file", options.passwordFile, "the password: the first line of FILE")
+        ->check(CLI::ExistingFile);
+    command.add_option("--ca-file", options.caFile, "mqtts://: the broker's CA (default: the system's store)")
+        ->check(CLI::ExistingFile);
+    command.add_option("--wait", options.waitSeconds, "--once and get: collect at most SECONDS (default 3)")
+        ->check(nonNegativeNumber());
     command.add_option("--soc-signal", options.socSignal, "the SOC column's signal (default: the one ending in SOC)");
   };
 

@@ -25,7 +25,8 @@ struct FleetOptions {
 };
 
 ExitCode runFleetWatch(const FleetOptions& options, Streams streams, bool terminal);
-ExitCode runFleetGet(const FleetOptions& options, const std::string& vehicleId, const std::string& key, Streams streams);
+ExitCode runFleetGet(const FleetOptions& options, const std::string& vehicleId, const std::string& key,
+                     Streams streams);
 
 /// Adds `fleet` (watch, get) to `app`.
 void registerFleetCommands(CLI::App& app, CommandContext& context);

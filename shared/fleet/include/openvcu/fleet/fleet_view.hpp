@@ -35,7 +35,7 @@ struct VehicleView {
   std::optional<FaultsMessage> faults;
   std::optional<HealthMessage> health;
   std::map<std::string, SignalSample> signals;  ///< the newest sample of each signal by name
-  std::int64_t newestUnixMs{};                   ///< the newest "t" of its messages (0: none carried one)
+  std::int64_t newestUnixMs{};                  ///< the newest "t" of its messages (0: none carried one)
 };
 
 class FleetView {
