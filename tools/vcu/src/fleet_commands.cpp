@@ -447,7 +447,6 @@ ExitCode runFleetGet(const FleetOptions& options, const std::string& vehicleId, 
 
 void registerFleetCommands(CLI::App& app, CommandContext& context) {
   CLI::App* fleetCommand = app.add_subcommand("fleet", FLEET_DESCRIPTION);
-  fleetCommand->require_subcommand(1);
   const auto addBrokerOptions = [](CLI::App& command, FleetOptions& options) {
     command.add_option("--broker", options.broker, "mqtt://HOST[:PORT] (1883) or mqtts://HOST[:PORT] (8883)")
         ->required();
