@@ -156,6 +156,11 @@ std::optional<std::string> fleetValue(const VehicleView& vehicle, std::string_vi
     }
     for (const Dm1Count& node : vehicle.faults->dm1) {
       list += (list.empty() ? "" : "; ") + ("DM1 " + node.node + " " + std::to_string(node.activeDtcs) + " DTC(s)");
+      for (std::size_t i = 0; i < node.dtcs.size(); ++i) {
+        const Dtc& dtc = node.dtcs[i];
+        list += (i == 0 ? " " : ", ") + ("SPN " + std::to_string(dtc.spn) + " FMI " + std::to_string(dtc.fmi) +
+                                         " OC " + std::to_string(dtc.oc));
+      }
     }
     return list.empty() ? out : out + ": " + list;
   }

@@ -165,7 +165,17 @@ Result<FaultsMessage> parseFaults(std::string_view payload) {
   for (std::size_t i = 0; i < dm1.size() && read.ok(); ++i) {
     const std::string path = "/dm1/" + std::to_string(i);
     if (!read.objectAt(dm1[i], path)) break;
-    out.dm1.push_back({read.text(dm1[i], "node", path), read.number<std::int64_t>(dm1[i], "activeDtcs", path)});
+    Dm1Count node{read.text(dm1[i], "node", path), read.number<std::int64_t>(dm1[i], "activeDtcs", path), {}};
+    const Json& dtcs = read.array(dm1[i], "dtcs", path);
+    for (std::size_t j = 0; j < dtcs.size() && read.ok(); ++j) {
+      const std::string dtcPath = path + "/dtcs/" + std::to_string(j);
+      if (!read.objectAt(dtcs[j], dtcPath)) break;
+      node.dtcs.push_back({read.number<std::uint32_t>(dtcs[j], "spn", dtcPath),
+                           read.number<std::uint32_t>(dtcs[j], "fmi", dtcPath),
+                           read.number<std::uint32_t>(dtcs[j], "oc", dtcPath, false),
+                           read.number<std::uint32_t>(dtcs[j], "cm", dtcPath, false)});
+    }
+    out.dm1.push_back(std::move(node));
   }
   if (!read.ok()) return read.error();
   return out;

@@ -24,7 +24,7 @@ constexpr const char* VEHICLE = "hhea-07";
 TEST_CASE("fleet contract: the engine's state, faults, health and signals records are read back by FleetView") {
   signals::testing::ScopedInstance instance{"fleet-contract"};
   const signals::Catalog catalog =
-      signals::testing::makeCatalog({"BMS.SOC", "BMS.Current", "internal.dm1.BMS.activeDtcs"});
+      signals::testing::makeCatalog({"BMS.SOC", "BMS.Current"});
   auto table = signals::SignalTable::open(catalog, instance.name());
   REQUIRE(table.ok());
   config::TelemetryConfig settings;
@@ -34,7 +34,7 @@ TEST_CASE("fleet contract: the engine's state, faults, health and signals record
   REQUIRE(engine);
   REQUIRE(table->writeBus(*catalog.indexOf("BMS.SOC"), 87.5, START_NS, 0xF3, signals::Quality::Valid));
   REQUIRE(table->writeBus(*catalog.indexOf("BMS.Current"), -12.25, START_NS, 0xF3, signals::Quality::Valid));
-  REQUIRE(table->writeBus(*catalog.indexOf("internal.dm1.BMS.activeDtcs"), 2, START_NS, 0xF3, signals::Quality::Valid));
+  engine->onDm1({.node = "BMS", .source = 0xF3, .lamps = 0x04, .dtcs = {{100, 1, 3, false}, {200, 2, 1, false}}});
   engine->onTransition(
       ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Driving", .cause = "drive"});
   engine->onFault(ipc::FaultEvent{.timestampNs = 0,
@@ -73,7 +73,7 @@ TEST_CASE("fleet contract: the engine's state, faults, health and signals record
   CHECK(fleet::activeDtcCount(*vehicle) == 2);
   CHECK(fleet::worstFaultLevel(*vehicle) == fleet::FaultLevel::Critical);
   CHECK(fleet::fleetValue(*vehicle, "faults") ==
-        "3 active, worst critical: vcu-fsm/Contactor welded; DM1 BMS 2 DTC(s)");
+        "3 active, worst critical: vcu-fsm/Contactor welded; DM1 BMS 2 DTC(s) SPN 100 FMI 1 OC 3, SPN 200 FMI 2 OC 1");
   CHECK(fleet::fleetValue(*vehicle, "BMS.SOC") == "87.5");
   CHECK(fleet::fleetValue(*vehicle, "BMS.Current") == "-12.25");
   CHECK(fleet::socSignalOf(*vehicle) == "BMS.SOC");

@@ -60,9 +60,17 @@ struct ActiveFault {
   FaultLevel level{FaultLevel::Error};
   std::string text;
 };
+/// One DTC of a node's DM1 ("dtcs" of a faults message's "dm1" entry).
+struct Dtc {
+  std::uint32_t spn{};
+  std::uint32_t fmi{};
+  std::uint32_t oc{};  ///< occurrence count, 127 = not available
+  std::uint32_t cm{};  ///< the SPN conversion method bit
+};
 struct Dm1Count {
   std::string node;
   std::int64_t activeDtcs{};
+  std::vector<Dtc> dtcs;  ///< empty when the message lists none (older producers sent only the count)
 };
 /// openvcu/<id>/faults: the whole active set.
 struct FaultsMessage {
