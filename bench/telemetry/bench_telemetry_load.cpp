@@ -14,7 +14,7 @@
 //       subscribes to openvcu/# (QoS 1) and writes one line per message, flushed:
 //       "<arrival Unix ms> <arrival monotonic ns> <topic suffix> <bytes> <seq|-> <t|-> <samples|-> <binary bytes|->"
 //       where the binary bytes are the size of the same signals message in the binary form below;
-//       until SIGTERM.
+//       until SIGTERM. Says "subscribed" on stderr when the broker confirmed the subscription.
 //   bench_telemetry_load fill --queue DIR --records N --bytes B
 //       appends N records "bench\n{"v":1,"seq":S,"t":T,"pad":"xxx..."}" of about B bytes to the
 //       queue in DIR (vcu-telemetry's DiskQueue, batches of 100, fdatasync per batch): a backlog
@@ -189,6 +189,7 @@ int watch(int port, const std::string& outPath) {
   mosquitto_connect_callback_set(mosq, [](mosquitto* client, void*, int rc) {
     if (rc == 0) mosquitto_subscribe(client, nullptr, "openvcu/#", 1);
   });
+  mosquitto_subscribe_callback_set(mosq, [](mosquitto*, void*, int, int, const int*) { std::cerr << "subscribed" << std::endl; });
   mosquitto_message_callback_set(mosq, [](mosquitto*, void* self, const mosquitto_message* message) {
     auto& w = *static_cast<Watcher*>(self);
     const std::int64_t mono = clock::monotonicNs();

@@ -23,8 +23,8 @@
 #   3. perf record -g of vcu-telemetry for 20 s (when perf works here): where its CPU goes;
 #   4. encode: bench_telemetry_load encode, in process: Engine::sample and Engine::tick (JSON)
 #      against the binary prototype for the same 200 x 10 samples per second;
-#   5. outage: mosquitto SIGKILLed for OUTAGE s while the writer goes on, restarted; from the
-#      watcher: the records made before vcu-telemetry reconnected (the backlog), the time from
+#   5. outage: mosquitto SIGKILLed for OUTAGE s while the writer goes on, restarted (vcu-telemetry
+#      held with SIGSTOP until the new watcher's subscription is confirmed); from the watcher: the records made before vcu-telemetry reconnected (the backlog), the time from
 #      its "online" to the last of them, records/s and MB/s;
 #   6. prefilled drains: vcu-telemetry stopped (SIGTERM), its queue given FILL_SMALL records of
 #      300 bytes (then FILL_BIG of 32 KiB: a full signals message) by bench_telemetry_load fill,
@@ -78,7 +78,7 @@ start_watcher() {  # FILE
   "$load" watch --port 1883 --out "$1" 2>"$1.err" &
   watchPid=$!
   started+=("$watchPid")
-  wait_until 10 grep -q watching "$1.err" || { echo "error: the watcher did not connect: $(cat "$1.err")" >&2; exit 1; }
+  wait_until 10 grep -q subscribed "$1.err" || { echo "error: the watcher did not subscribe: $(cat "$1.err")" >&2; exit 1; }
 }
 stop_pid() {  # PID SIGNAL
   kill "-$2" "$1" 2>/dev/null || true
@@ -159,9 +159,11 @@ if [[ "$usePerf" == 1 ]] && command -v perf >/dev/null &&
    perf record -q -F 2999 -g -p "$telemetryPid" -o "$work/perf.data" -- sleep 20 >"$work/perf.log" 2>&1; then
   echo "== perf record -F 2999 -g, 20 s: vcu-telemetry's samples by shared object and symbol (self)"
   perf report -i "$work/perf.data" --stdio --no-children --sort dso,symbol 2>/dev/null |
-    grep -E '^ +[0-9.]+%' | head -n 25 | sed 's/^/   /' || true
+    grep -E '^ +[0-9.]+%' | head -n 25 | sed -e 's/ *- *- *$//' -e 's/^/   /' || true
   echo "   by shared object:"
-  perf report -i "$work/perf.data" --stdio --no-children --sort dso 2>/dev/null | grep -E '^ +[0-9.]+%' | head -n 10 | sed 's/^/   /' || true
+  perf report -i "$work/perf.data" --stdio --no-children --sort dso 2>/dev/null | grep -E '^ +[0-9.]+%' | head -n 10 |
+    sed -e 's/ *$//' -e 's/^/   /' || true
+  echo "   samples: $(perf report -i "$work/perf.data" --stdio 2>/dev/null | sed -n 's/^# Samples: \([^ ]*\).*/\1/p' | head -n 1)"
 else
   echo "== perf: not available here ($(tail -n 1 "$work/perf.log" 2>/dev/null || echo 'PERF=0'))"
 fi
@@ -176,9 +178,13 @@ echo "== outage: mosquitto SIGKILLed for $outage s"
 stop_pid "$brokerPid" KILL
 stop_pid "$watchPid" TERM
 sleep "$outage"
+# vcu-telemetry is stopped (SIGSTOP) while the broker starts and the new watcher subscribes, so
+# that it cannot reconnect and send the backlog before the watcher listens; then SIGCONT
+kill -STOP "$telemetryPid"
 brokerStartMs=$(( $(date +%s%N) / 1000000 ))
 start_broker
 start_watcher "$work/drain.txt"
+kill -CONT "$telemetryPid"
 onlineLine="$(online_line "$work/drain.txt" 0)"
 sleep 5
 read -r dk dn <<<"$(cpu_sample "$telemetryPid")"
