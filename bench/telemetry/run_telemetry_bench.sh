@@ -7,7 +7,7 @@
 #
 # usage: bench/telemetry/run_telemetry_bench.sh [BUILD_DIR] [SECONDS]   (defaults: <repo>/build, 60)
 #   environment: OUTAGE (s, default 30), FILL_SMALL (records, default 20000, 300 bytes each),
-#   FILL_BIG (records, default 500, 32 KiB each), PERF (1: perf record 20 s if perf works; default 1)
+#   FILL_BIG (records, default 500, 32 KiB each), QUEUE_MB (maxQueueMB, default 64), PERF (1: perf record 20 s if perf works; default 1)
 #
 # Everything runs inside tests/harness/run_isolated.sh (private network, /dev/shm, /tmp, PIDs):
 #   0. a copy of config/hhea whose telemetry.json lists 200 DBC signals at maxRateHz 10,
@@ -18,7 +18,8 @@
 #      second, so neither the rate limit's phase nor the deadband ever leaves a signal out)
 #      and the real vcu-telemetry; 5 s to settle after its "online";
 #   2. steady: over SECONDS, vcu-telemetry's CPU (utime+stime of /proc/PID/stat and the sum of
-#      /proc/PID/task/*/schedstat, in % of one core), VmRSS every second (max) and VmHWM;
+#      /proc/PID/task/*/schedstat, in % of one core; per thread with its context switches/s),
+#      VmRSS every second (max), VmHWM, RSS and PSS by kind, the largest mappings;
 #      from the watcher: messages/s and bytes/s per topic, samples/s, the binary form's bytes/s;
 #   3. perf record -g of vcu-telemetry for 20 s (when perf works here): where its CPU goes;
 #   4. encode: bench_telemetry_load encode, in process: Engine::sample and Engine::tick (JSON)
@@ -31,7 +32,8 @@
 #      vcu-telemetry started again: the time from its "online" to the last filled record.
 # Output: the sections above, then one line `RESULT key=value ...`.
 # exit: 0 targets met (steady CPU <= 1 % of one core, RSS <= 15 MB), 2 a target missed,
-# 1 something failed. Only processes this script started are ended, by PID.
+# 1 something failed (also: vcu-telemetry logged an error, e.g. a tick batch larger than a
+# queue segment with QUEUE_MB below 2). Only processes this script started are ended, by PID.
 set -euo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -46,6 +48,7 @@ outage="${OUTAGE:-30}"
 fillSmall="${FILL_SMALL:-20000}"
 fillBig="${FILL_BIG:-500}"
 usePerf="${PERF:-1}"
+queueMb="${QUEUE_MB:-64}"
 work=/tmp/telemetry-bench
 rm -rf "$work"
 mkdir -p "$work/vehicle" "$work/broker"
@@ -60,8 +63,8 @@ echo "date $(date -u '+%Y-%m-%d %H:%M UTC')"
 cp "$repo"/config/hhea/* "$work/vehicle/"
 config="$work/vehicle/vehicle.json"
 signals="$("$load" select --config "$config" --count 200 --rate-hz 10)"
-jq -n --argjson signals "$signals" --arg queue "$work/queue" \
-  '{broker: "mqtt://127.0.0.1:1883", vehicleId: "bench-01", queueFolder: $queue, maxQueueMB: 64, signals: $signals}' \
+jq -n --argjson signals "$signals" --arg queue "$work/queue" --argjson mb "$queueMb" \
+  '{broker: "mqtt://127.0.0.1:1883", vehicleId: "bench-01", queueFolder: $queue, maxQueueMB: $mb, signals: $signals}' \
   >"$work/vehicle/telemetry.json"
 printf 'listener 1883 127.0.0.1\nallow_anonymous true\npersistence false\nuser root\nlog_dest file %s\n' "$work/broker/mosquitto.log" >"$work/broker/mosquitto.conf"
 
@@ -116,7 +119,16 @@ online_line "$work/steady.txt" 0 >/dev/null
 sleep 5
 echo "== vcu-telemetry (pid $telemetryPid, $(ls /proc/$telemetryPid/task | wc -l) threads): 200 signals at maxRateHz 10, written at 20 Hz"
 
+# "<tid> <comm> <schedstat ns> <switches>" per thread of process $1
+thread_sample() {
+  local task
+  for task in /proc/"$1"/task/*; do
+    echo "$(basename "$task") $(tr ' ' '_' <"$task/comm") $(awk '{print $1}' "$task/schedstat") $(awk '/ctxt_switches:/ { s += $2 } END { print s }' "$task/status")"
+  done
+}
+
 # 2. steady
+thread_sample "$telemetryPid" >"$work/threads0.txt"
 read -r k0 n0 <<<"$(cpu_sample "$telemetryPid")"
 read -r bk0 bn0 <<<"$(cpu_sample "$brokerPid")"
 t0ms=$(( $(date +%s%N) / 1000000 )); t0=$(date +%s%N)
@@ -127,6 +139,7 @@ for (( i = 0; i < seconds; i++ )); do
   (( rss > rssMax )) && rssMax=$rss
 done
 read -r k1 n1 <<<"$(cpu_sample "$telemetryPid")"
+thread_sample "$telemetryPid" >"$work/threads1.txt"
 read -r bk1 bn1 <<<"$(cpu_sample "$brokerPid")"
 t1=$(date +%s%N); t1ms=$(( t1 / 1000000 ))
 hwm="$(awk '/^VmHWM:/ {print $2}' "/proc/$telemetryPid/status")"
@@ -138,6 +151,11 @@ brokerCpu="$(awk -v n=$(( bn1 - bn0 )) -v w="$wall" 'BEGIN { printf "%.2f", 100 
 echo "== steady ($(awk -v w="$wall" 'BEGIN { printf "%.1f", w / 1e9 }') s)"
 echo "   vcu-telemetry CPU: $cpuTicks % of one core (ticks), $cpuSched % (schedstat); VmRSS max $rssMax kB, VmHWM $hwm kB"
 echo "   VmRSS at the end: ${rssParts%, } (RssShmem: the signal table's pages it touched)"
+echo "   PSS (its share of pages shared with other processes): $(awk '/^Pss(_Anon|_File|_Shmem)?:/ { printf "%s %s kB, ", $1, $2 }' "/proc/$telemetryPid/smaps_rollup" | sed 's/, $//')"
+echo "   per thread (CPU in % of one core, context switches/s):"
+awk -v w="$wall" 'NR == FNR { ns[$1] = $3; sw[$1] = $4; next }
+  ($1 in ns) { printf "   %-16s %6.3f %% %7.1f/s\n", $2, 100 * ($3 - ns[$1]) / w, ($4 - sw[$1]) * 1e9 / w }' \
+  "$work/threads0.txt" "$work/threads1.txt"
 echo "   the largest mappings by Rss (kB, /proc/PID/smaps):"
 awk '/^[0-9a-f]+-[0-9a-f]+ / { name = (NF >= 6 ? $6 : "[anon]") } /^Rss:/ { rss[name] += $2 }
      END { for (n in rss) printf "%8d %s\n", rss[n], n }' "/proc/$telemetryPid/smaps" | sort -rn | head -n 8 | sed 's/^/   /'
@@ -231,11 +249,16 @@ echo "== prefilled drains (vcu-telemetry restarted on a queue of N records; the 
 drain_fill small "$fillSmall" 300
 drain_fill big "$fillBig" 32000
 
-echo "== vcu-telemetry log (last lines)"
-tail -n 5 "$work/telemetry.log" | sed 's/^/   /'
+echo "== vcu-telemetry log: errors and warnings but the DBC's ($(grep -c ' error ' "$work/telemetry.log" || true) error lines)"
+grep -E ' (error|warning) ' "$work/telemetry.log" | grep -v 'hhea.dbc' | sort | uniq -c | sort -rn | head -n 5 | cut -c1-220 | sed 's/^/   /' || true
 
 status=0
+logErrors="$(grep -c ' error ' "$work/telemetry.log" || true)"
 awk -v c="$cpuSched" -v r="$rssMax" -v h="$hwm" 'BEGIN { exit !(c <= 1.0 && r <= 15360 && h <= 15360) }' || status=2
 echo "   targets: steady CPU <= 1 % of one core, RSS <= 15 MB: $( ((status == 0)) && echo met || echo "NOT met")"
-echo "RESULT cpu_pct=$cpuSched cpu_ticks_pct=$cpuTicks rss_max_kb=$rssMax hwm_kb=$hwm broker_cpu_pct=$brokerCpu $steadyLine ${encodeLine}${outageLine} ${fillResults}targets_met=$( ((status == 0)) && echo 1 || echo 0)"
+if (( logErrors > 0 )); then
+  echo "   vcu-telemetry logged $logErrors error(s): the figures above are not those of a healthy run"
+  status=1
+fi
+echo "RESULT cpu_pct=$cpuSched cpu_ticks_pct=$cpuTicks rss_max_kb=$rssMax hwm_kb=$hwm broker_cpu_pct=$brokerCpu $steadyLine ${encodeLine}${outageLine} ${fillResults}log_errors=$logErrors targets_met=$( ((status == 0)) && echo 1 || echo 0)"
 exit "$status"
