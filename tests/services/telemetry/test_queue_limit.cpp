@@ -7,8 +7,8 @@
 //      confirmed, the broker is stopped: the outage begins;
 //   3. the queue is filled to just below its limit with backlog records (the test appends
 //      them through DiskQueue, as the bridge would during a long outage: with maxQueueMB 1 a
-//      tick batch must stay under a segment, so vcu-telemetry alone would need about 20 s of
-//      outage, and libmosquitto's reconnect backoff another 15, to get there);
+//      tick's batch must fit one 64 KiB segment, so vcu-telemetry alone would need about 20 s
+//      of outage to fill 1 MiB, and its reconnect backoff up to 16 s more after it);
 //   4. vcu-telemetry starts again on that queue with the broker still down and the writer
 //      going on: its ticks take the queue past the limit, so whole segments go, oldest first;
 //      it logs the dropped range;
