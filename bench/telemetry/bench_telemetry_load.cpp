@@ -29,8 +29,10 @@
 //   u8 version (1) | u8 kind (1 = signals) | u64 seq | i64 t (Unix ms) | u16 sample count |
 //   per sample: u16 signal index (into the birth's "signals" list) | u16 ms before t | f64 value
 // i.e. 20 bytes of header and 12 per sample (names are known from the birth).
+#include <mosquitto.h>
 #include <signal.h>
 #include <time.h>
+#include <zlib.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -42,9 +44,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
-#include <mosquitto.h>
 #include <mutex>
-#include <zlib.h>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
@@ -71,7 +71,9 @@ constexpr std::uint16_t SOURCE = 0xF3;
 constexpr double QUANTUM = 0.05;  ///< written values are multiples of this (a typical DBC factor)
 
 std::atomic<bool> g_stop{false};
-void onSignal(int /*signal*/) { g_stop = true; }
+void onSignal(int /*signal*/) {
+  g_stop = true;
+}
 
 [[noreturn]] void fail(const std::string& text) {
   std::cerr << "bench_telemetry_load: " << text << "\n";
@@ -106,7 +108,8 @@ Vehicle loadVehicle(const std::string& path) {
 }
 
 /// The configured signals' catalog indices, in telemetry.json's order.
-std::vector<signals::SignalIndex> configuredSignals(const signals::Catalog& catalog, const config::TelemetryConfig& settings) {
+std::vector<signals::SignalIndex> configuredSignals(const signals::Catalog& catalog,
+                                                    const config::TelemetryConfig& settings) {
   std::vector<signals::SignalIndex> out;
   for (const config::TelemetrySignal& signal : settings.signals) {
     const auto index = catalog.indexOf(signal.name);
@@ -142,7 +145,8 @@ int select(const std::string& vehiclePath, int count, double rateHz) {
     if (info.maximum <= info.minimum) continue;
     list.push_back({{"name", info.key}, {"maxRateHz", rateHz}, {"deadband", 0}});
   }
-  if (static_cast<int>(list.size()) < count) fail("the catalog has only " + std::to_string(list.size()) + " suitable signals");
+  if (static_cast<int>(list.size()) < count)
+    fail("the catalog has only " + std::to_string(list.size()) + " suitable signals");
   std::cout << list.dump() << "\n";
   return 0;
 }
@@ -171,7 +175,9 @@ int write(const std::string& vehiclePath, const std::string& telemetryPath, doub
 }
 
 /// The binary form's size of a signals message (see the top of this file).
-std::size_t binaryBytes(std::size_t samples) { return BINARY_HEADER_BYTES + samples * BINARY_SAMPLE_BYTES; }
+std::size_t binaryBytes(std::size_t samples) {
+  return BINARY_HEADER_BYTES + samples * BINARY_SAMPLE_BYTES;
+}
 
 struct Watcher {
   std::FILE* out{};
@@ -189,14 +195,16 @@ int watch(int port, const std::string& outPath) {
   mosquitto_connect_callback_set(mosq, [](mosquitto* client, void*, int rc) {
     if (rc == 0) mosquitto_subscribe(client, nullptr, "openvcu/#", 1);
   });
-  mosquitto_subscribe_callback_set(mosq, [](mosquitto*, void*, int, int, const int*) { std::cerr << "subscribed" << std::endl; });
+  mosquitto_subscribe_callback_set(
+      mosq, [](mosquitto*, void*, int, int, const int*) { std::cerr << "subscribed" << std::endl; });
   mosquitto_message_callback_set(mosq, [](mosquitto*, void* self, const mosquitto_message* message) {
     auto& w = *static_cast<Watcher*>(self);
     const std::int64_t mono = clock::monotonicNs();
     const std::int64_t real = clock::realtimeNs() / 1'000'000;
     const std::string_view topic(message->topic);
     const std::string_view suffix = topic.substr(topic.rfind('/') + 1);
-    const std::string_view text(static_cast<const char*>(message->payload), static_cast<std::size_t>(message->payloadlen));
+    const std::string_view text(static_cast<const char*>(message->payload),
+                                static_cast<std::size_t>(message->payloadlen));
     std::string seq = "-", t = "-", samples = "-", binary = "-";
     if (!text.empty() && text.front() == '{') {
       const Json body = Json::parse(text, nullptr, false);
@@ -242,7 +250,8 @@ int fill(const std::string& folder, std::uint64_t records, std::size_t bytes) {
     batch.clear();
     std::uint64_t sequence = queue->stats().nextSequence;
     for (std::size_t i = 0; i < FILL_BATCH && written + batch.size() < records; ++i) {
-      std::string record = "bench\n{\"v\":1,\"seq\":" + std::to_string(sequence++) + ",\"t\":" + std::to_string(t) + ",\"pad\":\"";
+      std::string record =
+          "bench\n{\"v\":1,\"seq\":" + std::to_string(sequence++) + ",\"t\":" + std::to_string(t) + ",\"pad\":\"";
       record.append(bytes > record.size() + 2 ? bytes - record.size() - 2 : 0, 'x');
       record += "\"}";
       batch.push_back(std::move(record));
@@ -313,7 +322,8 @@ int encode(const std::string& vehiclePath, const std::string& telemetryPath, int
     tickSamples.clear();
     for (int round = 0; round < ROUNDS_PER_SECOND; ++round, ++step) {
       // simulated time: 100 ms per round, so every signal's 10 Hz limit lets each round through
-      const std::int64_t now = start + (static_cast<std::int64_t>(second) * ROUNDS_PER_SECOND + round + 1) * (NS_PER_S / ROUNDS_PER_SECOND);
+      const std::int64_t now =
+          start + (static_cast<std::int64_t>(second) * ROUNDS_PER_SECOND + round + 1) * (NS_PER_S / ROUNDS_PER_SECOND);
       for (std::size_t i = 0; i < indices.size(); ++i) {
         const double value = valueAt(vehicle.catalog[indices[i]], i, step);
         table->writeBus(indices[i], value, now, SOURCE, signals::Quality::Valid);
@@ -324,10 +334,11 @@ int encode(const std::string& vehiclePath, const std::string& telemetryPath, int
       sampleCpu += threadCpuNs() - before;
     }
     const std::int64_t tickNow = start + static_cast<std::int64_t>(second + 1) * NS_PER_S;
-    const telemetry::TickInputs inputs{.clocks = {.monoNs = tickNow, .unixMs = startUnixMs + (tickNow - start) / 1'000'000},
-                                       .queue = {},
-                                       .drops = {},
-                                       .link = {}};
+    const telemetry::TickInputs inputs{
+        .clocks = {.monoNs = tickNow, .unixMs = startUnixMs + (tickNow - start) / 1'000'000},
+        .queue = {},
+        .drops = {},
+        .link = {}};
     std::int64_t before = threadCpuNs();
     const std::vector<std::string> records = engine->tick(sequence, inputs);
     jsonCpu += threadCpuNs() - before;
@@ -349,11 +360,13 @@ int encode(const std::string& vehiclePath, const std::string& telemetryPath, int
     samples += tickSamples.size();
   }
   const auto perSecond = [seconds](std::int64_t ns) { return static_cast<double>(ns) / seconds / 1000.0; };
-  std::printf("encode seconds %d signals %zu samples_per_s %.0f\n", seconds, indices.size(), static_cast<double>(samples) / seconds);
+  std::printf("encode seconds %d signals %zu samples_per_s %.0f\n", seconds, indices.size(),
+              static_cast<double>(samples) / seconds);
   std::printf("encode json_deflated_bytes_per_s %.0f deflate_cpu_us_per_s %.1f binary_deflated_bytes_per_s %.0f\n",
-              static_cast<double>(jsonDeflated) / seconds, perSecond(deflateCpu), static_cast<double>(binaryDeflated) / seconds);
-  std::printf("encode sample_cpu_us_per_s %.1f json_tick_cpu_us_per_s %.1f binary_cpu_us_per_s %.1f\n", perSecond(sampleCpu),
-              perSecond(jsonCpu), perSecond(binaryCpu));
+              static_cast<double>(jsonDeflated) / seconds, perSecond(deflateCpu),
+              static_cast<double>(binaryDeflated) / seconds);
+  std::printf("encode sample_cpu_us_per_s %.1f json_tick_cpu_us_per_s %.1f binary_cpu_us_per_s %.1f\n",
+              perSecond(sampleCpu), perSecond(jsonCpu), perSecond(binaryCpu));
   std::printf("encode json_bytes_per_s %.0f json_messages_per_s %.2f binary_bytes_per_s %.0f\n",
               static_cast<double>(jsonBytes) / seconds, static_cast<double>(jsonRecords) / seconds,
               static_cast<double>(binaryBytesTotal) / seconds);

@@ -120,7 +120,9 @@ class Subscriber {
   std::vector<Message> m_messages;
 };
 
-bool hasSeq(const Message& message) { return message.body.is_object() && message.body.contains("seq"); }
+bool hasSeq(const Message& message) {
+  return message.body.is_object() && message.body.contains("seq");
+}
 
 std::uint64_t maxSeq(const std::vector<Message>& messages) {
   std::uint64_t max = 0;
@@ -137,7 +139,8 @@ std::map<std::uint64_t, std::uint64_t> reportedDrops(const std::vector<Message>&
     if (!message.topic.ends_with("/health")) continue;
     for (const Json& drop : message.body["queue"]["drops"]) {
       drops[drop["first"].get<std::uint64_t>()] = drop["last"].get<std::uint64_t>();
-      CHECK(drop["records"].get<std::uint64_t>() == drop["last"].get<std::uint64_t>() - drop["first"].get<std::uint64_t>() + 1);
+      CHECK(drop["records"].get<std::uint64_t>() ==
+            drop["last"].get<std::uint64_t>() - drop["first"].get<std::uint64_t>() + 1);
     }
   }
   return drops;
@@ -145,10 +148,13 @@ std::map<std::uint64_t, std::uint64_t> reportedDrops(const std::vector<Message>&
 
 }  // namespace
 
-TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped first, reported in health and the log, the consumer sees exactly that gap and everything after in order") {
+TEST_CASE(
+    "vcu-telemetry's queue at its limit (#25): oldest records dropped first, reported in health and the log, the "
+    "consumer sees exactly that gap and everything after in order") {
   if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
   const std::string bin = OPENVCU_BINARY_DIR "/bin";
-  if (!fs::exists("/usr/sbin/mosquitto")) OPENVCU_SKIP("skipped: needs mosquitto (Debian's mosquitto package; scripts/install-deps.sh)");
+  if (!fs::exists("/usr/sbin/mosquitto"))
+    OPENVCU_SKIP("skipped: needs mosquitto (Debian's mosquitto package; scripts/install-deps.sh)");
   harness::Harness sut;
   const fs::path work = fs::temp_directory_path() / "telemetry-queue-limit";  // the sandbox's own /tmp
   fs::remove_all(work);
@@ -159,9 +165,11 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   // the broker: anonymous on loopback; persistence keeps the subscriber's session over the outage;
   // no limit on the messages it holds for that session (the drain is larger than the default 1000)
   writeFile(work / "broker/mosquitto.conf",
-            "listener " + std::to_string(PORT) + " 127.0.0.1\nallow_anonymous true\npersistence true\npersistence_location " +
+            "listener " + std::to_string(PORT) +
+                " 127.0.0.1\nallow_anonymous true\npersistence true\npersistence_location " +
                 (work / "broker").string() + "/\nmax_queued_messages 0\nuser root\nlog_dest stdout\n");
-  const harness::ProcessSpec brokerSpec{.name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "broker/mosquitto.conf").string()}};
+  const harness::ProcessSpec brokerSpec{
+      .name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "broker/mosquitto.conf").string()}};
 
   // the vehicle: a copy of config/hhea, telemetry.json with a 1 MiB queue and 20 signals
   for (const auto& entry : fs::directory_iterator(fs::path(OPENVCU_SOURCE_DIR) / "config/hhea")) {
@@ -176,7 +184,9 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   Json signalList = Json::array();
   for (signals::SignalIndex i = 0; i < catalog->size() && written.size() < SIGNAL_COUNT; ++i) {
     const signals::SignalInfo& info = (*catalog)[i];
-    if (info.kind != signals::SignalKind::Bus || info.direction != signals::SignalDirection::Received || info.maximum - info.minimum < 1) continue;
+    if (info.kind != signals::SignalKind::Bus || info.direction != signals::SignalDirection::Received ||
+        info.maximum - info.minimum < 1)
+      continue;
     written.push_back(i);
     signalList.push_back({{"name", info.key}, {"maxRateHz", 10}, {"deadband", 0}});
   }
@@ -186,7 +196,7 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
                                                   {"queueFolder", queueFolder.string()},
                                                   {"maxQueueMB", MAX_QUEUE_MB},
                                                   {"signals", signalList}}
-                                                .dump(2));
+                                                 .dump(2));
   auto table = signals::SignalTable::open(*catalog, vehicle->instance);
   REQUIRE_STATUS(table);
 
@@ -198,7 +208,8 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
       if (!paused) {
         const std::int64_t now = clock::monotonicNs();
         for (std::size_t i = 0; i < written.size(); ++i) {
-          table->writeBus(written[i], static_cast<double>((step + static_cast<int>(i)) % 100), now, 0xF3, signals::Quality::Valid);
+          table->writeBus(written[i], static_cast<double>((step + static_cast<int>(i)) % 100), now, 0xF3,
+                          signals::Quality::Valid);
         }
       }
       std::this_thread::sleep_for(WRITE_PERIOD);
@@ -220,9 +231,8 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   bool connected = false;
   for (int attempt = 0; attempt < 50 && !(connected = watcher.connect()); ++attempt) std::this_thread::sleep_for(100ms);
   REQUIRE_MESSAGE(connected, "the broker did not accept the watcher");
-  const harness::ProcessSpec bridgeSpec{.name = "vcu-telemetry",
-                                        .argv = {bin + "/vcu-telemetry", "--config", vehiclePath},
-                                        .notifyReadiness = true};
+  const harness::ProcessSpec bridgeSpec{
+      .name = "vcu-telemetry", .argv = {bin + "/vcu-telemetry", "--config", vehiclePath}, .notifyReadiness = true};
   auto bridge = sut.start(bridgeSpec);
   REQUIRE_STATUS(bridge);
   REQUIRE(watcher.waitFor([](const std::vector<Message>& messages) { return maxSeq(messages) >= 3; }, 10s));
@@ -240,7 +250,8 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   {
     auto queue = telemetry::DiskQueue::open({.folder = queueFolder.string(), .maxBytes = MAX_QUEUE_BYTES});
     REQUIRE_STATUS(queue);
-    MESSAGE("after the live part: " << queue->stats().pendingRecords << " record(s) pending, the subscriber saw up to seq " << lastBefore);
+    MESSAGE("after the live part: " << queue->stats().pendingRecords
+                                    << " record(s) pending, the subscriber saw up to seq " << lastBefore);
     backlogFirst = queue->stats().nextSequence;
     const std::int64_t t = clock::realtimeNs() / 1'000'000;
     for (;;) {
@@ -251,8 +262,8 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
       if (count == 0) break;
       std::vector<std::string> batch;
       for (std::size_t i = 0; i < count; ++i) {
-        std::string record = "signals\n{\"v\":1,\"seq\":" + std::to_string(stats.nextSequence + i) + ",\"t\":" +
-                             std::to_string(t) + ",\"backlog\":\"";
+        std::string record = "signals\n{\"v\":1,\"seq\":" + std::to_string(stats.nextSequence + i) +
+                             ",\"t\":" + std::to_string(t) + ",\"backlog\":\"";
         record.append(BACKLOG_RECORD_BYTES - record.size(), 'x');
         record += "\"}";
         batch.push_back(std::move(record));
@@ -285,7 +296,7 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   const std::uint64_t loggedLast = std::stoull(logged[2]);
   MESSAGE("log: " << dropLine);
   CHECK_MESSAGE(loggedFirst == lastBefore + 1, "the oldest record the subscriber had not seen goes first");
-  CHECK(loggedLast < backlogLast);  // whole oldest segments, not the newest records
+  CHECK(loggedLast < backlogLast);      // whole oldest segments, not the newest records
   std::this_thread::sleep_for(1200ms);  // the next tick's health carries the drop
 
   // 5. the broker back
@@ -295,8 +306,9 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   // until a record made after the broker returned arrives (the drain is done by then: it is in order)
   REQUIRE(watcher.waitFor(
       [&](const std::vector<Message>& messages) {
-        return std::any_of(messages.begin(), messages.end(),
-                           [&](const Message& m) { return hasSeq(m) && m.body["t"].get<std::int64_t>() > backMs + 1000; });
+        return std::any_of(messages.begin(), messages.end(), [&](const Message& m) {
+          return hasSeq(m) && m.body["t"].get<std::int64_t>() > backMs + 1000;
+        });
       },
       20s));
   const auto messages = watcher.messages();
@@ -309,11 +321,13 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   std::uint64_t droppedLast = 0;
   std::uint64_t expectedFirst = drops.begin()->first;
   for (const auto& [first, last] : drops) {
-    CHECK_MESSAGE(first == expectedFirst, "the drops are contiguous, oldest first: " << first << " after " << expectedFirst - 1);
+    CHECK_MESSAGE(first == expectedFirst,
+                  "the drops are contiguous, oldest first: " << first << " after " << expectedFirst - 1);
     expectedFirst = last + 1;
     droppedLast = last;
   }
-  const auto health = std::find_if(messages.rbegin(), messages.rend(), [](const Message& m) { return m.topic.ends_with("/health"); });
+  const auto health =
+      std::find_if(messages.rbegin(), messages.rend(), [](const Message& m) { return m.topic.ends_with("/health"); });
   REQUIRE(health != messages.rend());
   CHECK(health->body["queue"]["dropped"].get<std::uint64_t>() >= loggedLast - loggedFirst + 1);
 
@@ -333,11 +347,12 @@ TEST_CASE("vcu-telemetry's queue at its limit (#25): oldest records dropped firs
   REQUIRE_MESSAGE(gaps.size() == 1, "one gap in seq, found " << gaps.size());
   CHECK(gaps.front().first == drops.begin()->first);
   CHECK(gaps.front().second == droppedLast);
-  CHECK(*distinct.begin() == 1);                           // nothing lost before the outage
-  CHECK(*distinct.rbegin() > backlogLast);                 // the backlog's newest and the live records after it
+  CHECK(*distinct.begin() == 1);            // nothing lost before the outage
+  CHECK(*distinct.rbegin() > backlogLast);  // the backlog's newest and the live records after it
   for (std::uint64_t seq = droppedLast + 1; seq <= backlogLast; ++seq) {
     CHECK_MESSAGE(distinct.count(seq) == 1, "backlog record " << seq << " after the drop arrived");
   }
-  MESSAGE("seen 1.." << lastBefore << " live, dropped " << drops.begin()->first << ".." << droppedLast << " (" << drops.size()
-                     << " range(s) in health), then " << droppedLast + 1 << ".." << *distinct.rbegin() << " in order");
+  MESSAGE("seen 1.." << lastBefore << " live, dropped " << drops.begin()->first << ".." << droppedLast << " ("
+                     << drops.size() << " range(s) in health), then " << droppedLast + 1 << ".." << *distinct.rbegin()
+                     << " in order");
 }
