@@ -23,6 +23,11 @@
 #                                 an existing DIR/vehicle.json is run as it is (docs/bring-up.md)
 #   ./run.sh --check              only `vcu check` every file of the vehicle and exit with its
 #                                 code (0 clean, 1 errors); installs and builds nothing
+#   ./run.sh --fleet N            a fleet: a local mosquitto on 127.0.0.1:1883 and N simulated
+#                                 vehicles (instances <instance>-01 ..., each a copy of the
+#                                 vehicle's folder in the run folder) publishing to it through
+#                                 vcu-telemetry, watched with `vcu fleet watch`; HHEA vehicles
+#                                 are started (StartStop), the second also connects Driving
 # Ctrl-C (or the end of --for) stops every process cleanly and removes the stack's shared
 # memory, also when the output is piped (`./run.sh | tee run.log`). Logs: the folder printed
 # at start (one file per service); it is kept. Recordings, exports, uploads and vcu-web's
@@ -32,7 +37,7 @@ set -euo pipefail
 # realpath -m: the folder of --record need not exist yet
 root=$(dirname "$(readlink -f "$0")")
 
-headless=0; scenario=""; seconds=""; isolated=0; bus=""; check=0; record=""; dbc=""; node=""; into=""; web_port=8080
+headless=0; scenario=""; seconds=""; isolated=0; fleet=0; bus=""; check=0; record=""; dbc=""; node=""; into=""; web_port=8080
 config=$root/config/hhea/vehicle.json; config_given=0
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -48,7 +53,8 @@ while [ $# -gt 0 ]; do
     --node) node=${2:?--node needs the node name of the VCU}; shift ;;
     --into) into=$(realpath -m -- "${2:?--into needs a folder}"); shift ;;
     --web-port) web_port=${2:?--web-port needs a port (0: no vcu-web)}; shift ;;
-    -h|--help) sed -n '2,29p' "$0"; exit 0 ;;
+    --fleet) fleet=${2:?--fleet needs a number of vehicles}; shift ;;
+    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (./run.sh --help)" >&2; exit 2 ;;
   esac
   shift
@@ -72,6 +78,11 @@ if [ -n "$scenario" ] && [ "$(realpath -m -- "$config")" != "$root/config/hhea/v
 fi
 case "$bus" in ""|socketcan:*) ;; *) echo "run.sh: --bus takes socketcan:IFACE" >&2; exit 2 ;; esac
 if [ -n "$seconds" ] && ! [[ "$seconds" =~ ^[0-9]+$ ]]; then echo "run.sh: --for takes whole seconds" >&2; exit 2; fi
+if ! [[ "$fleet" =~ ^[0-9]+$ ]] || [ "$fleet" -gt 20 ]; then echo "run.sh: --fleet takes a number of vehicles, 1-20" >&2; exit 2; fi
+fleet=$((10#$fleet))
+if [ "$fleet" -gt 0 ] && { [ -n "$bus" ] || [ -n "$record" ] || [ -n "$scenario" ] || [ -n "$dbc" ] || [ $check -eq 1 ]; }; then
+  echo "run.sh: --fleet runs simulated vehicles only: not with --bus, --record, --scenario, --dbc or --check" >&2; exit 2
+fi
 if ! [[ "$web_port" =~ ^[0-9]{1,5}$ ]] || [ "$web_port" -gt 65535 ]; then
   echo "run.sh: --web-port takes a port 1-65535, or 0 for no vcu-web" >&2; exit 2
 fi
@@ -139,8 +150,13 @@ if [ "${OPENVCU_ISOLATED:-0}" != 1 ]; then
     [ -n "$bus" ] && inner+=(--bus "$bus")
     [ -n "$record" ] && inner+=(--record "$record")
     inner+=(--web-port "$web_port")
+    [ "$fleet" -gt 0 ] && inner+=(--fleet "$fleet")
     exec tests/harness/run_isolated.sh "${keep[@]}" -- "$root/run.sh" "${inner[@]}"
   fi
+fi
+
+if [ "$fleet" -gt 0 ]; then
+  OPENVCU_BIN=$bin exec "$root/scripts/run-fleet.sh" "$fleet" "$config" "$headless" "$seconds"
 fi
 
 echo "== configuration $config"

@@ -2,7 +2,7 @@
 // message: 0 command_request_t and 1 command_ack_t through ipc::decodeCommandRequest /
 // decodeCommandAck (what a command socket does with each datagram), 2..9 the event types
 // (fsm_transition_t, fault_event_t, log_record_t, heartbeat_t, signal_snapshot_t), 7 stats_t,
-// 8 tx_schedule_t and 9 j1939_network_t through
+// 8 tx_schedule_t, 9 j1939_network_t and 10 j1939_dm1_t through
 // their lcm-gen decoders as EventBus does (shared/ipc/src/event_bus.cpp, decodeOne).
 // Invariants: no crash, leak or UB; a decoded command encodes and decodes to itself.
 //
@@ -29,6 +29,7 @@
 #include "openvcu_lcm/signal_snapshot_t.hpp"
 #include "openvcu_lcm/stats_t.hpp"
 #include "openvcu_lcm/tx_schedule_t.hpp"
+#include "openvcu_lcm/j1939_dm1_t.hpp"
 #include "openvcu_lcm/j1939_network_t.hpp"
 
 using namespace openvcu;
@@ -92,7 +93,7 @@ void checkAck(const std::uint8_t* data, std::size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1 || size > ipc::MAX_COMMAND_BYTES * 8) return 0;
-  const std::uint8_t type = data[0] % 10;
+  const std::uint8_t type = data[0] % 11;  // the regressions' first bytes (0, 2, 5) pick the same types as with % 10
   const std::uint8_t* message = data + 1;
   const std::size_t messageSize = size - 1;
   switch (type) {
@@ -105,7 +106,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     case 6: decodeEvent<openvcu_lcm::signal_snapshot_t>(ipc::EventKind::Snapshot, message, messageSize); break;
     case 7: decodeEvent<openvcu_lcm::stats_t>(ipc::EventKind::Stats, message, messageSize); break;
     case 8: decodeEvent<openvcu_lcm::tx_schedule_t>(ipc::EventKind::Schedule, message, messageSize); break;
-    default: decodeEvent<openvcu_lcm::j1939_network_t>(ipc::EventKind::J1939, message, messageSize); break;
+    case 9: decodeEvent<openvcu_lcm::j1939_network_t>(ipc::EventKind::J1939, message, messageSize); break;
+    default: decodeEvent<openvcu_lcm::j1939_dm1_t>(ipc::EventKind::Dm1, message, messageSize); break;
   }
   return 0;
 }

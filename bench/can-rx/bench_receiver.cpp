@@ -65,6 +65,7 @@ struct CountingOutputs final : canrx::ReceiverOutputs {
     return true;
   }
   void fault(const ipc::FaultEvent&) override { ++faultCount; }
+  void dm1(const ipc::NodeDm1&) override {}
 };
 
 /// One pre-built frame and the bus it arrives on.

@@ -126,6 +126,13 @@ struct CanRxAppImpl final : ReceiverOutputs {
     }
   }
 
+  void dm1(const ipc::NodeDm1& message) override {
+    ipc::NodeDm1 stamped = message;
+    stamped.service = runtime.program();
+    stamped.instance = runtime.instance();
+    runtime.events().publish(stamped);
+  }
+
   // ---- the loop ---------------------------------------------------------------------------
 
   void drain(std::size_t bus) noexcept {

@@ -12,6 +12,7 @@
 #include "address_map.hpp"
 #include "openvcu/j1939/address_claim.hpp"
 #include "openvcu/j1939/dm1.hpp"
+#include "openvcu/j1939/dm_encode.hpp"
 #include "openvcu/j1939/id.hpp"
 #include "openvcu/j1939/request.hpp"
 #include "openvcu/j1939/safety.hpp"
@@ -68,6 +69,7 @@ struct SafetyState {
 struct Dm1State {
   j1939::Dm1 last{};
   bool has{};
+  std::int64_t publishedNs{};                                   ///< when outputs.dm1() last got this node's DM1
   std::array<std::int32_t, config::DM1_FIELDS.size()> slots{};  ///< NO_SLOT when the node has none
   std::string label;  ///< node name, or "SA 0x.."
 };
@@ -333,9 +335,41 @@ struct ReceiverImpl {
         before, now,
         [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, true); },
         [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, false); });
+    const bool changed =
+        !state->has || now.lamps != before.lamps || !std::ranges::equal(now.activeDtcs(), before.activeDtcs());
+    if (changed || nowNs - state->publishedNs >= DM1_REPUBLISH_NS) {
+      publishDm1(busIndex, source, *state, now);
+      state->publishedNs = nowNs;
+    }
     state->last = now;
     state->has = true;
     ++buses[busIndex].counters.dm1Messages;
+  }
+
+  /// The node's whole DM1 for other processes (vcu-telemetry): lamps and every active DTC.
+  void publishDm1(std::size_t busIndex, std::uint8_t source, const Dm1State& state,
+                  const j1939::Dm1& dm1Message) noexcept {
+    try {
+      ipc::NodeDm1 message;
+      message.bus = buses[busIndex].name;
+      message.node = state.label;
+      message.source = source;
+      std::array<std::uint8_t, j1939::DM1_MIN_LENGTH + 2> lampBytes{};  // the two lamp bytes, as on the bus
+      if (j1939::encodeDm1(dm1Message.lamps, {}, lampBytes) >= j1939::DM1_LAMP_BYTES) {
+        message.lamps = lampBytes[0];
+        message.flash = lampBytes[1];
+      }
+      message.dtcs.reserve(dm1Message.dtcCount);
+      for (const j1939::Dtc& dtc : dm1Message.activeDtcs()) {
+        message.dtcs.push_back(ipc::NodeDtc{.spn = dtc.spn,
+                                            .fmi = dtc.fmi,
+                                            .occurrences = dtc.occurrenceCount,
+                                            .conversionMethod = dtc.spnConversionMethod});
+      }
+      outputs.dm1(message);
+    } catch (...) {
+      // Out of memory: the table still holds the DM1 summary; the next DM1 tries again.
+    }
   }
 
   void dtcFault(const Dm1State& state, const j1939::Dtc& dtc, const j1939::Dm1& dm1Message, bool active) {

@@ -54,7 +54,15 @@ class ReceiverOutputs {
   virtual bool transmit(std::size_t bus, const can::Frame& frame) noexcept = 0;
   /// A fault raised or cleared (rare: allocation allowed).
   virtual void fault(const ipc::FaultEvent& event) = 0;
+  /// A node's DM1 whose content changed, or unchanged DM1_REPUBLISH_NS after the last one
+  /// (rare: allocation allowed). The app publishes it (EventKind::Dm1); `service` and
+  /// `instance` are left for it to fill.
+  virtual void dm1(const ipc::NodeDm1& message) = 0;
 };
+
+/// An unchanged DM1 of a node goes out again after this long (J1939-73 sends DM1 once a
+/// second), so a subscriber started later learns every node's DTCs.
+inline constexpr std::int64_t DM1_REPUBLISH_NS = 1'000'000'000;
 
 /// Counters of one bus (read by the heartbeat).
 struct BusCounters {

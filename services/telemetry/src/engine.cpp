@@ -5,14 +5,15 @@
 #include <string_view>
 
 #include "openvcu/display/values.hpp"
+#include "openvcu/j1939/dm1.hpp"
 
 namespace openvcu::telemetry {
 namespace {
 
 using Json = nlohmann::json;
+/// Members in the order written (the faults message keeps the documented field order).
+using OrderedJson = nlohmann::ordered_json;
 
-constexpr std::string_view DM1_PREFIX = "internal.dm1.";
-constexpr std::string_view DM1_SUFFIX = ".activeDtcs";
 /// A DBC signal not received for this long is Stale (dashboard.json's default).
 constexpr std::int64_t BUS_STALE_NS = 2'000'000'000;
 
@@ -36,7 +37,8 @@ std::string record(std::string_view suffix, std::uint64_t sequence, std::int64_t
 }
 
 /// The members of a JSON object without its braces.
-std::string members(const Json& object) {
+template <typename AnyJson>
+std::string members(const AnyJson& object) {
   std::string text = object.dump();
   return text.substr(1, text.size() - 2);
 }
@@ -62,12 +64,6 @@ Result<Engine> Engine::create(const config::TelemetryConfig& settings, const sig
                                        .deadband = signal.deadband});
   }
   if (!unknown.empty()) return Error{"/signals: not in this vehicle's catalog: " + unknown};
-  for (signals::SignalIndex i = 0; i < catalog.size(); ++i) {
-    const std::string& key = catalog[i].key;
-    if (key.starts_with(DM1_PREFIX) && key.ends_with(DM1_SUFFIX)) {
-      engine.m_dm1.emplace_back(key.substr(DM1_PREFIX.size(), key.size() - DM1_PREFIX.size() - DM1_SUFFIX.size()), i);
-    }
-  }
   return engine;
 }
 
@@ -85,6 +81,8 @@ void Engine::onFault(const ipc::FaultEvent& fault) {
 }
 
 void Engine::onTransition(const ipc::FsmTransition& transition) { m_transitions.push_back(transition); }
+
+void Engine::onDm1(const ipc::NodeDm1& dm1) { m_dm1[dm1.node] = dm1; }
 
 void Engine::sample(std::int64_t nowMonoNs) {
   for (std::size_t i = 0; i < m_watched.size(); ++i) {
@@ -110,18 +108,30 @@ void Engine::sample(std::int64_t nowMonoNs) {
 }
 
 std::string Engine::faultsBody(std::int64_t /*nowMonoNs*/) const {
-  Json active = Json::array();
+  OrderedJson active = OrderedJson::array();
   for (const auto& [key, fault] : m_faults) {
     active.push_back({{"source", fault.source}, {"name", fault.name}, {"severity", std::string(display::faultSeverityName(fault.severity))},
                       {"text", fault.text}, {"sinceUnixMs", fault.timestampNs / 1'000'000}});
   }
-  Json dm1 = Json::array();
-  for (const auto& [node, index] : m_dm1) {
-    const auto slot = m_table->read(index);
-    if (!slot || slot->bus.updates == 0 || slot->bus.value <= 0) continue;
-    dm1.push_back({{"node", node}, {"activeDtcs", static_cast<long long>(slot->bus.value)}});
+  // a node whose last DM1 lists active DTCs: lamps (DM1 byte 0) and every DTC in DM1 order
+  OrderedJson dm1 = OrderedJson::array();
+  for (const auto& [node, last] : m_dm1) {
+    if (last.dtcs.empty()) continue;
+    const auto lamp = [&last](unsigned shift) {
+      return std::string(j1939::lampStatusName(static_cast<j1939::LampStatus>((last.lamps >> shift) & 0x3U)));
+    };
+    OrderedJson dtcs = OrderedJson::array();
+    for (const ipc::NodeDtc& dtc : last.dtcs) {
+      dtcs.push_back(
+          {{"spn", dtc.spn}, {"fmi", dtc.fmi}, {"oc", dtc.occurrences}, {"cm", dtc.conversionMethod ? 1 : 0}});
+    }
+    dm1.push_back(
+        {{"node", node},
+         {"activeDtcs", last.dtcs.size()},
+         {"lamps", {{"malfunction", lamp(6)}, {"redStop", lamp(4)}, {"amberWarning", lamp(2)}, {"protect", lamp(0)}}},
+         {"dtcs", std::move(dtcs)}});
   }
-  return members(Json{{"active", std::move(active)}, {"dm1", std::move(dm1)}});
+  return members(OrderedJson{{"active", std::move(active)}, {"dm1", std::move(dm1)}});
 }
 
 std::string Engine::healthSignature(std::int64_t nowMonoNs) const {

@@ -1,8 +1,8 @@
 #pragma once
 // vcu-telemetry's engine (docs/design/telemetry.md, "Payloads"): what goes out, decided
 // without threads, sockets or clocks of its own (the caller passes the time), so tests drive
-// it on a set clock. Fed by the events (FSM transitions, faults, heartbeats) and the signal
-// table (the configured signals, DM1 counts); each tick() returns the queue records of that
+// it on a set clock. Fed by the events (FSM transitions, faults, heartbeats, other nodes' DM1)
+// and the signal table (the configured signals); each tick() returns the queue records of that
 // tick, each "<topic suffix>\n<JSON>", numbered from the sequence the queue gives next.
 //
 //   auto engine = Engine::create(settings, runtime.catalog(), runtime.table());
@@ -64,6 +64,8 @@ class Engine {
   void onHeartbeat(const ipc::Heartbeat& beat, std::int64_t receivedMonoNs);
   void onFault(const ipc::FaultEvent& fault);
   void onTransition(const ipc::FsmTransition& transition);
+  /// Keeps the node's last DM1 (can-rx's DM1 event): its DTCs go into the faults message.
+  void onDm1(const ipc::NodeDm1& dm1);
 
   /// Reads the configured signals; keeps a sample of each that its rate allows and that moved
   /// past its deadband (or changed status, or was not sent for SIGNAL_KEEPALIVE_NS).
@@ -107,7 +109,7 @@ class Engine {
   std::vector<Sample> m_samples;
   std::vector<ipc::FsmTransition> m_transitions;
   std::map<FaultKey, ipc::FaultEvent> m_faults;
-  std::vector<std::pair<std::string, signals::SignalIndex>> m_dm1;  ///< node, internal.dm1.<node>.activeDtcs
+  std::map<std::string, ipc::NodeDm1> m_dm1;  ///< by node: its last DM1
   display::HealthTracker m_health;
   std::string m_sentFaults;  ///< the faults body last sent
   std::string m_sentHealth;  ///< the health signature last sent

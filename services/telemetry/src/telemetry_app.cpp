@@ -152,6 +152,9 @@ struct TelemetryAppImpl {
     auto transition = events.onFsmTransition([this](const ipc::FsmTransition& event) { engine.onTransition(event); });
     if (!transition) return transition.error();
     subscriptions.push_back(*transition);
+    auto dm1 = events.onNodeDm1([this](const ipc::NodeDm1& event) { engine.onDm1(event); });
+    if (!dm1) return dm1.error();
+    subscriptions.push_back(*dm1);
     return {};
   }
 

@@ -15,6 +15,7 @@
 #include <openvcu_lcm/stats_t.hpp>
 #include <openvcu_lcm/tx_schedule_t.hpp>
 #include <openvcu_lcm/j1939_network_t.hpp>
+#include <openvcu_lcm/j1939_dm1_t.hpp>
 
 // The C API, not lcm-cpp.hpp: LCM 1.3.1's member-handler subscription crashes when built
 // with -fsanitize=vptr (part of the Asan preset's -fsanitize=undefined); the C API is all we need.
@@ -283,6 +284,43 @@ J1939Network fromLcm(const openvcu_lcm::j1939_network_t& in) {
   return out;
 }
 
+bool toLcm(const NodeDm1& in, openvcu_lcm::j1939_dm1_t& out) {
+  if (!fitsArray(in.dtcs.size())) return false;
+  out.timestamp_ns = stampOrNow(in.timestampNs);
+  out.service = in.service;
+  out.instance = in.instance;
+  out.bus = in.bus;
+  out.node = in.node;
+  out.source = in.source;
+  out.lamps = static_cast<std::int8_t>(in.lamps);
+  out.flash = static_cast<std::int8_t>(in.flash);
+  out.num_dtcs = static_cast<std::int32_t>(in.dtcs.size());
+  out.dtc_spns.clear();
+  out.dtc_fmis.clear();
+  out.dtc_occurrences.clear();
+  out.dtc_cms.clear();
+  for (const NodeDtc& dtc : in.dtcs) {
+    out.dtc_spns.push_back(dtc.spn);
+    out.dtc_fmis.push_back(static_cast<std::int8_t>(dtc.fmi));
+    out.dtc_occurrences.push_back(static_cast<std::int8_t>(dtc.occurrences));
+    out.dtc_cms.push_back(dtc.conversionMethod ? 1 : 0);
+  }
+  return true;
+}
+NodeDm1 fromLcm(const openvcu_lcm::j1939_dm1_t& in) {
+  NodeDm1 out{in.timestamp_ns, in.service, in.instance, in.bus, in.node, static_cast<std::uint8_t>(in.source & 0xFF),
+              static_cast<std::uint8_t>(in.lamps), static_cast<std::uint8_t>(in.flash), {}};
+  const std::size_t dtcs =
+      std::min({in.dtc_spns.size(), in.dtc_fmis.size(), in.dtc_occurrences.size(), in.dtc_cms.size()});
+  out.dtcs.reserve(dtcs);
+  for (std::size_t i = 0; i < dtcs; ++i) {
+    out.dtcs.push_back(NodeDtc{static_cast<std::uint32_t>(in.dtc_spns[i] & 0x7FFFF),
+                               static_cast<std::uint8_t>(in.dtc_fmis[i] & 0x1F),
+                               static_cast<std::uint8_t>(in.dtc_occurrences[i] & 0x7F), in.dtc_cms[i] != 0});
+  }
+  return out;
+}
+
 // ---- datagram-sized parts ------------------------------------------------------------------
 // LCM encodes a string as int32 length (with the NUL), the bytes and the NUL.
 constexpr std::size_t encodedStringSize(const std::string& text) noexcept { return 4 + text.size() + 1; }
@@ -462,6 +500,13 @@ bool fits(const openvcu_lcm::j1939_network_t*, const void* data, std::size_t siz
                      F::I8});
 }
 
+bool fits(const openvcu_lcm::j1939_dm1_t*, const void* data, std::size_t size) noexcept {
+  using F = Field;
+  return fitsLayout(data, size,
+                    {F::I64, F::Str, F::Str, F::Str, F::Str, F::I64, F::I8, F::I8, F::Count, F::I64Array,
+                     F::ByteArray, F::ByteArray, F::ByteArray});
+}
+
 /// The layout check for LcmType.
 template <typename LcmType>
 bool fitsType(const void* data, std::size_t size) noexcept {
@@ -519,6 +564,7 @@ bool fitsEventLayout(EventKind kind, const void* data, std::size_t size) noexcep
     case EventKind::Stats: return fitsType<openvcu_lcm::stats_t>(data, size);
     case EventKind::Schedule: return fitsType<openvcu_lcm::tx_schedule_t>(data, size);
     case EventKind::J1939: return fitsType<openvcu_lcm::j1939_network_t>(data, size);
+    case EventKind::Dm1: return fitsType<openvcu_lcm::j1939_dm1_t>(data, size);
   }
   return false;
 }
@@ -722,6 +768,12 @@ bool EventBus::publish(const J1939Network& message) noexcept {
 Result<Subscription> EventBus::onJ1939Network(std::function<void(const J1939Network&)> callback) {
   return m_impl->subscribe<openvcu_lcm::j1939_network_t>(EventKind::J1939, std::move(callback));
 }
+bool EventBus::publish(const NodeDm1& message) noexcept {
+  return m_impl->publish<openvcu_lcm::j1939_dm1_t>(EventKind::Dm1, message);
+}
+Result<Subscription> EventBus::onNodeDm1(std::function<void(const NodeDm1&)> callback) {
+  return m_impl->subscribe<openvcu_lcm::j1939_dm1_t>(EventKind::Dm1, std::move(callback));
+}
 
 namespace {
 template <typename LcmType, typename Plain>
@@ -736,6 +788,7 @@ std::size_t encodedSize(const Heartbeat& message) { return encodedSizeOf<openvcu
 std::size_t encodedSize(const Stats& message) { return encodedSizeOf<openvcu_lcm::stats_t>(message); }
 std::size_t encodedSize(const TxSchedule& message) { return encodedSizeOf<openvcu_lcm::tx_schedule_t>(message); }
 std::size_t encodedSize(const J1939Network& message) { return encodedSizeOf<openvcu_lcm::j1939_network_t>(message); }
+std::size_t encodedSize(const NodeDm1& message) { return encodedSizeOf<openvcu_lcm::j1939_dm1_t>(message); }
 
 Result<Subscription> EventBus::onHeartbeat(std::function<void(const Heartbeat&)> callback) {
   return m_impl->subscribe<openvcu_lcm::heartbeat_t>(EventKind::Heartbeat, std::move(callback));

@@ -44,6 +44,8 @@ std::string_view channelSuffix(EventKind kind) noexcept {
       return "SCHEDULE";
     case EventKind::J1939:
       return "J1939";
+    case EventKind::Dm1:
+      return "DM1";
   }
   return "UNKNOWN";
 }

@@ -32,6 +32,7 @@ struct Recorder final : canrx::ReceiverOutputs {
   std::vector<std::pair<std::size_t, can::Frame>> receivedFrames, forwarded, transmitted, networkFrames;
   std::vector<std::pair<std::size_t, j1939::Request>> requests;
   std::vector<ipc::FaultEvent> faults;
+  std::vector<ipc::NodeDm1> dm1s;
   void received(std::size_t bus, const can::ReceivedFrame& frame) noexcept override {
     receivedFrames.emplace_back(bus, frame.frame);
   }
@@ -47,6 +48,7 @@ struct Recorder final : canrx::ReceiverOutputs {
     return true;
   }
   void fault(const ipc::FaultEvent& event) override { faults.push_back(event); }
+  void dm1(const ipc::NodeDm1& message) override { dm1s.push_back(message); }
 
   [[nodiscard]] const ipc::FaultEvent* lastFault(std::string_view name) const {
     for (auto it = faults.rbegin(); it != faults.rend(); ++it) {
@@ -315,6 +317,44 @@ TEST_CASE("a multi-packet DM1 over BAM appears as several DTCs") {
     CHECK(raised->active);
     CHECK(raised->severity == ipc::FaultSeverity::Error);  // red stop lamp
   }
+}
+
+TEST_CASE("a node's DM1 goes out whole when it changes and again after a second unchanged (#25)") {
+  Fixture f;
+  // amber warning on; SPN 1234 FMI 3 OC 5 CM 0, then SPN 100 FMI 1 OC 127 CM 1
+  const std::vector<std::uint8_t> twoDtcs{0x04, 0xFF, 0xD2, 0x04, 0x03, 0x05, 100, 0, 1, 0xFF};
+  const auto sendTwo = [&](std::int64_t atNs) {
+    f.sut->onFrame(BUS_A, frameOf(0x1CECFFF3, {0x20, 10, 0, 2, 0xFF, 0xCA, 0xFE, 0x00}, atNs));
+    std::vector<std::uint8_t> first{1};
+    first.insert(first.end(), twoDtcs.begin(), twoDtcs.begin() + 7);
+    std::vector<std::uint8_t> second{2};
+    second.insert(second.end(), twoDtcs.begin() + 7, twoDtcs.end());
+    second.resize(8, 0xFF);
+    f.sut->onFrame(BUS_A, frameOf(0x1CEBFFF3, first, atNs + 50 * MS));
+    f.sut->onFrame(BUS_A, frameOf(0x1CEBFFF3, second, atNs + 100 * MS));
+  };
+  sendTwo(START + MS);
+  REQUIRE(f.outputs.dm1s.size() == 1);
+  const ipc::NodeDm1& sent = f.outputs.dm1s[0];
+  CHECK(sent.node == "BMS");
+  CHECK(sent.bus == f.vehicle.buses[BUS_A].name);
+  CHECK(sent.source == 0xF3);
+  CHECK(sent.lamps == 0x04);
+  CHECK(sent.flash == 0xFF);
+  CHECK(sent.dtcs == std::vector<ipc::NodeDtc>{{1234, 3, 5, false}, {100, 1, 127, true}});
+  sendTwo(START + 500 * MS);  // unchanged, within a second: not again
+  CHECK(f.outputs.dm1s.size() == 1);
+  sendTwo(START + 1100 * MS);  // unchanged, a second later: again
+  CHECK(f.outputs.dm1s.size() == 2);
+  f.sut->onFrame(BUS_A, frameOf(0x18FECAF3, {0x04, 0xFF, 0xD2, 0x04, 0x03, 0x05, 0xFF, 0xFF}, START + 1300 * MS));
+  REQUIRE(f.outputs.dm1s.size() == 3);  // SPN 100 went away
+  CHECK(f.outputs.dm1s[2].dtcs == std::vector<ipc::NodeDtc>{{1234, 3, 5, false}});
+  // only the occurrence count changes: no fault event (same SPN and FMI), but the DM1 goes out
+  const std::size_t faultsBefore = f.outputs.faults.size();
+  f.sut->onFrame(BUS_A, frameOf(0x18FECAF3, {0x04, 0xFF, 0xD2, 0x04, 0x03, 0x06, 0xFF, 0xFF}, START + 1400 * MS));
+  CHECK(f.outputs.faults.size() == faultsBefore);
+  REQUIRE(f.outputs.dm1s.size() == 4);
+  CHECK(f.outputs.dm1s[3].dtcs == std::vector<ipc::NodeDtc>{{1234, 3, 6, false}});
 }
 
 TEST_CASE("a DM1 from an address no DBC node has is still reported, by address") {

@@ -6,8 +6,8 @@
 //   - the retained birth and status, the state and faults messages' content;
 //   - the rate limit (consecutive samples of a 2 Hz signal at least ~500 ms apart) and the
 //     deadband (consecutive samples of a 0.5-deadband signal more than 0.5 apart);
-//   - the broker SIGKILLed for OPENVCU_TELEMETRY_OUTAGE_S seconds (default 5; issue 25 says
-//     30, which is this test with OPENVCU_TELEMETRY_OUTAGE_S=30) and restarted: every record
+//   - the broker SIGKILLed for OPENVCU_TELEMETRY_OUTAGE_S seconds (default 30, as issue 25
+//     asks) and restarted: every record
 //     arrives, in order, none twice, also those made during the outage;
 //   - vcu-telemetry SIGKILLed and restarted on its queue: the status turns "offline" (the
 //     will), the sequence goes on without a gap, and what was lost is at most the batch of
@@ -65,7 +65,7 @@ constexpr std::int64_t ONE_BATCH_MS = 1000 + 500;
 
 int outageSeconds() {
   const char* text = std::getenv("OPENVCU_TELEMETRY_OUTAGE_S");
-  return text != nullptr ? std::max(1, std::atoi(text)) : 5;
+  return text != nullptr ? std::max(1, std::atoi(text)) : 30;
 }
 
 void writeFile(const fs::path& path, const std::string& text) {
@@ -257,10 +257,13 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
   events->publish(ipc::FsmTransition{.timestampNs = 0, .fromState = "Standby", .toState = "Ready", .cause = "test"});
   events->publish(ipc::FaultEvent{.timestampNs = 0, .name = "Contactor", .source = "telemetry-test",
                                   .severity = ipc::FaultSeverity::Error, .active = true, .text = "welded"});
+  events->publish(ipc::NodeDm1{.timestampNs = 0, .service = "telemetry-test", .instance = vehicle->instance,
+                               .bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x04, .flash = 0xFF,
+                               .dtcs = {{.spn = 100, .fmi = 1, .occurrences = 3, .conversionMethod = false}}});
   REQUIRE(watcher.waitFor(
       [](const std::vector<Message>& messages) {
         return std::any_of(messages.begin(), messages.end(), [](const Message& m) {
-          return m.topic.ends_with("/faults") && !m.body["active"].empty();
+          return m.topic.ends_with("/faults") && !m.body["active"].empty() && !m.body["dm1"].empty();
         });
       },
       10s));
@@ -295,6 +298,13 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
                                     [](const Message& m) { return m.topic.ends_with("/faults") && !m.body["active"].empty(); });
     CHECK(fault->body["active"][0]["name"] == "Contactor");
     CHECK(fault->body["active"][0]["text"] == "welded");
+    // can-rx's DM1 event (#25): the node's DTCs through the real service
+    const auto dm1 = std::find_if(messages.begin(), messages.end(),
+                                  [](const Message& m) { return m.topic.ends_with("/faults") && !m.body["dm1"].empty(); });
+    REQUIRE(dm1 != messages.end());
+    CHECK(dm1->body["dm1"][0]["node"] == "BMS");
+    CHECK(dm1->body["dm1"][0]["lamps"]["amberWarning"] == "On");
+    CHECK(dm1->body["dm1"][0]["dtcs"] == Json::parse(R"([{"spn":100,"fmi":1,"oc":3,"cm":0}])"));
     // the newest health (the first ones were made before the broker was up: connects 0)
     const auto health = std::find_if(messages.rbegin(), messages.rend(), [](const Message& m) { return m.topic.ends_with("/health"); });
     REQUIRE(health != messages.rend());

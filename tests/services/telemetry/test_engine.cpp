@@ -131,8 +131,8 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
   // nothing new: no state, no faults, no health before 10 s, no signals
   CHECK(bench.tick(45, START_NS + 1500 * MS).empty());
 
-  // a DM1 count and the fault cleared: one faults message with the new set
-  bench.write("internal.dm1.BMS.activeDtcs", 2, START_NS + 2000 * MS);
+  // a node's DM1 with two DTCs and the fault cleared: one faults message with the new set
+  bench.sut->onDm1({.node = "BMS", .source = 0xF3, .lamps = 0x04, .dtcs = {{100, 1, 3, false}, {200, 2, 1, false}}});
   bench.sut->onFault({.timestampNs = 0, .name = "Contactor", .source = "vcu-fsm",
                       .severity = ipc::FaultSeverity::Error, .active = false, .text = {}});
   const auto second = bench.tick(45, START_NS + 2500 * MS);
@@ -154,6 +154,43 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
   const auto later = bench.tick(47, START_NS + 13'600 * MS);  // connects back to 0: a change too
   REQUIRE(later.size() == 1);
   CHECK(later[0].first == "health");
+}
+
+TEST_CASE("telemetry engine: the faults message carries each node's DM1 lamps and DTCs, again when one changes (#25)") {
+  Bench bench({});
+  // BMS: red stop and amber warning lamps on (DM1 byte 0 = 0x14), two DTCs; INV: a DM1 without DTCs
+  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x14, .flash = 0xFF,
+                    .dtcs = {{.spn = 1234, .fmi = 3, .occurrences = 5, .conversionMethod = false},
+                             {.spn = 524287, .fmi = 31, .occurrences = 127, .conversionMethod = true}}});
+  bench.sut->onDm1({.bus = "vehicle", .node = "INV", .source = 0xEF, .lamps = 0x00, .flash = 0xFF, .dtcs = {}});
+  telemetry::TickInputs inputs;
+  inputs.clocks = {.monoNs = START_NS, .unixMs = START_UNIX_MS};
+  const std::vector<std::string> first = bench.sut->tick(7, inputs);
+  REQUIRE_FALSE(first.empty());
+  CHECK(first[0] ==
+        "faults\n{\"v\":1,\"seq\":7,\"t\":1764259200000,\"active\":[],\"dm1\":[{\"node\":\"BMS\",\"activeDtcs\":2,"
+        "\"lamps\":{\"malfunction\":\"Off\",\"redStop\":\"On\",\"amberWarning\":\"On\",\"protect\":\"Off\"},"
+        "\"dtcs\":[{\"spn\":1234,\"fmi\":3,\"oc\":5,\"cm\":0},{\"spn\":524287,\"fmi\":31,\"oc\":127,\"cm\":1}]}]}");
+
+  // the same DM1 again (can-rx repeats it every second): no faults message
+  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x14, .flash = 0xFF,
+                    .dtcs = {{1234, 3, 5, false}, {524287, 31, 127, true}}});
+  inputs.clocks = {.monoNs = START_NS + 1000 * MS, .unixMs = START_UNIX_MS + 1000};
+  CHECK(bench.sut->tick(9, inputs).empty());
+
+  // only an occurrence count moves: the whole set goes out again
+  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x14, .flash = 0xFF,
+                    .dtcs = {{1234, 3, 6, false}, {524287, 31, 127, true}}});
+  const auto counted = bench.tick(9, START_NS + 2000 * MS);
+  REQUIRE(counted.size() == 1);
+  CHECK(counted[0].first == "faults");
+  CHECK(counted[0].second["dm1"][0]["dtcs"][0]["oc"] == 6);
+
+  // the node's DTCs are gone: the node leaves the list
+  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x00, .flash = 0xFF, .dtcs = {}});
+  const auto cleared = bench.tick(10, START_NS + 3000 * MS);
+  REQUIRE(cleared.size() == 1);
+  CHECK(cleared[0].second["dm1"].empty());
 }
 
 TEST_CASE("telemetry engine: a configured signal the catalog does not have is refused by name") {

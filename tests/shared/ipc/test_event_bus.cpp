@@ -54,6 +54,19 @@ TEST_CASE("channel names are OPENVCU_<INSTANCE>_<KIND> with the instance in uppe
   CHECK(ipc::channelName("hhea", ipc::EventKind::Stats) == "OPENVCU_HHEA_STATS");
   CHECK(ipc::channelName("hhea", ipc::EventKind::Schedule) == "OPENVCU_HHEA_SCHEDULE");
   CHECK(ipc::channelName("hhea", ipc::EventKind::J1939) == "OPENVCU_HHEA_J1939");
+  CHECK(ipc::channelName("hhea", ipc::EventKind::Dm1) == "OPENVCU_HHEA_DM1");
+}
+
+TEST_CASE("a node's DM1 goes out and comes back field by field, extreme SPN, FMI, OC and CM included (#25)") {
+  ipc::EventBus sut = openMemq("hhea");
+  ipc::NodeDm1 sent{.timestampNs = SOME_TIME_NS, .service = "vcu-can-rx", .instance = "hhea", .bus = "vehicle",
+                    .node = "BMS", .source = 0xF3, .lamps = 0x44, .flash = 0xFF, .dtcs = {}};
+  sent.dtcs.push_back(ipc::NodeDtc{.spn = 524287, .fmi = 31, .occurrences = 127, .conversionMethod = true});
+  sent.dtcs.push_back(ipc::NodeDtc{.spn = 100, .fmi = 1, .occurrences = 3, .conversionMethod = false});
+  const auto received = roundTrip(sut, [&](auto callback) { return sut.onNodeDm1(callback); }, sent);
+  REQUIRE(received.has_value());
+  CHECK(*received == sent);
+  CHECK(ipc::encodedSize(sent) < ipc::datagramPayloadLimit(sut.channel(ipc::EventKind::Dm1)));
 }
 
 TEST_CASE("a J1939 network view goes out and comes back field by field, a full NAME included (#24)") {

@@ -8,6 +8,7 @@
 #include "check_commands.hpp"
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
+#include "fleet_commands.hpp"
 #include "fsm_commands.hpp"
 #include "gpio_commands.hpp"
 #include "init_command.hpp"
@@ -89,6 +90,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerTraceCommands(app, context);
     registerInitCommand(app, context);
     registerJ1939Commands(app, context);
+    registerFleetCommands(app, context);
     try {
       app.parse(argc, argv);
       exitCode = static_cast<int>(context.exitCode);

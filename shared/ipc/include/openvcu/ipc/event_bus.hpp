@@ -81,6 +81,7 @@ class EventBus {
   bool publish(const Stats& message) noexcept;
   bool publish(const TxSchedule& message) noexcept;
   bool publish(const J1939Network& message) noexcept;
+  bool publish(const NodeDm1& message) noexcept;
 
   /// Calls `callback` from handle() for each message on this instance's channel.
   /// A message that does not decode is dropped and counted (decodeErrors()); an exception
@@ -95,6 +96,7 @@ class EventBus {
   Result<Subscription> onStats(std::function<void(const Stats&)> callback);
   Result<Subscription> onSchedule(std::function<void(const TxSchedule&)> callback);
   Result<Subscription> onJ1939Network(std::function<void(const J1939Network&)> callback);
+  Result<Subscription> onNodeDm1(std::function<void(const NodeDm1&)> callback);
   void unsubscribe(Subscription subscription) noexcept;
 
   /// Readable when a message waits: for poll/epoll or Waiter::attachFd. -1 on failure.

@@ -14,6 +14,7 @@
 //   OPENVCU_<INSTANCE>_STATS      Stats            openvcu_lcm.stats_t        (in datagram-sized parts)
 //   OPENVCU_<INSTANCE>_SCHEDULE   TxSchedule       openvcu_lcm.tx_schedule_t  (in datagram-sized parts)
 //   OPENVCU_<INSTANCE>_J1939      J1939Network     openvcu_lcm.j1939_network_t (one per bus)
+//   OPENVCU_<INSTANCE>_DM1        NodeDm1          openvcu_lcm.j1939_dm1_t     (one per source node)
 //
 // A heartbeat always fits one datagram (LCM_DATAGRAM_BYTES): per-bus and per-message
 // statistics go to STATS, can-tx's live schedule to SCHEDULE, each split into parts that
@@ -35,8 +36,8 @@ namespace openvcu::ipc {
 /// lcm-spy and lcm-logger without arguments see the stack.
 inline constexpr std::string_view DEFAULT_EVENT_URL = "udpm://239.255.76.67:7667?ttl=0";
 
-enum class EventKind : std::uint8_t { Command, Ack, Fsm, Fault, Log, Heartbeat, Snapshot, Stats, Schedule, J1939 };
-inline constexpr std::size_t EVENT_KIND_COUNT = 10;
+enum class EventKind : std::uint8_t { Command, Ack, Fsm, Fault, Log, Heartbeat, Snapshot, Stats, Schedule, J1939, Dm1 };
+inline constexpr std::size_t EVENT_KIND_COUNT = 11;
 
 /// LCM 1.3 sends a message of at most this many bytes (its 8-byte header, the channel name
 /// with its NUL, the payload) as one UDP datagram, and fragments anything larger.
@@ -49,7 +50,7 @@ constexpr std::size_t datagramPayloadLimit(std::string_view channel) noexcept {
 }
 
 /// "COMMAND", "ACK", "FSM", "FAULT", "LOG", "HEARTBEAT", "SNAPSHOT", "STATS", "SCHEDULE",
-/// "J1939".
+/// "J1939", "DM1".
 std::string_view channelSuffix(EventKind kind) noexcept;
 
 /// "OPENVCU_HHEA_HEARTBEAT" for ("hhea", EventKind::Heartbeat). `instance` must satisfy
@@ -224,6 +225,30 @@ struct J1939Network {
   bool operator==(const J1939Network&) const = default;
 };
 
+/// One active DTC of another node's DM1 (J1939-73; j1939::Dtc without the decoder).
+struct NodeDtc {
+  std::uint32_t spn{};         ///< 0..524287
+  std::uint8_t fmi{};          ///< 0..31
+  std::uint8_t occurrences{};  ///< 0..126; 127 = not available
+  bool conversionMethod{};     ///< the CM bit
+  bool operator==(const NodeDtc&) const = default;
+};
+
+/// Another node's last DM1 as vcu-can-rx decoded it (shared/ipc/lcm/j1939_dm1_t.lcm): sent
+/// when its content changes and at most once a second while the node keeps sending DM1.
+struct NodeDm1 {
+  std::int64_t timestampNs{};
+  std::string service;
+  std::string instance;
+  std::string bus;
+  std::string node;  ///< the DBC node at `source`, or "SA 0x21" when none has that address
+  std::uint8_t source{};
+  std::uint8_t lamps{};  ///< DM1 byte 0: malfunction, red stop, amber warning, protect (2 bits each)
+  std::uint8_t flash{};  ///< DM1 byte 1
+  std::vector<NodeDtc> dtcs;
+  bool operator==(const NodeDm1&) const = default;
+};
+
 /// "off", "claiming", "claimed", "cannot claim".
 std::string_view claimStateName(ClaimState state) noexcept;
 
@@ -233,6 +258,7 @@ std::size_t encodedSize(const Heartbeat& message);
 std::size_t encodedSize(const Stats& message);
 std::size_t encodedSize(const TxSchedule& message);
 std::size_t encodedSize(const J1939Network& message);
+std::size_t encodedSize(const NodeDm1& message);
 
 /// One signal in a snapshot.
 struct SignalValue {
