@@ -20,7 +20,8 @@ std::string CommandOutcome::verdict() const {
 CommandOutcome sendCommand(std::string_view instance, const ipc::CommandRequest& request,
                            std::chrono::nanoseconds timeout) {
   auto client = ipc::CommandClient::connect(instance);
-  if (!client) return CommandOutcome{.kind = CommandOutcome::Kind::NotReachable, .ack = {}, .error = client.error().message};
+  if (!client)
+    return CommandOutcome{.kind = CommandOutcome::Kind::NotReachable, .ack = {}, .error = client.error().message};
   auto answer = client->send(request, timeout);
   if (answer) return CommandOutcome{.kind = CommandOutcome::Kind::Answered, .ack = std::move(*answer), .error = {}};
   // CommandClient::send says "no running service answers for '<key>' (...: not theirs)" when
