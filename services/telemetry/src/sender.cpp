@@ -1,6 +1,7 @@
 #include "sender.hpp"
 
 #include <mosquitto.h>
+#include <mqtt_protocol.h>
 
 #include <algorithm>
 #include <fstream>
@@ -29,11 +30,19 @@ void onDisconnect(mosquitto* /*mosq*/, void* self, int reasonCode, const mosquit
 void onPublish(mosquitto* /*mosq*/, void* self, int mid, int reasonCode, const mosquitto_property* /*props*/) {
   static_cast<Sender*>(self)->notePublished(mid, reasonCode);
 }
+void onMessage(mosquitto* /*mosq*/, void* self, const mosquitto_message* message, const mosquitto_property* /*props*/) {
+  static_cast<Sender*>(self)->noteMessage(message->topic, message->payload, message->payloadlen, message->retain);
+}
+void onSubscribe(mosquitto* /*mosq*/, void* self, int /*mid*/, int count, const int* grantedQos,
+                 const mosquitto_property* /*props*/) {
+  if (count > 0) static_cast<Sender*>(self)->noteSubscribed(grantedQos[0]);
+}
 
 }  // namespace
 
 Sender::Sender(const config::TelemetryConfig& settings, SenderOptions options)
     : m_topicRoot("openvcu/" + settings.vehicleId + "/"),
+      m_commandTopic(settings.remoteCommandsEnabled ? m_topicRoot + "cmd/+" : std::string()),
       m_options(std::move(options)),
       m_retryDelay(std::chrono::seconds(m_options.reconnectMinS)) {}
 
@@ -49,6 +58,10 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
   mosquitto_connect_v5_callback_set(mosq, onConnect);
   mosquitto_disconnect_v5_callback_set(mosq, onDisconnect);
   mosquitto_publish_v5_callback_set(mosq, onPublish);
+  if (!sender->m_commandTopic.empty()) {
+    mosquitto_message_v5_callback_set(mosq, onMessage);
+    mosquitto_subscribe_v5_callback_set(mosq, onSubscribe);
+  }
   mosquitto_reconnect_delay_set(mosq, sender->m_options.reconnectMinS, sender->m_options.reconnectMaxS, true);
   const std::string willTopic = sender->m_topicRoot + "status";
   if (const int rc = mosquitto_will_set_v5(mosq, willTopic.c_str(), 7, "offline", QOS_AT_LEAST_ONCE, true, nullptr);
@@ -155,7 +168,13 @@ void Sender::noteConnect(int reasonCode) {
     m_notes.push_back({Note::Kind::Connected, 0, 0});
     birth = m_birth;
   }
-  // on the network thread, before any queued record of this connection
+  // on the network thread, before any queued record of this connection; the subscription
+  // first, so whoever sees this connection's birth knows commands are read (a clean session:
+  // the broker forgot the last one)
+  if (!m_commandTopic.empty()) {
+    mosquitto_subscribe_v5(m_mosq, nullptr, m_commandTopic.c_str(), QOS_AT_LEAST_ONCE,
+                           MQTT_SUB_OPT_RETAIN_AS_PUBLISHED, nullptr);
+  }
   publishRetained(m_topicRoot + "status", "online");
   if (!birth.empty()) publishRetained(m_topicRoot + "birth", birth);
 }
@@ -172,6 +191,31 @@ void Sender::notePublished(int mid, int reasonCode) {
   m_notes.push_back({Note::Kind::Published, mid, reasonCode});
 }
 
+void Sender::noteMessage(const char* topic, const void* payload, int length, bool retained) {
+  const std::lock_guard lock(m_mutex);
+  if (m_inbound.size() >= m_options.maxInbound) {
+    ++m_inboundDropped;
+    return;
+  }
+  m_inbound.push_back(InboundMessage{.topic = topic != nullptr ? topic : "",
+                                     .payload = std::string(static_cast<const char*>(payload),
+                                                            static_cast<std::size_t>(std::max(length, 0))),
+                                     .retained = retained});
+}
+
+void Sender::noteSubscribed(int grantedQos) {
+  if (grantedQos < FIRST_FAILURE_REASON) return;
+  const std::lock_guard lock(m_mutex);
+  m_notes.push_back({Note::Kind::SubscribeRefused, 0, grantedQos});
+}
+
+std::vector<InboundMessage> Sender::takeMessages() {
+  std::vector<InboundMessage> messages;
+  const std::lock_guard lock(m_mutex);
+  messages.swap(m_inbound);
+  return messages;
+}
+
 void Sender::log(bool warning, const std::string& text) const {
   const auto& sink = warning ? m_options.logWarning : m_options.logInfo;
   if (sink) sink(text);
@@ -183,10 +227,16 @@ Status Sender::pump(DiskQueue& queue) {
   }
   std::vector<Note> notes;
   bool connected = false;
+  std::uint64_t inboundDropped = 0;
   {
     const std::lock_guard lock(m_mutex);
     notes.swap(m_notes);
     connected = m_connected;
+    std::swap(inboundDropped, m_inboundDropped);
+  }
+  if (inboundDropped > 0) {
+    log(true, std::to_string(inboundDropped) + " remote command message(s) dropped unread: " +
+                  std::to_string(m_options.maxInbound) + " were already waiting");
   }
   for (const Note& note : notes) {
     switch (note.kind) {
@@ -200,6 +250,10 @@ Status Sender::pump(DiskQueue& queue) {
       case Note::Kind::Disconnected:
         log(true, "link to the broker lost (" + std::string(mosquitto_strerror(note.reasonCode)) +
                       "); records wait in the queue");
+        break;
+      case Note::Kind::SubscribeRefused:
+        log(true, "the broker refused the subscription to " + m_commandTopic + ": " +
+                      mosquitto_reason_string(note.reasonCode) + " (no remote commands arrive; its ACL)");
         break;
       case Note::Kind::Published: {
         const auto it = m_midToSequence.find(note.mid);

@@ -9,12 +9,15 @@
 //     the highest record below which every record is done;
 //   - never publishes while disconnected: after a reconnect libmosquitto resends what it held.
 // At each connect: the retained status "online" and the retained birth; the last will is the
-// retained status "offline".
+// retained status "offline". With remote commands enabled, also the subscription to
+// openvcu/<id>/cmd/+ (QoS 1, retain as published, so a retained command is seen as one); the
+// messages are only noted (at most maxInbound waiting) and taken by the owner with takeMessages().
 //
 //   auto sender = Sender::create(settings, {.maxInFlight = 20});
 //   sender->setBirth(birthJson);
 //   sender->start();                 // connect in the background (pump() retries a refused first connect)
 //   sender->pump(queue);             // often, on the queue's thread
+//   for (auto& message : sender->takeMessages()) handle(message);   // remote commands, same thread
 
 #include <chrono>
 #include <cstdint>
@@ -35,8 +38,16 @@ struct mosquitto;
 
 namespace openvcu::telemetry {
 
+/// A message the broker delivered on a subscribed topic (remote commands).
+struct InboundMessage {
+  std::string topic;
+  std::string payload;
+  bool retained{false};  ///< as published (the subscription keeps the flag)
+};
+
 struct SenderOptions {
   std::size_t maxInFlight{20};
+  std::size_t maxInbound{64};  ///< delivered messages waiting for takeMessages(); more are dropped and logged
   unsigned reconnectMinS{1};   ///< first reconnect delay; doubles up to reconnectMaxS
   unsigned reconnectMaxS{30};
   std::function<void(const std::string&)> logInfo;     ///< called on the pump()'s thread
@@ -66,11 +77,15 @@ class Sender {
   [[nodiscard]] bool connected() const;
   [[nodiscard]] LinkCounters counters() const;
   [[nodiscard]] std::size_t inFlight() const noexcept { return m_handed.size(); }
+  /// The messages delivered on openvcu/<id>/cmd/+ since the last call, in arrival order.
+  std::vector<InboundMessage> takeMessages();
 
   // libmosquitto's callbacks (network thread)
   void noteConnect(int reasonCode);
   void noteDisconnect(int reasonCode);
   void notePublished(int mid, int reasonCode);
+  void noteMessage(const char* topic, const void* payload, int length, bool retained);
+  void noteSubscribed(int grantedQos);
 
  private:
   Sender(const config::TelemetryConfig& settings, SenderOptions options);
@@ -79,7 +94,7 @@ class Sender {
     bool done{false};
   };
   struct Note {
-    enum class Kind { Connected, Refused, Disconnected, Published } kind;
+    enum class Kind { Connected, Refused, Disconnected, Published, SubscribeRefused } kind;
     int mid{};
     int reasonCode{};
   };
@@ -88,6 +103,7 @@ class Sender {
   void log(bool warning, const std::string& text) const;
 
   std::string m_topicRoot;  ///< "openvcu/<id>/"
+  std::string m_commandTopic;  ///< "openvcu/<id>/cmd/+" with remote commands enabled, else empty
   SenderOptions m_options;
   mosquitto* m_mosq{nullptr};
   std::string m_host;
@@ -104,6 +120,8 @@ class Sender {
   bool m_connected{false};
   std::string m_birth;
   LinkCounters m_counters;
+  std::vector<InboundMessage> m_inbound;
+  std::uint64_t m_inboundDropped{0};  ///< beyond maxInbound since the last pump()
 
   // the owner's thread only
   std::deque<Handed> m_handed;            ///< in the order handed

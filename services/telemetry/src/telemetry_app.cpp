@@ -15,6 +15,7 @@
 #include "openvcu/config/telemetry.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/service/timer.hpp"
+#include "remote_commands.hpp"
 #include "sender.hpp"
 
 namespace openvcu::telemetry {
@@ -70,6 +71,7 @@ struct TelemetryAppImpl {
   DiskQueue queue;
   Engine engine;
   std::unique_ptr<Sender> sender;
+  std::unique_ptr<RemoteCommands> remoteCommands;  ///< with remoteCommands.enabled only
   std::string birthBase;  ///< the birth's members but nextSeq and t
   std::vector<ipc::Subscription> subscriptions;
   std::optional<service::PeriodicTimer> pumpTimer;
@@ -99,10 +101,27 @@ struct TelemetryAppImpl {
   }
 
   void pump() {
+    if (remoteCommands) takeCommands();
     if (auto pumped = sender->pump(queue); !pumped && !queueFailed) {
       queueFailed = true;  // logged once; the service goes on (the link side may still recover)
       runtime.log().error("telemetry: " + pumped.error().toString());
     }
+  }
+
+  /// Remote commands from the broker to their checks; their answers into the queue at once (one batch).
+  void takeCommands() {
+    const ClockPair clocks = readClocks();
+    for (const InboundMessage& message : sender->takeMessages()) remoteCommands->onMessage(message, clocks);
+    const std::uint64_t first = queue.stats().nextSequence;
+    const std::vector<std::string> records = remoteCommands->takeRecords(first, clocks);
+    if (records.empty()) return;
+    std::vector<std::string_view> views(records.begin(), records.end());
+    if (auto appended = queue.appendBatch(views); !appended || *appended != first) {
+      runtime.log().error("telemetry queue: remote command answers lost: " +
+                          (appended ? "numbered from " + std::to_string(*appended) : appended.error().toString()));
+      return;
+    }
+    queued += records.size();
   }
 
   void tick() {
@@ -255,8 +274,25 @@ Result<std::unique_ptr<TelemetryApp>> TelemetryApp::create(service::Service& run
                       {"commands", {{"enabled", settings.remoteCommandsEnabled}, {"keys", settings.remoteCommandKeys}}}};
   const std::string birthText = birth.dump();
 
+  std::unique_ptr<RemoteCommands> remoteCommands;
+  if (settings.remoteCommandsEnabled) {
+    auto created = RemoteCommands::create(
+        {.vehicleId = settings.vehicleId,
+         .keys = settings.remoteCommandKeys,
+         .catalog = &runtime.catalog(),
+         .database = &vehicle.database,
+         .send = [instance = runtime.instance()](const ipc::CommandRequest& request, std::chrono::nanoseconds timeout) {
+           return commands::sendCommand(instance, request, timeout);
+         },
+         .logInfo = [&runtime](const std::string& text) { runtime.log().info(text); },
+         .logWarning = [&runtime](const std::string& text) { runtime.log().warning(text); }});
+    if (!created) return Error{vehicle.telemetryFile + ": " + created.error().message};
+    remoteCommands = std::move(*created);
+  }
+
   auto impl = std::make_unique<TelemetryAppImpl>(runtime, std::move(settings), std::move(*queue), std::move(*engine));
   impl->sender = std::move(*sender);
+  impl->remoteCommands = std::move(remoteCommands);
   impl->birthBase = birthText.substr(1, birthText.size() - 2);
   impl->sender->setBirth(impl->birth(readClocks()));
   if (auto subscribed = impl->subscribe(); !subscribed) return subscribed.error();
@@ -264,7 +300,10 @@ Result<std::unique_ptr<TelemetryApp>> TelemetryApp::create(service::Service& run
   if (auto started = impl->sender->start(); !started) return started.error();
   runtime.log().info("publishing vehicle '" + impl->settings.vehicleId + "' to " + impl->settings.brokerUrl +
                      "; queue " + impl->settings.queueFolder + " (" +
-                     std::to_string(impl->queue.stats().pendingRecords) + " record(s) waiting)");
+                     std::to_string(impl->queue.stats().pendingRecords) + " record(s) waiting)" +
+                     (impl->remoteCommands ? "; remote commands on for " + std::to_string(impl->settings.remoteCommandKeys.size()) +
+                                                 " key(s)"
+                                           : ""));
   return std::unique_ptr<TelemetryApp>(new TelemetryApp(std::move(impl)));
 }
 

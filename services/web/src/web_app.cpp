@@ -13,6 +13,8 @@
 #include "http_server.hpp"
 #include "live_state.hpp"
 #include "openvcu/commands/command_check.hpp"
+#include "openvcu/commands/command_sender.hpp"
+#include "openvcu/commands/worker.hpp"
 #include "openvcu/config/dashboard.hpp"
 #include "openvcu/config/web.hpp"
 #include "openvcu/core/clock.hpp"
@@ -20,7 +22,6 @@
 #include "openvcu/service/timer.hpp"
 #include "recordings.hpp"
 #include "web_reports.hpp"
-#include "worker.hpp"
 
 #ifndef OPENVCU_VERSION
 #define OPENVCU_VERSION "0.0.0"
@@ -108,8 +109,8 @@ struct WebAppImpl {
   service::CounterRef refusedCounter;
   int auditFd{-1};
   // Workers last among the members that they use, first to go: no job outlives what it touches.
-  Worker commands{"web-commands", COMMAND_QUEUE};
-  Worker files{"web-files", FILE_QUEUE};
+  commands::Worker commands{"web-commands", COMMAND_QUEUE};
+  commands::Worker files{"web-files", FILE_QUEUE};
   std::thread ioThread;
 
   WebAppImpl(service::Service& service, config::WebConfig webSettings, LiveSetup liveSetup, ServerOptions options)
@@ -273,30 +274,27 @@ struct WebAppImpl {
     commandRequest.timestampNs = clock::realtimeNs();
     const std::string what = commands::describeCommand(commandRequest);
     const bool queued = commands.submit([this, commandRequest, user, what, client = request.clientAddress, respond] {
-      auto client_ = ipc::CommandClient::connect(runtime.instance());
-      if (!client_) {
-        audit(user, client, what, false, "stack not reachable: " + client_.error().message);
-        respond(Response::error(503, "the stack is not reachable: " + client_.error().message));
-        return;
+      const commands::CommandOutcome outcome = commands::sendCommand(runtime.instance(), commandRequest, COMMAND_TIMEOUT);
+      const std::string verdict = outcome.verdict();
+      audit(user, client, what, outcome.accepted(), verdict);
+      switch (outcome.kind) {
+        case commands::CommandOutcome::Kind::Answered:
+          runtime.log().info("command by " + user + " from " + client + ": " + what + ": " + verdict);
+          respond(Response::json(200, Json{{"accepted", outcome.ack.accepted},
+                                           {"reason", outcome.ack.reason},
+                                           {"responder", outcome.ack.responder},
+                                           {"text", verdict}}
+                                          .dump()));
+          return;
+        case commands::CommandOutcome::Kind::NotReachable:
+          respond(Response::error(503, verdict));
+          return;
+        case commands::CommandOutcome::Kind::NotOwned:  // nobody owning the key is said at once
+        case commands::CommandOutcome::Kind::NoAnswer:  // no answer in time is a timeout
+          runtime.log().warning("command by " + user + " from " + client + ": " + what + ": " + verdict);
+          respond(Response::error(outcome.kind == commands::CommandOutcome::Kind::NotOwned ? 409 : 504, verdict));
+          return;
       }
-      auto answer = client_->send(commandRequest, COMMAND_TIMEOUT);
-      if (!answer) {
-        audit(user, client, what, false, answer.error().message);
-        runtime.log().warning("command by " + user + " from " + client + ": " + what + ": " + answer.error().message);
-        // nobody owning the key is said at once; no answer in time is a timeout
-        const bool unowned = answer.error().message.find("no running service answers for") != std::string::npos;
-        respond(Response::error(unowned ? 409 : 504, answer.error().message));
-        return;
-      }
-      const std::string verdict = answer->accepted ? "accepted by " + answer->responder
-                                                   : "refused by " + answer->responder + ": " + answer->reason;
-      audit(user, client, what, answer->accepted, verdict);
-      runtime.log().info("command by " + user + " from " + client + ": " + what + ": " + verdict);
-      respond(Response::json(200, Json{{"accepted", answer->accepted},
-                                       {"reason", answer->reason},
-                                       {"responder", answer->responder},
-                                       {"text", verdict}}
-                                      .dump()));
     });
     if (!queued) respond(Response::error(503, "busy: too many commands waiting; try again"));
   }

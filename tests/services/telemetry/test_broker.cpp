@@ -33,6 +33,7 @@
 #include <set>
 #include <thread>
 
+#include "broker_fixture.hpp"
 #include "harness/harness.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/vehicle.hpp"
@@ -68,17 +69,8 @@ int outageSeconds() {
   return text != nullptr ? std::max(1, std::atoi(text)) : 30;
 }
 
-void writeFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  REQUIRE(out.good());
-}
-
-struct Message {
-  std::string topic;
-  Json body;
-  bool retained{};
-};
+using telemetry_test::Message;
+using telemetry_test::writeFile;
 
 /// A libmosquitto subscriber to openvcu/# (MQTT 3.1.1, QoS 1), reconnecting by itself; with
 /// `persistent` (clean session off) the broker keeps its subscription across a restart.

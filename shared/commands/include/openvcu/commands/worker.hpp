@@ -1,10 +1,11 @@
 #pragma once
-// A thread for vcu-web's work that blocks (a command waiting for its answer, a password hash,
-// an archive, a report), with a bounded queue: the io thread never waits, and a burst of
-// requests beyond the queue is refused (503) instead of piling up.
+// A thread for work that blocks (a command waiting for its owner's answer; in vcu-web also a
+// password hash, an archive, a report), with a bounded queue: the caller's loop thread never
+// waits, and a burst beyond the queue is refused at once (vcu-web: 503, vcu-telemetry: a
+// refusal answered) instead of piling up.
 //
-//   web::Worker commands("web-commands", 16);
-//   if (!commands.submit([=] { respond(sendCommand(request)); })) respond(Response::error(503, "busy"));
+//   commands::Worker worker("web-commands", 16);
+//   if (!worker.submit([=] { respond(sendCommand(instance, request, timeout)); })) respond(busy());
 
 #include <condition_variable>
 #include <cstddef>
@@ -14,7 +15,7 @@
 #include <string>
 #include <thread>
 
-namespace openvcu::web {
+namespace openvcu::commands {
 
 /// @note thread-safe: submit() from any thread; jobs run one at a time on the worker's thread.
 class Worker {
@@ -38,4 +39,4 @@ class Worker {
   std::thread m_thread;
 };
 
-}  // namespace openvcu::web
+}  // namespace openvcu::commands

@@ -1,8 +1,8 @@
-#include "worker.hpp"
+#include "openvcu/commands/worker.hpp"
 
 #include <pthread.h>
 
-namespace openvcu::web {
+namespace openvcu::commands {
 
 Worker::Worker(std::string name, std::size_t capacity) : m_name(std::move(name)), m_capacity(capacity) {
   m_thread = std::thread([this] { run(); });
@@ -43,4 +43,4 @@ void Worker::run() {
   }
 }
 
-}  // namespace openvcu::web
+}  // namespace openvcu::commands
