@@ -5,6 +5,8 @@
 #include <string_view>
 
 #include "openvcu/display/values.hpp"
+#include "openvcu/fleet/payloads.hpp"
+#include "openvcu/fleet/topics.hpp"
 #include "openvcu/j1939/dm1.hpp"
 
 namespace openvcu::telemetry {
@@ -22,11 +24,14 @@ std::int64_t toUnixMs(std::int64_t monoNs, const ClockPair& clocks) {
 }
 
 /// "<suffix>\n{"v":1,"seq":N,"t":T,<body>}"; body: members without braces.
-std::string record(std::string_view suffix, std::uint64_t sequence, std::int64_t unixMs, const std::string& body) {
+std::string record(fleet::Topic topic, std::uint64_t sequence, std::int64_t unixMs, const std::string& body) {
+  const std::string_view suffix = fleet::topicSuffix(topic);
   std::string out;
   out.reserve(suffix.size() + body.size() + 48);
   out += suffix;
-  out += "\n{\"v\":1,\"seq\":";
+  out += "\n{\"v\":";
+  out += std::to_string(fleet::PAYLOAD_VERSION);
+  out += ",\"seq\":";
   out += std::to_string(sequence);
   out += ",\"t\":";
   out += std::to_string(unixMs);
@@ -154,12 +159,12 @@ std::vector<std::string> Engine::tick(std::uint64_t firstSequence, const TickInp
   for (const ipc::FsmTransition& transition : m_transitions) {
     const Json body = {{"state", transition.toState}, {"previous", transition.fromState}, {"event", transition.cause},
                        {"atUnixMs", transition.timestampNs / 1'000'000}};
-    records.push_back(record("state", sequence++, clocks.unixMs, members(body)));
+    records.push_back(record(fleet::Topic::State, sequence++, clocks.unixMs, members(body)));
   }
   m_transitions.clear();
 
   if (std::string faults = faultsBody(now); faults != m_sentFaults) {
-    records.push_back(record("faults", sequence++, clocks.unixMs, faults));
+    records.push_back(record(fleet::Topic::Faults, sequence++, clocks.unixMs, faults));
     m_sentFaults = std::move(faults);
   }
 
@@ -182,7 +187,7 @@ std::vector<std::string> Engine::tick(std::uint64_t firstSequence, const TickInp
                        {"queue", {{"pending", inputs.queue.pendingRecords}, {"diskBytes", inputs.queue.diskBytes},
                                   {"dropped", inputs.queue.droppedRecords}, {"drops", std::move(drops)}}},
                        {"link", {{"connects", inputs.link.connects}, {"refused", inputs.link.refused}}}};
-    records.push_back(record("health", sequence++, clocks.unixMs, members(body)));
+    records.push_back(record(fleet::Topic::Health, sequence++, clocks.unixMs, members(body)));
     m_sentHealth = std::move(signature);
     m_sentLink = inputs.link;
     m_healthSentNs = now;
@@ -209,7 +214,7 @@ std::vector<std::string> Engine::tick(std::uint64_t firstSequence, const TickInp
       samples += Json(sample.value).dump();
       samples += ']';
     }
-    records.push_back(record("signals", sequence++, clocks.unixMs,
+    records.push_back(record(fleet::Topic::Signals, sequence++, clocks.unixMs,
                              "\"names\":" + names.dump() + ",\"samples\":[" + samples + "]"));
   }
   m_samples.clear();

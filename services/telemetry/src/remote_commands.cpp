@@ -5,6 +5,7 @@
 
 #include "openvcu/commands/command_check.hpp"
 #include "openvcu/core/clock.hpp"
+#include "openvcu/fleet/topics.hpp"
 
 namespace openvcu::telemetry {
 namespace {
@@ -31,7 +32,7 @@ std::string keyList(const std::vector<std::string>& keys) {
 }  // namespace
 
 RemoteCommands::RemoteCommands(RemoteCommandsOptions options)
-    : m_options(std::move(options)), m_topicPrefix("openvcu/" + m_options.vehicleId + "/cmd/") {}
+    : m_options(std::move(options)), m_topicPrefix(fleet::commandTopicPrefix(m_options.vehicleId)) {}
 
 RemoteCommands::~RemoteCommands() {
   m_worker.reset();
@@ -198,7 +199,7 @@ std::vector<std::string> RemoteCommands::takeRecords(std::uint64_t firstSequence
                                          {"accepted", answer.accepted},
                                          {"reason", answer.reason},
                                          {"responder", answer.responder}};
-    records.push_back("cmd/" + answer.cmdId + "/answer\n" + body.dump());
+    records.push_back(fleet::commandAnswerSuffix(answer.cmdId) + "\n" + body.dump());
   }
   m_ready.clear();
   return records;

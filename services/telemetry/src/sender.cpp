@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <fstream>
+#include <string_view>
+
+#include "openvcu/fleet/topics.hpp"
 
 namespace openvcu::telemetry {
 namespace {
@@ -41,8 +44,10 @@ void onSubscribe(mosquitto* /*mosq*/, void* self, int /*mid*/, int count, const 
 }  // namespace
 
 Sender::Sender(const config::TelemetryConfig& settings, SenderOptions options)
-    : m_topicRoot("openvcu/" + settings.vehicleId + "/"),
-      m_commandTopic(settings.remoteCommandsEnabled ? m_topicRoot + "cmd/+" : std::string()),
+    : m_topicRoot(fleet::vehicleTopicRoot(settings.vehicleId)),
+      m_statusTopic(fleet::vehicleTopic(settings.vehicleId, fleet::Topic::Status)),
+      m_birthTopic(fleet::vehicleTopic(settings.vehicleId, fleet::Topic::Birth)),
+      m_commandTopic(settings.remoteCommandsEnabled ? fleet::commandFilter(settings.vehicleId) : std::string()),
       m_options(std::move(options)),
       m_retryDelay(std::chrono::seconds(m_options.reconnectMinS)) {}
 
@@ -63,8 +68,9 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
     mosquitto_subscribe_v5_callback_set(mosq, onSubscribe);
   }
   mosquitto_reconnect_delay_set(mosq, sender->m_options.reconnectMinS, sender->m_options.reconnectMaxS, true);
-  const std::string willTopic = sender->m_topicRoot + "status";
-  if (const int rc = mosquitto_will_set_v5(mosq, willTopic.c_str(), 7, "offline", QOS_AT_LEAST_ONCE, true, nullptr);
+  if (const int rc = mosquitto_will_set_v5(mosq, sender->m_statusTopic.c_str(),
+                                          static_cast<int>(fleet::STATUS_OFFLINE.size()), fleet::STATUS_OFFLINE.data(),
+                                          QOS_AT_LEAST_ONCE, true, nullptr);
       rc != MOSQ_ERR_SUCCESS) {
     return Error{std::string("libmosquitto: the last will: ") + mosquitto_strerror(rc)};
   }
@@ -175,8 +181,8 @@ void Sender::noteConnect(int reasonCode) {
     mosquitto_subscribe_v5(m_mosq, nullptr, m_commandTopic.c_str(), QOS_AT_LEAST_ONCE,
                            MQTT_SUB_OPT_RETAIN_AS_PUBLISHED, nullptr);
   }
-  publishRetained(m_topicRoot + "status", "online");
-  if (!birth.empty()) publishRetained(m_topicRoot + "birth", birth);
+  publishRetained(m_statusTopic, std::string(fleet::STATUS_ONLINE));
+  if (!birth.empty()) publishRetained(m_birthTopic, birth);
 }
 
 void Sender::noteDisconnect(int reasonCode) {
@@ -295,12 +301,16 @@ Status Sender::pump(DiskQueue& queue) {
       m_lastHanded = entry.sequence;
       continue;
     }
-    const std::string topic = m_topicRoot + entry.payload.substr(0, newline);
+    const std::string_view suffix = std::string_view(entry.payload).substr(0, newline);
+    const std::string topic = m_topicRoot + std::string(suffix);
+    // state, faults and health retained (the last one stays for a watcher that comes later)
+    const auto kind = fleet::topicFromSuffix(suffix);
+    const bool retain = kind.has_value() && fleet::isRetained(*kind);
     const char* body = entry.payload.data() + newline + 1;
     const int length = static_cast<int>(entry.payload.size() - newline - 1);
     int mid = 0;
     // the mid is noted before the PUBACK can be handled: notes are read by this thread only
-    const int rc = mosquitto_publish_v5(m_mosq, &mid, topic.c_str(), length, body, QOS_AT_LEAST_ONCE, false, nullptr);
+    const int rc = mosquitto_publish_v5(m_mosq, &mid, topic.c_str(), length, body, QOS_AT_LEAST_ONCE, retain, nullptr);
     if (rc == MOSQ_ERR_SUCCESS || (rc == MOSQ_ERR_NO_CONN && mid != 0)) {
       // NO_CONN: the link dropped just now; libmosquitto keeps the message and sends it after the reconnect
       m_midToSequence[mid] = entry.sequence;

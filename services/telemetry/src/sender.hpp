@@ -103,6 +103,8 @@ class Sender {
   void log(bool warning, const std::string& text) const;
 
   std::string m_topicRoot;  ///< "openvcu/<id>/"
+  std::string m_statusTopic;  ///< "openvcu/<id>/status" (online, the will offline)
+  std::string m_birthTopic;   ///< "openvcu/<id>/birth"
   std::string m_commandTopic;  ///< "openvcu/<id>/cmd/+" with remote commands enabled, else empty
   SenderOptions m_options;
   mosquitto* m_mosq{nullptr};

@@ -37,7 +37,22 @@ std::optional<Topic> topicFromSuffix(std::string_view suffix) noexcept {
 }
 
 bool isRetained(Topic topic) noexcept {
-  return topic == Topic::Status || topic == Topic::Birth;
+  return topic != Topic::Signals;
+}
+
+std::string commandTopicPrefix(std::string_view vehicleId) {
+  return vehicleTopicRoot(vehicleId) + "cmd/";
+}
+
+std::string commandFilter(std::string_view vehicleId) {
+  return commandTopicPrefix(vehicleId) + "+";
+}
+
+std::string commandAnswerSuffix(std::string_view cmdId) {
+  std::string out = "cmd/";
+  out += cmdId;
+  out += "/answer";
+  return out;
 }
 
 std::string vehicleTopicRoot(std::string_view vehicleId) {

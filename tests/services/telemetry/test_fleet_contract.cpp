@@ -124,7 +124,11 @@ TEST_CASE("fleet topics: names built and parsed the same way") {
   CHECK_FALSE(fleet::parseTopic("openvcu/a b/birth").has_value());
   CHECK_FALSE(fleet::parseTopic("openvcu/hhea-01/cmd/7/answer").has_value());
   CHECK(fleet::isRetained(fleet::Topic::Status));
-  CHECK_FALSE(fleet::isRetained(fleet::Topic::State));
+  CHECK(fleet::isRetained(fleet::Topic::State));
+  CHECK(fleet::isRetained(fleet::Topic::Faults));
+  CHECK_FALSE(fleet::isRetained(fleet::Topic::Signals));
+  CHECK(fleet::commandFilter("hhea-01") == "openvcu/hhea-01/cmd/+");
+  CHECK(fleet::commandAnswerSuffix("c7") == "cmd/c7/answer");
 }
 
 TEST_CASE("fleet view: the SOC column takes the option, else the birth's signal ending in SOC") {

@@ -34,8 +34,9 @@ inline constexpr std::string_view STATUS_OFFLINE = "offline";
 [[nodiscard]] std::string_view topicSuffix(Topic topic) noexcept;
 /// The kind named by a suffix, or empty.
 [[nodiscard]] std::optional<Topic> topicFromSuffix(std::string_view suffix) noexcept;
-/// True for the kinds published retained (today status and birth); the others go through the
-/// vehicle's queue and reach only the watchers connected when they are sent.
+/// True for the kinds published retained: status, birth, and the last state, faults and health,
+/// so a watcher that connects later learns them at once (an offline vehicle's last ones stay).
+/// Signals are not retained: a batch holds only the signals that moved.
 [[nodiscard]] bool isRetained(Topic topic) noexcept;
 
 /// "openvcu/<vehicleId>/" (the prefix of all of one vehicle's topics).
@@ -44,6 +45,13 @@ inline constexpr std::string_view STATUS_OFFLINE = "offline";
 [[nodiscard]] std::string vehicleTopic(std::string_view vehicleId, Topic topic);
 /// "openvcu/+/<suffix>": one kind of every vehicle.
 [[nodiscard]] std::string fleetFilter(Topic topic);
+
+/// "openvcu/<vehicleId>/cmd/": the prefix of the commands to one vehicle (fleet -> vehicle).
+[[nodiscard]] std::string commandTopicPrefix(std::string_view vehicleId);
+/// "openvcu/<vehicleId>/cmd/+": what a vehicle subscribes to when it takes remote commands.
+[[nodiscard]] std::string commandFilter(std::string_view vehicleId);
+/// "cmd/<cmdId>/answer": the answer's topic below the vehicle's root (a queue record's topic line).
+[[nodiscard]] std::string commandAnswerSuffix(std::string_view cmdId);
 
 struct TopicName {
   std::string vehicleId;
