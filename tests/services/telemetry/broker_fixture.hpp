@@ -1,6 +1,7 @@
 #pragma once
-// What the broker tests of vcu-telemetry share (test_broker.cpp, test_remote_commands.cpp):
-// writing a file, a received message, a mosquitto configuration with a password file (made
+// What the broker tests of vcu-telemetry share (test_broker.cpp, test_remote_commands.cpp,
+// test_queue_limit.cpp, test_fleet_watch.cpp): writing a file, a received message, a
+// subscriber to openvcu/# that keeps every message, a port check, a mosquitto configuration with a password file (made
 // by mosquitto_passwd at run time, test passwords only) and an ACL file, and an MQTT v5 client
 // on libmosquitto that reports what the broker answered (CONNACK, SUBACK and PUBACK reason
 // codes). Runs inside tests/harness/run_isolated.sh only (loopback).
@@ -13,8 +14,14 @@
 
 #include <doctest/doctest.h>
 #include <mosquitto.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <functional>
+#include <thread>
 #include <condition_variable>
 #include <filesystem>
 #include <fstream>
@@ -182,5 +189,98 @@ class MqttClient {
   std::map<int, int> m_subacks;
   std::vector<Message> m_messages;
 };
+
+/// A libmosquitto subscriber to openvcu/# (MQTT 3.1.1, QoS 1), reconnecting by itself every
+/// second; with `persistent` (clean session off) the broker keeps its subscription across a
+/// restart. A username (with its password) when the broker wants one. Each message keeps its
+/// retain flag: set for a retained copy given at a (re)subscription, not for a live one.
+class Subscriber {
+ public:
+  Subscriber(const char* clientId, bool persistent, const char* username = nullptr, const char* password = nullptr,
+             int port = 1883)
+      : m_port(port) {
+    mosquitto_lib_init();
+    m_mosq = mosquitto_new(clientId, !persistent, this);
+    REQUIRE(m_mosq != nullptr);
+    if (username != nullptr) mosquitto_username_pw_set(m_mosq, username, password);
+    mosquitto_reconnect_delay_set(m_mosq, 1, 1, false);
+    mosquitto_connect_callback_set(m_mosq, [](mosquitto* mosq, void*, int rc) {
+      if (rc == 0) mosquitto_subscribe(mosq, nullptr, "openvcu/#", 1);
+    });
+    mosquitto_message_callback_set(m_mosq, [](mosquitto*, void* self, const mosquitto_message* message) {
+      static_cast<Subscriber*>(self)->add(message);
+    });
+  }
+  ~Subscriber() {
+    mosquitto_disconnect(m_mosq);
+    mosquitto_loop_stop(m_mosq, true);
+    mosquitto_destroy(m_mosq);
+  }
+  bool connect() {
+    if (mosquitto_connect(m_mosq, "127.0.0.1", m_port, 10) != MOSQ_ERR_SUCCESS) return false;
+    return mosquitto_loop_start(m_mosq) == MOSQ_ERR_SUCCESS;
+  }
+  void add(const mosquitto_message* message) {
+    const std::string text(static_cast<const char*>(message->payload), static_cast<std::size_t>(message->payloadlen));
+    Json body = Json::parse(text, nullptr, false);
+    if (body.is_discarded()) body = text;  // the status is plain text
+    const std::lock_guard lock(m_mutex);
+    m_messages.push_back({message->topic, std::move(body), message->retain});
+    m_changed.notify_all();
+  }
+  /// Waits until `done(messages)` holds; false on timeout.
+  template <typename Predicate>
+  bool waitFor(Predicate done, std::chrono::milliseconds timeout) {
+    std::unique_lock lock(m_mutex);
+    return m_changed.wait_for(lock, timeout, [&] { return done(m_messages); });
+  }
+  std::vector<Message> messages() {
+    const std::lock_guard lock(m_mutex);
+    return m_messages;
+  }
+
+ private:
+  mosquitto* m_mosq{nullptr};
+  int m_port;
+  std::mutex m_mutex;
+  std::condition_variable m_changed;
+  std::vector<Message> m_messages;
+};
+
+/// Calls `step(n)` (n = 0, 1, ...) every `period` on a thread of its own until stop() or the
+/// destructor: the tests' writer of the signal table.
+class PeriodicWriter {
+ public:
+  PeriodicWriter(std::chrono::milliseconds period, std::function<void(int)> step)
+      : m_thread([this, period, step = std::move(step)] {
+          for (int n = 0; m_running; ++n) {
+            step(n);
+            std::this_thread::sleep_for(period);
+          }
+        }) {}
+  ~PeriodicWriter() { stop(); }
+  PeriodicWriter(const PeriodicWriter&) = delete;
+  PeriodicWriter& operator=(const PeriodicWriter&) = delete;
+  void stop() {
+    m_running = false;
+    if (m_thread.joinable()) m_thread.join();
+  }
+
+ private:
+  std::atomic<bool> m_running{true};
+  std::thread m_thread;
+};
+
+/// True once something accepts TCP connections on 127.0.0.1:port.
+inline bool listening(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const bool ok = ::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
+  ::close(fd);
+  return ok;
+}
 
 }  // namespace openvcu::telemetry_test

@@ -70,59 +70,8 @@ int outageSeconds() {
 }
 
 using telemetry_test::Message;
+using telemetry_test::Subscriber;
 using telemetry_test::writeFile;
-
-/// A libmosquitto subscriber to openvcu/# (MQTT 3.1.1, QoS 1), reconnecting by itself; with
-/// `persistent` (clean session off) the broker keeps its subscription across a restart.
-class Subscriber {
- public:
-  Subscriber(const char* clientId, bool persistent) {
-    mosquitto_lib_init();
-    m_mosq = mosquitto_new(clientId, !persistent, this);
-    REQUIRE(m_mosq != nullptr);
-    mosquitto_username_pw_set(m_mosq, WATCHER, WATCHER_PASSWORD);
-    mosquitto_reconnect_delay_set(m_mosq, 1, 1, false);
-    mosquitto_connect_callback_set(m_mosq, [](mosquitto* mosq, void*, int rc) {
-      if (rc == 0) mosquitto_subscribe(mosq, nullptr, "openvcu/#", 1);
-    });
-    mosquitto_message_callback_set(m_mosq, [](mosquitto*, void* self, const mosquitto_message* message) {
-      static_cast<Subscriber*>(self)->add(message);
-    });
-  }
-  ~Subscriber() {
-    mosquitto_disconnect(m_mosq);
-    mosquitto_loop_stop(m_mosq, true);
-    mosquitto_destroy(m_mosq);
-  }
-  bool connect() {
-    if (mosquitto_connect(m_mosq, "127.0.0.1", PORT, 10) != MOSQ_ERR_SUCCESS) return false;
-    return mosquitto_loop_start(m_mosq) == MOSQ_ERR_SUCCESS;
-  }
-  void add(const mosquitto_message* message) {
-    const std::string text(static_cast<const char*>(message->payload), static_cast<std::size_t>(message->payloadlen));
-    Json body = Json::parse(text, nullptr, false);
-    if (body.is_discarded()) body = text;  // the status is plain text
-    const std::lock_guard lock(m_mutex);
-    m_messages.push_back({message->topic, std::move(body), message->retain});
-    m_changed.notify_all();
-  }
-  /// Waits until `done(messages)` holds; false on timeout.
-  template <typename Predicate>
-  bool waitFor(Predicate done, std::chrono::milliseconds timeout) {
-    std::unique_lock lock(m_mutex);
-    return m_changed.wait_for(lock, timeout, [&] { return done(m_messages); });
-  }
-  std::vector<Message> messages() {
-    const std::lock_guard lock(m_mutex);
-    return m_messages;
-  }
-
- private:
-  mosquitto* m_mosq{nullptr};
-  std::mutex m_mutex;
-  std::condition_variable m_changed;
-  std::vector<Message> m_messages;
-};
 
 std::uint64_t maxSeq(const std::vector<Message>& messages) {
   std::uint64_t max = 0;
@@ -207,25 +156,13 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
   REQUIRE_STATUS(events);
 
   // the writer: the rate signal ramps by 1 and the deadband signal by 0.1 every 20 ms
-  std::atomic<bool> writing{true};
-  std::thread writer([&] {
-    const auto rate = *catalog->indexOf(RATE_KEY);
-    const auto deadband = *catalog->indexOf(DEADBAND_KEY);
-    for (int step = 0; writing; ++step) {
-      const std::int64_t now = clock::monotonicNs();
-      table->writeBus(rate, step % 1000, now, 0xF3, signals::Quality::Valid);
-      table->writeBus(deadband, (step % 500) * 0.1, now, 0xF3, signals::Quality::Valid);
-      std::this_thread::sleep_for(WRITE_PERIOD);
-    }
+  const auto rate = *catalog->indexOf(RATE_KEY);
+  const auto deadband = *catalog->indexOf(DEADBAND_KEY);
+  telemetry_test::PeriodicWriter writer(WRITE_PERIOD, [&](int step) {
+    const std::int64_t now = clock::monotonicNs();
+    table->writeBus(rate, step % 1000, now, 0xF3, signals::Quality::Valid);
+    table->writeBus(deadband, (step % 500) * 0.1, now, 0xF3, signals::Quality::Valid);
   });
-  struct StopWriter {
-    std::atomic<bool>& writing;
-    std::thread& writer;
-    ~StopWriter() {
-      writing = false;
-      writer.join();
-    }
-  } stopWriter{writing, writer};
 
   // the bridge first, with no broker yet: it is ready, queues, and connects once the broker is up
   const harness::ProcessSpec bridgeSpec{.name = "vcu-telemetry",
@@ -237,7 +174,7 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
   auto broker = sut.start(brokerSpec);
   REQUIRE_STATUS(broker);
 
-  Subscriber watcher("telemetry-test-watcher", true);
+  Subscriber watcher("telemetry-test-watcher", true, WATCHER, WATCHER_PASSWORD, PORT);
   bool connected = false;
   for (int attempt = 0; attempt < 50 && !(connected = watcher.connect()); ++attempt) std::this_thread::sleep_for(100ms);
   REQUIRE_MESSAGE(connected, "the broker did not accept the watcher");
@@ -265,7 +202,7 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
     const auto birth = std::find_if(messages.begin(), messages.end(), [](const Message& m) { return m.topic.ends_with("/birth"); });
     REQUIRE(birth != messages.end());
     // the retained ones as a watcher that connects later gets them
-    Subscriber late("telemetry-test-late", false);
+    Subscriber late("telemetry-test-late", false, WATCHER, WATCHER_PASSWORD, PORT);
     REQUIRE(late.connect());
     CHECK(late.waitFor(
         [](const std::vector<Message>& retained) {
@@ -429,5 +366,5 @@ TEST_CASE("vcu-telemetry to a real mosquitto: content, rates and deadbands, noth
   const auto messages = watcher.messages();
   CHECK_FALSE(std::any_of(messages.begin(), messages.end(),
                           [](const Message& m) { return m.topic.starts_with("openvcu/hhea-02/"); }));
-  writing = false;
+  writer.stop();
 }

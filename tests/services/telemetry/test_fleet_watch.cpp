@@ -23,6 +23,7 @@
 #include <regex>
 #include <thread>
 
+#include "broker_fixture.hpp"
 #include "harness/harness.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/vehicle.hpp"
@@ -42,23 +43,8 @@ constexpr int PORT = 1883;
 constexpr const char* BROKER = "mqtt://127.0.0.1:1883";
 constexpr const char* SOC_KEY = "VIC.HVESSD2_PGN61585.HS_FastUpdSOC";
 
-void writeFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  REQUIRE(out.good());
-}
-
-/// True once something accepts TCP connections on 127.0.0.1:port.
-bool listening(int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(static_cast<std::uint16_t>(port));
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  const bool ok = connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
-  close(fd);
-  return ok;
-}
+using telemetry_test::listening;
+using telemetry_test::writeFile;
 
 /// One simulated vehicle: its instance's table and events (the vcu-telemetry runs apart).
 struct Vehicle {
@@ -137,24 +123,12 @@ TEST_CASE(
     bridges.push_back(*bridge);
   }
   // the SOC moves by 0.1 around each vehicle's value every 50 ms: a signals message every second
-  std::atomic<bool> writing{true};
-  std::thread writer([&] {
-    for (int step = 0; writing; ++step) {
-      for (Vehicle& vehicle : vehicles) {
-        vehicle.table->writeBus(soc, vehicle.soc + (step % 2) * 0.1, clock::monotonicNs(), 0xF3,
-                                signals::Quality::Valid);
-      }
-      std::this_thread::sleep_for(50ms);
+  telemetry_test::PeriodicWriter writer(50ms, [&](int step) {
+    for (Vehicle& vehicle : vehicles) {
+      vehicle.table->writeBus(soc, vehicle.soc + (step % 2) * 0.1, clock::monotonicNs(), 0xF3,
+                              signals::Quality::Valid);
     }
   });
-  struct StopWriter {
-    std::atomic<bool>& writing;
-    std::thread& writer;
-    ~StopWriter() {
-      writing = false;
-      writer.join();
-    }
-  } stopWriter{writing, writer};
 
   // live in a pipe: one line per change
   auto watch = sut.start({.name = "vcu-fleet-watch",
@@ -222,5 +196,5 @@ TEST_CASE(
   const auto untold = sut.run({vcu, "fleet", "get", "veh-c", "state", "--broker", BROKER, "--wait", "1"});
   CHECK(untold.exitCode() == 1);
   CHECK_MESSAGE(untold.err.find("vehicle 'veh-c' has not told 'state'") != std::string::npos, untold.describe());
-  writing = false;
+  writer.stop();
 }

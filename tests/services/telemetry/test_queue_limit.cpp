@@ -32,6 +32,7 @@
 #include <set>
 #include <thread>
 
+#include "broker_fixture.hpp"
 #include "disk_queue.hpp"
 #include "harness/harness.hpp"
 #include "openvcu/config/catalog.hpp"
@@ -58,70 +59,13 @@ constexpr std::size_t BACKLOG_RECORD_BYTES = 1000;
 constexpr std::size_t BACKLOG_BATCH = 16;
 constexpr std::uint64_t BACKLOG_MARGIN = 2048;
 
-void writeFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  REQUIRE(out.good());
-}
+using telemetry_test::Message;
+using telemetry_test::Subscriber;
+using telemetry_test::writeFile;
 
-struct Message {
-  std::string topic;
-  Json body;
-};
-
-/// A libmosquitto subscriber to openvcu/# (QoS 1) with a persistent session (clean session off):
-/// the broker (persistence on) keeps its subscription and its messages across a clean restart.
-/// (The same shape as test_broker.cpp's, without passwords: this broker is anonymous on loopback.)
-class Subscriber {
- public:
-  explicit Subscriber(const char* clientId) {
-    mosquitto_lib_init();
-    m_mosq = mosquitto_new(clientId, false, this);
-    REQUIRE(m_mosq != nullptr);
-    mosquitto_reconnect_delay_set(m_mosq, 1, 1, false);
-    mosquitto_connect_callback_set(m_mosq, [](mosquitto* mosq, void*, int rc) {
-      if (rc == 0) mosquitto_subscribe(mosq, nullptr, "openvcu/#", 1);
-    });
-    mosquitto_message_callback_set(m_mosq, [](mosquitto*, void* self, const mosquitto_message* message) {
-      static_cast<Subscriber*>(self)->add(message);
-    });
-  }
-  ~Subscriber() {
-    mosquitto_disconnect(m_mosq);
-    mosquitto_loop_stop(m_mosq, true);
-    mosquitto_destroy(m_mosq);
-  }
-  bool connect() {
-    if (mosquitto_connect(m_mosq, "127.0.0.1", PORT, 10) != MOSQ_ERR_SUCCESS) return false;
-    return mosquitto_loop_start(m_mosq) == MOSQ_ERR_SUCCESS;
-  }
-  void add(const mosquitto_message* message) {
-    const std::string text(static_cast<const char*>(message->payload), static_cast<std::size_t>(message->payloadlen));
-    Json body = Json::parse(text, nullptr, false);
-    if (body.is_discarded()) body = text;  // the status is plain text
-    const std::lock_guard lock(m_mutex);
-    m_messages.push_back({message->topic, std::move(body)});
-    m_changed.notify_all();
-  }
-  template <typename Predicate>
-  bool waitFor(Predicate done, std::chrono::milliseconds timeout) {
-    std::unique_lock lock(m_mutex);
-    return m_changed.wait_for(lock, timeout, [&] { return done(m_messages); });
-  }
-  std::vector<Message> messages() {
-    const std::lock_guard lock(m_mutex);
-    return m_messages;
-  }
-
- private:
-  mosquitto* m_mosq{nullptr};
-  std::mutex m_mutex;
-  std::condition_variable m_changed;
-  std::vector<Message> m_messages;
-};
-
+/// A record of the stream: not a retained copy given again at a (re)subscription.
 bool hasSeq(const Message& message) {
-  return message.body.is_object() && message.body.contains("seq");
+  return !message.retained && message.body.is_object() && message.body.contains("seq");
 }
 
 std::uint64_t maxSeq(const std::vector<Message>& messages) {
@@ -201,33 +145,21 @@ TEST_CASE(
   REQUIRE_STATUS(table);
 
   // the writer: every signal a new value every 20 ms, unless paused
-  std::atomic<bool> writing{true};
   std::atomic<bool> paused{false};
-  std::thread writer([&] {
-    for (int step = 0; writing; ++step) {
-      if (!paused) {
-        const std::int64_t now = clock::monotonicNs();
-        for (std::size_t i = 0; i < written.size(); ++i) {
-          table->writeBus(written[i], static_cast<double>((step + static_cast<int>(i)) % 100), now, 0xF3,
-                          signals::Quality::Valid);
-        }
+  telemetry_test::PeriodicWriter writer(WRITE_PERIOD, [&](int step) {
+    if (!paused) {
+      const std::int64_t now = clock::monotonicNs();
+      for (std::size_t i = 0; i < written.size(); ++i) {
+        table->writeBus(written[i], static_cast<double>((step + static_cast<int>(i)) % 100), now, 0xF3,
+                        signals::Quality::Valid);
       }
-      std::this_thread::sleep_for(WRITE_PERIOD);
     }
   });
-  struct StopWriter {
-    std::atomic<bool>& writing;
-    std::thread& writer;
-    ~StopWriter() {
-      writing = false;
-      writer.join();
-    }
-  } stopWriter{writing, writer};
 
   // 1. live: the first records reach the subscriber
   auto broker = sut.start(brokerSpec);
   REQUIRE_STATUS(broker);
-  Subscriber watcher("telemetry-limit-watcher");
+  Subscriber watcher("telemetry-limit-watcher", true, nullptr, nullptr, PORT);
   bool connected = false;
   for (int attempt = 0; attempt < 50 && !(connected = watcher.connect()); ++attempt) std::this_thread::sleep_for(100ms);
   REQUIRE_MESSAGE(connected, "the broker did not accept the watcher");
