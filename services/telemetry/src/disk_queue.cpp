@@ -301,9 +301,9 @@ Status DiskQueue::openWriteSegment(std::uint64_t firstSequence) {
   Segment segment{m_options.folder + "/" + segmentName(firstSequence), firstSequence, firstSequence - 1, 0};
   m_writeFd = ::open(segment.path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0640);
   if (m_writeFd < 0) return Error{systemError("cannot create a segment", segment.path)};
+  m_segments.push_back(std::move(segment));  // listed at once: it exists and is the one written
   // the new name must survive a power cut too
   if (::fsync(m_folderFd) != 0) return Error{systemError("cannot sync the queue folder", m_options.folder)};
-  m_segments.push_back(std::move(segment));
   return {};
 }
 
@@ -363,25 +363,39 @@ Status DiskQueue::writeAckState() {
 
 Result<std::uint64_t> DiskQueue::appendBatch(std::span<const std::string_view> payloads) {
   if (payloads.empty()) return m_nextSequence;
+  const std::uint64_t segmentBytes = m_options.segmentBytes;
   m_buffer.clear();
+  m_recordEnds.clear();
   std::uint64_t sequence = m_nextSequence;
-  for (const std::string_view payload : payloads) {
+  for (std::size_t i = 0; i < payloads.size(); ++i) {
+    const std::string_view payload = payloads[i];
+    if (HEADER_BYTES + payload.size() > segmentBytes) {
+      return Error{m_options.folder + ": record " + std::to_string(i + 1) + " of a batch of " +
+                   std::to_string(payloads.size()) + " is " + std::to_string(HEADER_BYTES + payload.size()) +
+                   " bytes with its header, larger than a segment (" + std::to_string(segmentBytes) +
+                   " bytes); nothing of the batch is stored"};
+    }
     const auto length = static_cast<std::uint32_t>(payload.size());
     put(m_buffer, RECORD_MAGIC);
     put(m_buffer, length);
     put(m_buffer, sequence);
     put(m_buffer, recordCrc(length, sequence, payload));
     m_buffer.append(payload);
+    m_recordEnds.push_back(m_buffer.size());
     ++sequence;
   }
   const std::uint64_t batchBytes = m_buffer.size();
-  if (batchBytes > m_options.segmentBytes) {
-    return Error{m_options.folder + ": a batch of " + std::to_string(batchBytes) + " bytes is larger than a segment (" +
-                 std::to_string(m_options.segmentBytes) + " bytes)"};
+  if (batchBytes > m_options.maxBytes) {
+    return Error{m_options.folder + ": a batch of " + std::to_string(batchBytes) + " bytes is larger than the queue limit (" +
+                 std::to_string(m_options.maxBytes) + " bytes); nothing of it is stored"};
   }
-  if (m_writeFd < 0 || m_segments.back().bytes + batchBytes > m_options.segmentBytes) {
+  // a batch starts a new segment unless it fits whole into the one being written (or that one
+  // is still empty); a batch larger than a segment then fills one segment after the other
+  if (m_writeFd < 0 || (m_segments.back().bytes > 0 && m_segments.back().bytes + batchBytes > segmentBytes)) {
     if (auto opened = openWriteSegment(m_nextSequence); !opened) return opened.error();
   }
+  // room for the whole batch before anything is written: whole segments, oldest first (the
+  // segment being written stays; it holds at most a segment, the batch at most the limit)
   auto diskBytes = [&] {
     std::uint64_t total = 0;
     for (const Segment& segment : m_segments) total += segment.bytes;
@@ -390,23 +404,76 @@ Result<std::uint64_t> DiskQueue::appendBatch(std::span<const std::string_view> p
   while (m_segments.size() > 1 && diskBytes() + batchBytes > m_options.maxBytes) {
     if (auto dropped = dropOldestSegment(true); !dropped) return dropped.error();
   }
-  Segment& segment = m_segments.back();
-  if (!writeAll(m_writeFd, m_buffer.data(), m_buffer.size()) || ::fdatasync(m_writeFd) != 0) {
-    const int error = errno;
-    // leave no partial batch behind: the next open would cut it anyway
-    if (::ftruncate(m_writeFd, static_cast<off_t>(segment.bytes)) != 0) { /* open() cuts it */ }
-    return Error{systemError("cannot append to", segment.path, error)};
+  const std::size_t firstIndex = m_segments.size() - 1;
+  const std::uint64_t firstBytes = m_segments.back().bytes;
+  const std::uint64_t firstLastSequence = m_segments.back().lastSequence;
+  const std::uint64_t first = m_nextSequence;
+  std::size_t record = 0;
+  std::uint64_t chunkBegin = 0;
+  while (record < m_recordEnds.size()) {
+    // the records that fit into this segment: at least one (each fits an empty segment)
+    Segment& segment = m_segments.back();
+    std::size_t end = record;
+    while (end < m_recordEnds.size() && segment.bytes + (m_recordEnds[end] - chunkBegin) <= segmentBytes) ++end;
+    const std::uint64_t chunkEnd = m_recordEnds[end - 1];
+    // synced before the next segment is created: after a crash the batch is there up to a
+    // record boundary, never with a hole
+    if (!writeAll(m_writeFd, m_buffer.data() + chunkBegin, chunkEnd - chunkBegin) || ::fdatasync(m_writeFd) != 0) {
+      const Error error{systemError("cannot append to", segment.path)};
+      rollbackBatch(firstIndex, firstBytes, firstLastSequence);
+      return error;
+    }
+    if (segment.bytes == 0) segment.firstSequence = first + record;
+    segment.bytes += chunkEnd - chunkBegin;
+    segment.lastSequence = first + end - 1;
+    record = end;
+    chunkBegin = chunkEnd;
+    if (record < m_recordEnds.size()) {
+      if (auto opened = openWriteSegment(first + record); !opened) {
+        rollbackBatch(firstIndex, firstBytes, firstLastSequence);
+        return opened.error();
+      }
+    }
   }
   if (m_ackDirty) {
     ::fdatasync(m_ackFd);
     m_ackDirty = false;
   }
-  const std::uint64_t first = m_nextSequence;
-  if (segment.bytes == 0) segment.firstSequence = first;
-  segment.bytes += batchBytes;
-  segment.lastSequence = sequence - 1;
   m_nextSequence = sequence;
   return first;
+}
+
+void DiskQueue::rollbackBatch(std::size_t firstIndex, std::uint64_t firstBytes, std::uint64_t firstLastSequence) {
+  // the segments this batch created go; the first one it wrote to is cut back to its old length
+  // (a cut that fails leaves whole records the next open() keeps; the disk is failing then)
+  while (m_segments.size() > firstIndex + 1) {
+    const Segment& created = m_segments.back();
+    if (m_readFd >= 0 && m_readPath == created.path) {
+      ::close(m_readFd);
+      m_readFd = -1;
+    }
+    ::unlink(created.path.c_str());
+    m_segments.pop_back();
+    if (m_writeFd >= 0) ::close(m_writeFd);
+    m_writeFd = -1;
+  }
+  Segment& segment = m_segments[firstIndex];
+  if (m_writeFd >= 0) {
+    if (::ftruncate(m_writeFd, static_cast<off_t>(firstBytes)) != 0) { /* see above */ }
+  } else {
+    if (::truncate(segment.path.c_str(), static_cast<off_t>(firstBytes)) != 0) { /* see above */ }
+    if (firstBytes == 0) {  // no write segment any more: the next batch creates one under this name
+      if (m_readFd >= 0 && m_readPath == segment.path) {
+        ::close(m_readFd);
+        m_readFd = -1;
+      }
+      ::unlink(segment.path.c_str());
+      m_segments.pop_back();
+      return;
+    }
+  }
+  segment.bytes = firstBytes;
+  segment.lastSequence = firstLastSequence;
 }
 
 Result<std::vector<QueueRecord>> DiskQueue::peek(std::size_t maxRecords, std::size_t maxBytes) {
@@ -472,8 +539,10 @@ Status DiskQueue::ack(std::uint64_t sequence) {
     }
     break;
   }
-  if (auto deleted = deleteAckedSegments(); !deleted) return deleted;
-  return writeAckState();
+  // the state first: a process killed in between must not find acked segments deleted while
+  // ack.state still names an older sequence (the reopened queue would start after a hole)
+  if (auto written = writeAckState(); !written) return written;
+  return deleteAckedSegments();
 }
 
 QueueStats DiskQueue::stats() const noexcept {

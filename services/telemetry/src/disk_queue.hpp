@@ -14,15 +14,21 @@
 //   u32 magic "OVQR" | u32 payload length | u64 sequence | u32 CRC-32C of length, sequence
 //   and payload | payload   (little endian, 20 bytes of header)
 //
-// Durability (fsync policy: per batch): appendBatch() writes the whole batch with one write
-// and fdatasync()s it before it returns, so a power cut or SIGKILL loses at most the batch
-// being written. ack() writes its slot without syncing; it reaches the disk with the next
+// Segments: a batch goes into the segment being written when it fits there whole, else it
+// starts a new segment; a batch larger than a segment is split between records over as many
+// new segments as it needs (a record is never split: one larger than a segment is refused).
+//
+// Durability (fsync policy: per batch): appendBatch() writes the batch with one write and one
+// fdatasync() per segment it goes into (one for a batch that fits a segment), each segment
+// synced before the next is created, all before it returns; so a power cut or SIGKILL loses at
+// most the batch being written, and of a batch split over segments what survives is its first
+// records, whole, without a hole. ack() writes its slot without syncing; it reaches the disk with the next
 // batch's sync, so a power cut may send a few confirmed
 // records again, with their old sequence numbers (MQTT QoS 1 is at-least-once anyway;
 // consumers drop a sequence number they have seen).
 //
 // Bounded: when a batch would take the segment files past maxBytes, whole segments are
-// dropped, oldest first; what they held that was not yet acked is counted (stats()) and
+// dropped, oldest first, before any of it is written; what they held that was not yet acked is counted (stats()) and
 // reported once (takeDrops()).
 //
 // Never crashes on a damaged folder: open() reads every record, stops a segment at the
@@ -86,8 +92,10 @@ class DiskQueue {
   ~DiskQueue();
 
   /// Appends the payloads in order with consecutive sequence numbers, one write and one
-  /// fdatasync for the batch; returns the first sequence number given. Drops the oldest
-  /// segments when the limit needs it. Error: the batch alone exceeds a segment, or I/O.
+  /// fdatasync per segment the batch goes into (one when it fits a segment); returns the first
+  /// sequence number given. Drops the oldest segments when the limit needs it. Errors, with
+  /// nothing of the batch stored: a record (with its 20-byte header) larger than a segment, a
+  /// batch larger than maxBytes, or I/O (what was written of the batch is removed again).
   Result<std::uint64_t> appendBatch(std::span<const std::string_view> payloads);
   Result<std::uint64_t> append(std::string_view payload) { return appendBatch({&payload, 1}); }
 
@@ -113,6 +121,9 @@ class DiskQueue {
 
   DiskQueue() = default;
   Status openWriteSegment(std::uint64_t firstSequence);
+  /// After a failed append: deletes the segments the batch created and cuts the first one it
+  /// wrote to (m_segments[firstIndex]) back to firstBytes.
+  void rollbackBatch(std::size_t firstIndex, std::uint64_t firstBytes, std::uint64_t firstLastSequence);
   /// Deletes the oldest segment; atLimit: for room (its unacked records count as dropped).
   Status dropOldestSegment(bool atLimit);
   Status writeAckState();
@@ -137,6 +148,8 @@ class DiskQueue {
   QueueStats m_dropCounts;
   std::vector<QueueDrop> m_drops;
   std::string m_buffer;  ///< encode buffer, reused
+  /// where each record of the batch ends in m_buffer
+  std::vector<std::uint64_t> m_recordEnds;
 };
 
 /// CRC-32C (Castagnoli, reflected polynomial 0x82F63B78) over `data`, continuing from `crc`

@@ -1,6 +1,7 @@
 // The store-and-forward queue (services/telemetry/src/disk_queue.hpp): records come back in
-// order until acked, survive a reopen and a SIGKILL, the byte limit drops the oldest and says
-// so, and a damaged folder is recovered up to its last good record.
+// order until acked (also a batch split over segments), survive a reopen and a SIGKILL, the
+// byte limit drops the oldest and says so, and a damaged folder is recovered up to its last
+// good record.
 #include <doctest/doctest.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -166,15 +167,77 @@ TEST_CASE("a second process on the same folder is refused") {
   CHECK(second.error().message.find("in use by another process") != std::string::npos);
 }
 
-TEST_CASE("limits smaller than four segments and batches larger than a segment are refused") {
+TEST_CASE("limits below four segments, records larger than a segment and batches beyond the limit are refused") {
   TempFolder folder;
   CHECK_FALSE(DiskQueue::open({.folder = folder.path, .maxBytes = SMALL_SEGMENT, .segmentBytes = SMALL_SEGMENT}));
   auto sut = openQueue(folder.path);
   REQUIRE(sut);
-  const std::string huge(SMALL_SEGMENT, 'x');
-  const auto appended = sut->append(huge);
-  REQUIRE_FALSE(appended);
-  CHECK(appended.error().message.find("larger than a segment") != std::string::npos);
+  appendRange(*sut, 1, 3);
+  const auto before = sut->stats();
+  const std::string huge(SMALL_SEGMENT, 'x');  // with its 20-byte header one segment is too small
+  const auto alone = sut->append(huge);
+  REQUIRE_FALSE(alone);
+  CHECK(alone.error().message.find("larger than a segment") != std::string::npos);
+  // in the middle of a batch: nothing of the batch is stored, not even the records before it
+  const std::string small = payloadFor(4);
+  const std::vector<std::string_view> mixed{small, small, huge, small};
+  const auto inBatch = sut->appendBatch(mixed);
+  REQUIRE_FALSE(inBatch);
+  CHECK(inBatch.error().message.find("record 3 of a batch of 4") != std::string::npos);
+  // many small records together larger than the whole limit
+  std::vector<std::string> payloads(SMALL_LIMIT / 1000 + 1, std::string(1000, 'y'));
+  std::vector<std::string_view> views(payloads.begin(), payloads.end());
+  const auto tooMany = sut->appendBatch(views);
+  REQUIRE_FALSE(tooMany);
+  CHECK(tooMany.error().message.find("larger than the queue limit") != std::string::npos);
+  const auto after = sut->stats();
+  CHECK(after.nextSequence == before.nextSequence);
+  CHECK(after.diskBytes == before.diskBytes);
+  CHECK(after.segments == before.segments);
+  appendRange(*sut, 4, 1);  // the numbering goes on where it was
+  checkContiguous(peekAll(*sut), 1);
+}
+
+TEST_CASE("a batch of three segments' worth is split over segments between records and read back in order") {
+  TempFolder folder;
+  constexpr std::size_t RECORD_BYTES = 1000;  // 1020 on disk: 64 in a segment
+  constexpr std::uint64_t BIG = 3 * SMALL_SEGMENT / (RECORD_BYTES + 20) + 1;  // 193 records, 196,860 bytes
+  {
+    auto sut = openQueue(folder.path, nullptr, 1ull << 20);
+    REQUIRE(sut);
+    appendRange(*sut, 1, 5, RECORD_BYTES);  // the segment being written is not empty: the batch starts a new one
+    appendRange(*sut, 6, BIG, RECORD_BYTES);
+    appendRange(*sut, 6 + BIG, 5, RECORD_BYTES);  // fits the last segment of the split batch
+    const auto stats = sut->stats();
+    CHECK(stats.segments == 5);  // 5 records | 64 | 64 | 64 | 1 + 5
+    CHECK(stats.pendingRecords == BIG + 10);
+    CHECK(stats.diskBytes == (BIG + 10) * (RECORD_BYTES + 20));
+    const auto records = peekAll(*sut);
+    REQUIRE(records.size() == BIG + 10);
+    checkContiguous(records, 1);
+    for (const auto& record : records) REQUIRE(record.payload == payloadFor(record.sequence, RECORD_BYTES));
+  }
+  std::vector<std::string> segments;
+  for (const auto& entry : std::filesystem::directory_iterator(folder.path)) {
+    if (entry.path().filename().string().starts_with("seg-")) {
+      segments.push_back(entry.path().filename().string());
+      CHECK(std::filesystem::file_size(entry.path()) <= SMALL_SEGMENT);
+    }
+  }
+  std::sort(segments.begin(), segments.end());
+  CHECK(segments == std::vector<std::string>{"seg-00000000000000000001.q", "seg-00000000000000000006.q",
+                                             "seg-00000000000000000070.q", "seg-00000000000000000134.q",
+                                             "seg-00000000000000000198.q"});
+  std::vector<Error> warnings;
+  auto sut = openQueue(folder.path, &warnings, 1ull << 20);
+  REQUIRE(sut);
+  CHECK(warnings.empty());
+  checkContiguous(peekAll(*sut), 1);
+  REQUIRE(sut->ack(150));  // across the split: the three fully acked segments go
+  CHECK(sut->stats().segments == 2);
+  const auto rest = peekAll(*sut);
+  REQUIRE(rest.size() == BIG + 10 - 150);
+  checkContiguous(rest, 151);
 }
 
 TEST_CASE("at its byte limit the queue drops the oldest records first and reports them once") {
@@ -199,6 +262,32 @@ TEST_CASE("at its byte limit the queue drops the oldest records first and report
   REQUIRE(records.size() == stats.pendingRecords);
   checkContiguous(records, stats.droppedRecords + 1);  // the newest survive, in order
   CHECK(records.back().sequence == RECORDS);
+}
+
+TEST_CASE("at its byte limit batches split over segments drop the oldest records first and report them once") {
+  TempFolder folder;
+  auto sut = openQueue(folder.path);  // 256 KiB in segments of 64 KiB
+  REQUIRE(sut);
+  constexpr std::size_t RECORD_BYTES = 1000;
+  constexpr std::uint64_t BATCH = 100;  // 102,000 bytes: one and a half segments
+  constexpr std::uint64_t BATCHES = 10;
+  for (std::uint64_t b = 0; b < BATCHES; ++b) {
+    appendRange(*sut, 1 + b * BATCH, BATCH, RECORD_BYTES);
+    REQUIRE(sut->stats().diskBytes <= SMALL_LIMIT);
+  }
+  const auto stats = sut->stats();
+  CHECK(stats.droppedRecords > 0);
+  CHECK(stats.droppedRecords + stats.pendingRecords == BATCHES * BATCH);
+  CHECK(stats.pendingRecords >= BATCH);  // the newest batch is whole
+  const auto drops = sut->takeDrops();
+  REQUIRE(drops.size() == 1);
+  CHECK(drops[0].firstSequence == 1);
+  CHECK(drops[0].lastSequence == stats.droppedRecords);
+  CHECK(drops[0].records == stats.droppedRecords);
+  const auto records = peekAll(*sut);
+  REQUIRE(records.size() == stats.pendingRecords);
+  checkContiguous(records, stats.droppedRecords + 1);
+  CHECK(records.back().sequence == BATCHES * BATCH);
 }
 
 TEST_CASE("acked records dropped at the limit are not counted as lost") {
@@ -374,4 +463,67 @@ TEST_CASE("a writer killed with SIGKILL loses nothing it reported as synced, dup
     CHECK(records.back().sequence <= reportedLast + BATCH);      // at most the batch being written beyond
     CHECK(records.back().sequence + 1 == stats.nextSequence);
   }
+}
+
+TEST_CASE("a writer killed with SIGKILL inside batches split over segments leaves whole records, in order, no hole") {
+  TempFolder folder;
+  constexpr std::size_t RECORD_BYTES = 1000;
+  constexpr std::uint64_t BATCH = 3 * SMALL_SEGMENT / (RECORD_BYTES + 20) + 1;  // three segments and a record
+  constexpr std::uint64_t LIMIT = 4ull << 20;  // never reached: nothing is dropped
+  constexpr int ROUNDS = 4;
+  int cutInsideBatch = 0;  // rounds whose recovered queue ends inside a batch
+  std::uint64_t reportedLast = 0;
+  for (int round = 0; round < ROUNDS; ++round) {
+    int report[2];
+    REQUIRE(::pipe(report) == 0);
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+      // the writer: appends split batches for ever, acks all but the last two, reports the last synced
+      ::close(report[0]);
+      auto queue = openQueue(folder.path, nullptr, LIMIT);
+      if (!queue) ::_exit(2);
+      std::vector<std::string> payloads;
+      for (;;) {
+        const std::uint64_t first = queue->stats().nextSequence;
+        payloads.clear();
+        for (std::uint64_t s = first; s < first + BATCH; ++s) payloads.push_back(payloadFor(s, RECORD_BYTES));
+        std::vector<std::string_view> views(payloads.begin(), payloads.end());
+        if (!queue->appendBatch(views)) ::_exit(3);
+        const std::uint64_t last = first + BATCH - 1;
+        if (last > 2 * BATCH && !queue->ack(last - 2 * BATCH)) ::_exit(4);
+        if (::write(report[1], &last, sizeof last) != sizeof last) ::_exit(5);
+      }
+    }
+    ::close(report[1]);
+    std::uint64_t last = 0;
+    for (int i = 0; i < 3 + round; ++i) {
+      REQUIRE(::read(report[0], &last, sizeof last) == static_cast<ssize_t>(sizeof last));
+      reportedLast = last;
+    }
+    ::usleep(static_cast<useconds_t>(round * 700));  // a different point of the next batch each round
+    REQUIRE(::kill(child, SIGKILL) == 0);
+    int status = 0;
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    REQUIRE(WIFSIGNALED(status));
+    while (::read(report[0], &last, sizeof last) == static_cast<ssize_t>(sizeof last)) reportedLast = last;
+    ::close(report[0]);
+
+    std::vector<Error> warnings;
+    auto sut = openQueue(folder.path, &warnings, LIMIT);
+    REQUIRE(sut);
+    for (const Error& warning : warnings) CHECK(warning.message.find("truncated") != std::string::npos);
+    const auto stats = sut->stats();
+    const auto records = peekAll(*sut);
+    INFO("round " << round << ", reported last " << reportedLast);
+    REQUIRE_FALSE(records.empty());
+    CHECK(records.front().sequence == stats.ackedSequence + 1);
+    checkContiguous(records, records.front().sequence);
+    for (const auto& record : records) REQUIRE(record.payload == payloadFor(record.sequence, RECORD_BYTES));
+    CHECK(records.back().sequence >= reportedLast);
+    CHECK(records.back().sequence <= reportedLast + BATCH);  // at most the batch being written beyond
+    CHECK(records.back().sequence + 1 == stats.nextSequence);
+    if (records.back().sequence > reportedLast && records.back().sequence < reportedLast + BATCH) ++cutInsideBatch;
+  }
+  MESSAGE(cutInsideBatch << " of " << ROUNDS << " kills left part of a split batch (whole records)");
 }
