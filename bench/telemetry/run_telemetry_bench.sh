@@ -32,8 +32,7 @@
 #      vcu-telemetry started again: the time from its "online" to the last filled record.
 # Output: the sections above, then one line `RESULT key=value ...`.
 # exit: 0 targets met (steady CPU <= 1 % of one core, RSS <= 15 MB), 2 a target missed,
-# 1 something failed (also: vcu-telemetry logged an error, e.g. a tick batch larger than a
-# queue segment with QUEUE_MB below 2). Only processes this script started are ended, by PID.
+# 1 something failed (also: vcu-telemetry logged an error, e.g. a record it could not queue). Only processes this script started are ended, by PID.
 set -euo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
