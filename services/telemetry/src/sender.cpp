@@ -3,7 +3,12 @@
 #include <mosquitto.h>
 #include <mqtt_protocol.h>
 
+#include <sys/eventfd.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <string_view>
 
@@ -55,6 +60,8 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
   initLibrary();
   if (options.maxInFlight == 0) return Error{"maxInFlight: at least 1"};
   std::unique_ptr<Sender> sender(new Sender(settings, std::move(options)));
+  sender->m_wakeFd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (sender->m_wakeFd < 0) return Error{std::string("eventfd for the sender's wake-ups: ") + std::strerror(errno)};
   const std::string clientId = "openvcu-" + settings.vehicleId;
   sender->m_mosq = mosquitto_new(clientId.c_str(), true, sender.get());
   if (sender->m_mosq == nullptr) return Error{"libmosquitto: cannot create a client (out of memory)"};
@@ -104,12 +111,14 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
 }
 
 Sender::~Sender() {
-  if (m_mosq == nullptr) return;
-  if (m_started) {
-    mosquitto_disconnect_v5(m_mosq, 0, nullptr);  // a clean disconnect: the broker keeps the will back
-    mosquitto_loop_stop(m_mosq, false);
+  if (m_mosq != nullptr) {
+    if (m_started) {
+      mosquitto_disconnect_v5(m_mosq, 0, nullptr);  // a clean disconnect: the broker keeps the will back
+      mosquitto_loop_stop(m_mosq, false);
+    }
+    mosquitto_destroy(m_mosq);
   }
-  mosquitto_destroy(m_mosq);
+  if (m_wakeFd >= 0) ::close(m_wakeFd);  // after the network thread ended: it writes it
 }
 
 void Sender::setBirth(std::string birth) {
@@ -156,6 +165,22 @@ LinkCounters Sender::counters() const {
   return m_counters;
 }
 
+std::uint64_t Sender::wakeUps() const {
+  const std::lock_guard lock(m_mutex);
+  return m_wakeUps;
+}
+
+void Sender::signalWakeLocked() {
+  m_wakeAfterPublishes = 0;  // one wake-up until pump() arms the next
+  if (m_wakeSignalled) return;
+  const std::uint64_t one = 1;
+  // EAGAIN (the counter full) cannot happen: pump() reads it before the next write
+  if (::write(m_wakeFd, &one, sizeof one) == static_cast<ssize_t>(sizeof one)) {
+    m_wakeSignalled = true;
+    ++m_wakeUps;
+  }
+}
+
 void Sender::publishRetained(const std::string& topic, const std::string& payload) {
   mosquitto_publish_v5(m_mosq, nullptr, topic.c_str(), static_cast<int>(payload.size()), payload.data(),
                        QOS_AT_LEAST_ONCE, true, nullptr);
@@ -173,6 +198,7 @@ void Sender::noteConnect(int reasonCode) {
     ++m_counters.connects;
     m_notes.push_back({Note::Kind::Connected, 0, 0});
     birth = m_birth;
+    signalWakeLocked();  // records that waited for the link go out now, not at the next periodic pump()
   }
   // on the network thread, before any queued record of this connection; the subscription
   // first, so whoever sees this connection's birth knows commands are read (a clean session:
@@ -195,6 +221,8 @@ void Sender::notePublished(int mid, int reasonCode) {
   const std::lock_guard lock(m_mutex);
   if (reasonCode >= FIRST_FAILURE_REASON) ++m_counters.refused;
   m_notes.push_back({Note::Kind::Published, mid, reasonCode});
+  ++m_publishesSincePump;
+  if (m_wakeAfterPublishes > 0 && m_publishesSincePump >= m_wakeAfterPublishes) signalWakeLocked();
 }
 
 void Sender::noteMessage(const char* topic, const void* payload, int length, bool retained) {
@@ -239,6 +267,13 @@ Status Sender::pump(DiskQueue& queue) {
     notes.swap(m_notes);
     connected = m_connected;
     std::swap(inboundDropped, m_inboundDropped);
+    m_publishesSincePump = 0;
+    m_wakeAfterPublishes = 0;  // armed again below when records still wait
+    if (m_wakeSignalled) {
+      std::uint64_t count = 0;
+      (void)!::read(m_wakeFd, &count, sizeof count);  // back to not readable (EAGAIN: already read)
+      m_wakeSignalled = false;
+    }
   }
   if (inboundDropped > 0) {
     log(true, std::to_string(inboundDropped) + " remote command message(s) dropped unread: " +
@@ -286,10 +321,25 @@ Status Sender::pump(DiskQueue& queue) {
   if (ackUpTo > 0) {
     if (auto acked = queue.ack(ackUpTo); !acked) return acked.error();
   }
-  if (!connected || m_handed.size() >= m_options.maxInFlight) return {};
+  if (!connected) return {};
+  if (m_handed.size() < m_options.maxInFlight) {
+    if (auto handed = handOut(queue); !handed) return handed;
+  }
+  // records still wait behind a full window: wake at once when the broker confirmed half of it
+  // (or all, for a window below 2), so the drain runs at the broker's pace, not the periodic one
+  if (queue.stats().pendingRecords > m_handed.size() && !m_handed.empty()) {
+    const std::size_t after = std::max<std::size_t>(1, std::min(m_handed.size(), m_options.maxInFlight / 2));
+    const std::lock_guard lock(m_mutex);
+    m_wakeAfterPublishes = after;
+    if (m_publishesSincePump >= after) signalWakeLocked();  // confirmed while this pump() ran
+  }
+  return {};
+}
 
-  // the records after the last one handed (the queue peeks from the oldest unacked)
-  auto peeked = queue.peek(m_handed.size() + m_options.maxInFlight);
+Status Sender::handOut(DiskQueue& queue) {
+  // the records after the last one handed (the queue peeks from the oldest unacked, so the
+  // handed ones come first)
+  auto peeked = queue.peek(m_options.maxInFlight);
   if (!peeked) return peeked.error();
   for (const QueueRecord& entry : *peeked) {
     if (m_handed.size() >= m_options.maxInFlight) break;

@@ -3,6 +3,10 @@
 // records to the broker over libmosquitto, MQTT v5, QoS 1. libmosquitto's network thread
 // connects, reconnects with backoff and calls back; the callbacks only note what happened,
 // and pump() (on the owner's thread, which owns the queue) acts on it:
+//   - wakeFd() (an eventfd) turns readable when pump() should run at once rather than at the
+//     owner's next periodic call: at a connect, and while records wait in the queue beyond the
+//     full window, once PUBACKs freed half of it (one wake-up per half window; none while
+//     nothing waits, so the steady state adds none): the broker's confirmations pace the drain;
 //   - while connected, hands libmosquitto the records after the last one handed, at most
 //     maxInFlight unconfirmed at a time (libmosquitto holds whatever it is handed);
 //   - on each PUBACK (or a v5 refusal, counted) marks the record done and acks the queue up to
@@ -16,7 +20,8 @@
 //   auto sender = Sender::create(settings, {.maxInFlight = 20});
 //   sender->setBirth(birthJson);
 //   sender->start();                 // connect in the background (pump() retries a refused first connect)
-//   sender->pump(queue);             // often, on the queue's thread
+//   loop.addFd(sender->wakeFd(), [&] { sender->pump(queue); });   // the drain, paced by the broker
+//   sender->pump(queue);             // also periodically, on the queue's thread
 //   for (auto& message : sender->takeMessages()) handle(message);   // remote commands, same thread
 
 #include <chrono>
@@ -46,7 +51,7 @@ struct InboundMessage {
 };
 
 struct SenderOptions {
-  std::size_t maxInFlight{20};
+  std::size_t maxInFlight{20};  ///< records handed to libmosquitto and not yet confirmed
   std::size_t maxInbound{64};  ///< delivered messages waiting for takeMessages(); more are dropped and logged
   unsigned reconnectMinS{1};   ///< first reconnect delay; doubles up to reconnectMaxS
   unsigned reconnectMaxS{30};
@@ -71,8 +76,14 @@ class Sender {
   /// Error: the broker address cannot be used at all.
   Status start();
   /// Retries a first connect when due, acts on what the network thread noted and hands out
-  /// records; an error for the queue's I/O or an unusable broker address.
+  /// records; an error for the queue's I/O or an unusable broker address. Consumes wakeFd().
   Status pump(DiskQueue& queue);
+  /// Readable (an eventfd) when pump() has work now: a connect, or half the window confirmed
+  /// while more records wait. Owned by the sender; watch it for pump() (level-triggered: pump()
+  /// reads it).
+  [[nodiscard]] int wakeFd() const noexcept { return m_wakeFd; }
+  /// Wake-ups signalled on wakeFd() since create (tests, benchmarks).
+  [[nodiscard]] std::uint64_t wakeUps() const;
 
   [[nodiscard]] bool connected() const;
   [[nodiscard]] LinkCounters counters() const;
@@ -99,7 +110,9 @@ class Sender {
     int reasonCode{};
   };
   void publishRetained(const std::string& topic, const std::string& payload);
+  void signalWakeLocked();  ///< m_mutex held
   Status tryConnect();
+  Status handOut(DiskQueue& queue);  ///< connected, room in the window
   void log(bool warning, const std::string& text) const;
 
   std::string m_topicRoot;  ///< "openvcu/<id>/"
@@ -108,6 +121,7 @@ class Sender {
   std::string m_commandTopic;  ///< "openvcu/<id>/cmd/+" with remote commands enabled, else empty
   SenderOptions m_options;
   mosquitto* m_mosq{nullptr};
+  int m_wakeFd{-1};  ///< eventfd: the network thread writes, pump() reads
   std::string m_host;
   int m_port{};
   std::string m_brokerUrl;
@@ -124,6 +138,10 @@ class Sender {
   LinkCounters m_counters;
   std::vector<InboundMessage> m_inbound;
   std::uint64_t m_inboundDropped{0};  ///< beyond maxInbound since the last pump()
+  bool m_wakeSignalled{false};            ///< m_wakeFd holds a count pump() has not read yet
+  std::size_t m_publishesSincePump{0};    ///< PUBACKs (any publish) noted since the last pump()
+  std::size_t m_wakeAfterPublishes{0};    ///< wake pump() at this many; 0: no wake (nothing waits)
+  std::uint64_t m_wakeUps{0};
 
   // the owner's thread only
   std::deque<Handed> m_handed;            ///< in the order handed

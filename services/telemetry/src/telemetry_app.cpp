@@ -83,6 +83,7 @@ struct TelemetryAppImpl {
   service::CounterRef refusedCounter;
   std::uint64_t queued{0};
   bool queueFailed{false};
+  bool wakeWatched{false};  ///< the loop watches sender->wakeFd()
 
   TelemetryAppImpl(service::Service& service, config::TelemetryConfig telemetrySettings, DiskQueue diskQueue,
                    Engine telemetryEngine)
@@ -92,6 +93,7 @@ struct TelemetryAppImpl {
         engine(std::move(telemetryEngine)) {}
 
   ~TelemetryAppImpl() {
+    if (wakeWatched) runtime.loop().removeFd(sender->wakeFd());
     for (const ipc::Subscription subscription : subscriptions) runtime.events().unsubscribe(subscription);
   }
 
@@ -196,7 +198,14 @@ struct TelemetryAppImpl {
         !added) {
       return added.error();
     }
-    return runtime.loop().addTimer(*tickTimer, [this](const service::TimerTick&) { tick(); });
+    if (auto added = runtime.loop().addTimer(*tickTimer, [this](const service::TimerTick&) { tick(); }); !added) {
+      return added.error();
+    }
+    // the drain after an outage: pump() as soon as the broker confirmed half the window (or the
+    // link came up), not only every PUMP_PERIOD
+    if (auto added = runtime.loop().addFd(sender->wakeFd(), [this] { pump(); }); !added) return added.error();
+    wakeWatched = true;
+    return {};
   }
 };
 

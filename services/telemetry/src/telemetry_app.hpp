@@ -4,6 +4,7 @@
 // Everything but libmosquitto's network thread runs on the service's loop thread:
 //   every 10 ms  engine.sample (the configured signals), sender.pump (acks, hand-outs)
 //   every 1 s    engine.tick -> one queue batch (one fdatasync), then sender.pump
+//   sender.wakeFd() readable (a connect; half the window confirmed while records wait): sender.pump
 //
 //   auto appResult = telemetry::TelemetryApp::create(runtime, overrides);
 //   return runtime.run();
