@@ -325,10 +325,11 @@ Status Sender::pump(DiskQueue& queue) {
   if (m_handed.size() < m_options.maxInFlight) {
     if (auto handed = handOut(queue); !handed) return handed;
   }
-  // records still wait behind a full window: wake at once when the broker confirmed half of it
-  // (or all, for a window below 2), so the drain runs at the broker's pace, not the periodic one
+  // records still wait behind a full window (records or bytes): wake at once when the broker
+  // confirmed half of what is in flight (or all of one), so the drain runs at the broker's pace,
+  // not the periodic one
   if (queue.stats().pendingRecords > m_handed.size() && !m_handed.empty()) {
-    const std::size_t after = std::max<std::size_t>(1, std::min(m_handed.size(), m_options.maxInFlight / 2));
+    const std::size_t after = std::max<std::size_t>(1, m_handed.size() / 2);
     const std::lock_guard lock(m_mutex);
     m_wakeAfterPublishes = after;
     if (m_publishesSincePump >= after) signalWakeLocked();  // confirmed while this pump() ran
@@ -338,8 +339,8 @@ Status Sender::pump(DiskQueue& queue) {
 
 Status Sender::handOut(DiskQueue& queue) {
   // the records after the last one handed (the queue peeks from the oldest unacked, so the
-  // handed ones come first)
-  auto peeked = queue.peek(m_options.maxInFlight);
+  // handed ones come first and count against both bounds)
+  auto peeked = queue.peek(m_options.maxInFlight, m_options.maxInFlightBytes);
   if (!peeked) return peeked.error();
   for (const QueueRecord& entry : *peeked) {
     if (m_handed.size() >= m_options.maxInFlight) break;

@@ -5,10 +5,11 @@
 // and pump() (on the owner's thread, which owns the queue) acts on it:
 //   - wakeFd() (an eventfd) turns readable when pump() should run at once rather than at the
 //     owner's next periodic call: at a connect, and while records wait in the queue beyond the
-//     full window, once PUBACKs freed half of it (one wake-up per half window; none while
+//     full window, once PUBACKs confirmed half of it (one wake-up per half window; none while
 //     nothing waits, so the steady state adds none): the broker's confirmations pace the drain;
 //   - while connected, hands libmosquitto the records after the last one handed, at most
-//     maxInFlight unconfirmed at a time (libmosquitto holds whatever it is handed);
+//     maxInFlight unconfirmed at a time and maxInFlightBytes of their payloads (libmosquitto
+//     holds whatever it is handed);
 //   - on each PUBACK (or a v5 refusal, counted) marks the record done and acks the queue up to
 //     the highest record below which every record is done;
 //   - never publishes while disconnected: after a reconnect libmosquitto resends what it held.
@@ -52,6 +53,9 @@ struct InboundMessage {
 
 struct SenderOptions {
   std::size_t maxInFlight{20};  ///< records handed to libmosquitto and not yet confirmed
+  /// and their payload bytes (libmosquitto holds a copy of each until its PUBACK); a record
+  /// larger than this still goes out alone
+  std::size_t maxInFlightBytes{std::size_t{1} << 20};
   std::size_t maxInbound{64};  ///< delivered messages waiting for takeMessages(); more are dropped and logged
   unsigned reconnectMinS{1};   ///< first reconnect delay; doubles up to reconnectMaxS
   unsigned reconnectMaxS{30};
