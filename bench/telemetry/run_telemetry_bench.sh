@@ -65,7 +65,9 @@ signals="$("$load" select --config "$config" --count 200 --rate-hz 10)"
 jq -n --argjson signals "$signals" --arg queue "$work/queue" --argjson mb "$queueMb" \
   '{broker: "mqtt://127.0.0.1:1883", vehicleId: "bench-01", queueFolder: $queue, maxQueueMB: $mb, signals: $signals}' \
   >"$work/vehicle/telemetry.json"
-printf 'listener 1883 127.0.0.1\nallow_anonymous true\npersistence false\nuser root\nlog_dest file %s\n' "$work/broker/mosquitto.log" >"$work/broker/mosquitto.conf"
+# max_queued_messages 0: no limit on what the broker holds for the watcher (QoS 1). With the
+# default 1000 a drain faster than the watcher reads makes the broker drop messages to it.
+printf 'listener 1883 127.0.0.1\nallow_anonymous true\npersistence false\nmax_queued_messages 0\nuser root\nlog_dest file %s\n' "$work/broker/mosquitto.log" >"$work/broker/mosquitto.conf"
 
 brokerPid=""
 start_broker() {

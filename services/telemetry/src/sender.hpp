@@ -18,7 +18,7 @@
 // openvcu/<id>/cmd/+ (QoS 1, retain as published, so a retained command is seen as one); the
 // messages are only noted (at most maxInbound waiting) and taken by the owner with takeMessages().
 //
-//   auto sender = Sender::create(settings, {.maxInFlight = 20});
+//   auto sender = Sender::create(settings, {.maxInFlight = 200});
 //   sender->setBirth(birthJson);
 //   sender->start();                 // connect in the background (pump() retries a refused first connect)
 //   loop.addFd(sender->wakeFd(), [&] { sender->pump(queue); });   // the drain, paced by the broker
@@ -52,7 +52,10 @@ struct InboundMessage {
 };
 
 struct SenderOptions {
-  std::size_t maxInFlight{20};  ///< records handed to libmosquitto and not yet confirmed
+  /// records handed to libmosquitto and not yet confirmed (libmosquitto sends at most the
+  /// broker's receive maximum of them at a time and the rest as PUBACKs come: the drain needs
+  /// no loop wake-up between two of them); 200: docs/benchmarks.md, "Telemetry"
+  std::size_t maxInFlight{200};
   /// and their payload bytes (libmosquitto holds a copy of each until its PUBACK); a record
   /// larger than this still goes out alone
   std::size_t maxInFlightBytes{std::size_t{1} << 20};
