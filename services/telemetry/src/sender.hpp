@@ -1,7 +1,9 @@
 #pragma once
 // vcu-telemetry's sender (docs/design/telemetry.md, "Store and forward"): the disk queue's
-// records to the broker over libmosquitto, MQTT v5, QoS 1. libmosquitto's network thread
-// connects, reconnects with backoff and calls back; the callbacks only note what happened,
+// records to the broker over libmosquitto, MQTT v5, QoS 1. A network thread of the sender's
+// own (runNetwork: mosquitto_loop, and mosquitto_reconnect with backoff after any failure, a
+// failed TLS handshake among them, which libmosquitto's own loop thread gives up on) runs
+// libmosquitto, which calls back; the callbacks only note what happened,
 // and pump() (on the owner's thread, which owns the queue) acts on it:
 //   - while connected, hands libmosquitto the records after the last one handed, at most
 //     maxInFlight unconfirmed at a time (libmosquitto holds whatever it is handed);
@@ -19,7 +21,9 @@
 //   sender->pump(queue);             // often, on the queue's thread
 //   for (auto& message : sender->takeMessages()) handle(message);   // remote commands, same thread
 
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -27,6 +31,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "disk_queue.hpp"
@@ -55,7 +60,7 @@ struct SenderOptions {
 };
 
 /// @note restricted thread-safe: create, setBirth, start, pump and the destructor on one
-///       thread; libmosquitto's callbacks run on its network thread and only queue notes.
+///       thread; libmosquitto's callbacks run on the network thread and only queue notes.
 class Sender {
  public:
   /// Errors: libmosquitto cannot be set up (the TLS files, the password file).
@@ -66,8 +71,8 @@ class Sender {
 
   /// The retained birth published at each connect from now on.
   void setBirth(std::string birth);
-  /// Connects in the background: libmosquitto's network thread once the first connect is under
-  /// way (it reconnects from then on); until then pump() retries with the same backoff.
+  /// Connects in the background: the network thread once the first connect is under way (it
+  /// reconnects from then on); until then pump() retries with the same backoff.
   /// Error: the broker address cannot be used at all.
   Status start();
   /// Retries a first connect when due, acts on what the network thread noted and hands out
@@ -94,12 +99,15 @@ class Sender {
     bool done{false};
   };
   struct Note {
-    enum class Kind { Connected, Refused, Disconnected, Published, SubscribeRefused } kind;
+    enum class Kind { Connected, Refused, Disconnected, Published, SubscribeRefused, TlsFailed, LostBeforeConnack } kind;
     int mid{};
     int reasonCode{};
   };
   void publishRetained(const std::string& topic, const std::string& payload);
   Status tryConnect();
+  /// The network thread: runs libmosquitto until the destructor asks it to stop.
+  void runNetwork();
+  [[nodiscard]] std::string tlsFailure() const;
   void log(bool warning, const std::string& text) const;
 
   std::string m_topicRoot;  ///< "openvcu/<id>/"
@@ -111,8 +119,12 @@ class Sender {
   std::string m_host;
   int m_port{};
   std::string m_brokerUrl;
+  bool m_tls{false};      ///< mqtts://
   bool m_wanted{false};   ///< start() was called
   bool m_started{false};  ///< the network thread runs (after the first connect was under way)
+  std::thread m_network;
+  std::atomic<bool> m_stopping{false};  ///< set (under m_mutex) by the destructor
+  std::condition_variable m_wake;       ///< wakes the network thread's backoff wait to stop
   bool m_firstRetry{true};
   std::chrono::seconds m_retryDelay;
   std::chrono::steady_clock::time_point m_nextAttempt{};
@@ -120,6 +132,7 @@ class Sender {
   mutable std::mutex m_mutex;  // guards what the network thread writes:
   std::vector<Note> m_notes;
   bool m_connected{false};
+  bool m_connackSeen{false};  ///< a CONNACK (accepting or not) arrived on the current link
   std::string m_birth;
   LinkCounters m_counters;
   std::vector<InboundMessage> m_inbound;
