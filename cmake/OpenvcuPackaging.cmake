@@ -71,6 +71,9 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/tractor/ DESTINATION share/openvc
 install(PROGRAMS ${PROJECT_SOURCE_DIR}/config/iceoryx/iox-roudi.sh DESTINATION share/openvcu/iceoryx ${comp})
 install(FILES ${PROJECT_SOURCE_DIR}/config/iceoryx/roudi.toml DESTINATION share/openvcu/iceoryx ${comp})
 install(FILES ${OPENVCU_PACKAGING_DIR}/supervisor/openvcu.conf DESTINATION share/openvcu/supervisor ${comp})
+# vcu-telemetry's example broker setup (ACL, mosquitto.conf, how to make the password file)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/services/telemetry/examples/
+        DESTINATION share/doc/openvcu/examples/telemetry ${comp} EXCLUDE_FROM_ALL)
 set(openvcuUnits openvcu.target openvcu-roudi.service openvcu-can-rx.service openvcu-can-tx.service
     openvcu-fsm.service openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service
     openvcu-telemetry.service openvcu-bench.target)

@@ -74,7 +74,9 @@ expected=(/usr/bin/vcu /usr/bin/vcu-can-rx /usr/bin/vcu-can-tx /usr/bin/vcu-fsm 
           /usr/bin/vcu-ecu-sim /usr/bin/vcu-web /usr/bin/vcu-telemetry /usr/share/openvcu/www/index.html
           /usr/share/openvcu/iceoryx/iox-roudi.sh /usr/share/openvcu/iceoryx/roudi.toml
           /usr/share/openvcu/supervisor/openvcu.conf /lib/udev/rules.d/60-openvcu.rules
-          /usr/share/doc/openvcu/copyright /usr/share/doc/openvcu/changelog.Debian.gz)
+          /usr/share/doc/openvcu/copyright /usr/share/doc/openvcu/changelog.Debian.gz
+          /usr/share/doc/openvcu/examples/telemetry/acl /usr/share/doc/openvcu/examples/telemetry/mosquitto.conf
+          /usr/share/doc/openvcu/examples/telemetry/README.md)
 for file in "${etc[@]}"; do expected+=("/etc/openvcu/$file"); done
 for unit in "${units[@]}"; do expected+=("/lib/systemd/system/$unit"); done
 for example in hhea tractor; do

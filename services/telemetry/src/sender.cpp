@@ -18,6 +18,10 @@ namespace openvcu::telemetry {
 namespace {
 
 constexpr int KEEPALIVE_S = 10;
+/// The network thread's longest wait in mosquitto_loop (a publish from pump() wakes it at once).
+constexpr int LOOP_TIMEOUT_MS = 500;
+/// How long the destructor's DISCONNECT may take to go out before the network thread ends.
+constexpr auto STOP_WAIT = std::chrono::seconds(2);
 constexpr int QOS_AT_LEAST_ONCE = 1;
 /// MQTT v5 reason codes from 0x80 (128) on are failures (e.g. 0x87 not authorized).
 constexpr int FIRST_FAILURE_REASON = 0x80;
@@ -67,6 +71,7 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
   if (sender->m_mosq == nullptr) return Error{"libmosquitto: cannot create a client (out of memory)"};
   mosquitto* mosq = sender->m_mosq;
   mosquitto_int_option(mosq, MOSQ_OPT_PROTOCOL_VERSION, MQTT_PROTOCOL_V5);
+  mosquitto_threaded_set(mosq, true);  // runNetwork's thread, not mosquitto_loop_start's
   mosquitto_connect_v5_callback_set(mosq, onConnect);
   mosquitto_disconnect_v5_callback_set(mosq, onDisconnect);
   mosquitto_publish_v5_callback_set(mosq, onPublish);
@@ -74,7 +79,6 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
     mosquitto_message_v5_callback_set(mosq, onMessage);
     mosquitto_subscribe_v5_callback_set(mosq, onSubscribe);
   }
-  mosquitto_reconnect_delay_set(mosq, sender->m_options.reconnectMinS, sender->m_options.reconnectMaxS, true);
   if (const int rc = mosquitto_will_set_v5(mosq, sender->m_statusTopic.c_str(),
                                           static_cast<int>(fleet::STATUS_OFFLINE.size()), fleet::STATUS_OFFLINE.data(),
                                           QOS_AT_LEAST_ONCE, true, nullptr);
@@ -107,14 +111,20 @@ Result<std::unique_ptr<Sender>> Sender::create(const config::TelemetryConfig& se
   sender->m_host = settings.broker.host;
   sender->m_port = settings.broker.port;
   sender->m_brokerUrl = settings.brokerUrl;
+  sender->m_tls = settings.tls.has_value();
   return sender;
 }
 
 Sender::~Sender() {
   if (m_mosq != nullptr) {
     if (m_started) {
+      {
+        const std::lock_guard lock(m_mutex);
+        m_stopping = true;
+      }
+      m_wake.notify_all();
       mosquitto_disconnect_v5(m_mosq, 0, nullptr);  // a clean disconnect: the broker keeps the will back
-      mosquitto_loop_stop(m_mosq, false);
+      m_network.join();
     }
     mosquitto_destroy(m_mosq);
   }
@@ -132,27 +142,75 @@ Status Sender::start() {
 }
 
 Status Sender::tryConnect() {
-  // libmosquitto's network thread reconnects a link that was up once, but does not retry a
-  // first connect that failed (seen with 2.0.11): until the first one succeeds, this thread retries
+  // the network thread starts once a first connect is under way and reconnects from then on;
+  // a first connect that failed at once is retried by this thread (pump())
   const auto now = std::chrono::steady_clock::now();
   const int rc = mosquitto_connect_async(m_mosq, m_host.c_str(), m_port, KEEPALIVE_S);
   if (rc == MOSQ_ERR_SUCCESS) {
-    if (const int started = mosquitto_loop_start(m_mosq); started != MOSQ_ERR_SUCCESS) {
-      return Error{std::string("libmosquitto: network thread: ") + mosquitto_strerror(started)};
-    }
+    m_network = std::thread([this] { runNetwork(); });  // backs off from m_retryDelay on
     m_started = true;
     return {};
   }
-  if (rc != MOSQ_ERR_ERRNO && rc != MOSQ_ERR_EAI) {
+  // MOSQ_ERR_TLS: the handshake failed, e.g. the broker's certificate is not signed by caFile
+  // or does not name the host (libmosquitto checks both); never connected, retried like an
+  // unreachable broker (it may be fixed later), each time logged
+  if (rc != MOSQ_ERR_ERRNO && rc != MOSQ_ERR_EAI && rc != MOSQ_ERR_TLS) {
     return Error{"broker " + m_brokerUrl + ": " + mosquitto_strerror(rc)};
   }
-  if (m_firstRetry) {
+  if (rc == MOSQ_ERR_TLS) {
+    log(true, tlsFailure());
+  } else if (m_firstRetry) {
     log(true, "broker " + m_brokerUrl + " not reachable (" + mosquitto_strerror(rc) + "); retrying, records wait in the queue");
     m_firstRetry = false;
   }
   m_nextAttempt = now + m_retryDelay;
   m_retryDelay = std::min(m_retryDelay * 2, std::chrono::seconds(m_options.reconnectMaxS));
   return {};
+}
+
+std::string Sender::tlsFailure() const {
+  return "broker " + m_brokerUrl + ": TLS handshake failed (its certificate not signed by caFile or not for " + m_host +
+         ", or ours refused by it); not connected, retrying, records wait in the queue";
+}
+
+void Sender::runNetwork() {
+  // libmosquitto's mosquitto_loop_forever (mosquitto_loop_start's thread) returns for good on
+  // some errors, MOSQ_ERR_TLS among them (seen with 2.0.11: a broker refusing the client
+  // certificate, a broker certificate for another name): this loop retries after any failure
+  std::chrono::seconds delay = m_retryDelay;  // where pump()'s retries of the first connect left it
+  bool linkUp = true;  // tryConnect's connect is under way
+  while (!m_stopping) {
+    if (linkUp) {
+      const int rc = mosquitto_loop(m_mosq, LOOP_TIMEOUT_MS, 1);
+      if (rc == MOSQ_ERR_SUCCESS) {
+        if (connected()) delay = std::chrono::seconds(m_options.reconnectMinS);
+        continue;
+      }
+      linkUp = false;
+      if (rc == MOSQ_ERR_TLS) {
+        const std::lock_guard lock(m_mutex);
+        m_notes.push_back({Note::Kind::TlsFailed, 0, rc});
+      }
+      continue;
+    }
+    {
+      std::unique_lock lock(m_mutex);
+      if (m_wake.wait_for(lock, delay, [&] { return m_stopping.load(); })) break;
+    }
+    delay = std::min(delay * 2, std::chrono::seconds(m_options.reconnectMaxS));
+    const int rc = mosquitto_reconnect(m_mosq);  // blocking: name, TCP, TLS handshake, CONNECT sent
+    if (rc == MOSQ_ERR_SUCCESS) {
+      linkUp = true;
+    } else if (rc == MOSQ_ERR_TLS) {
+      const std::lock_guard lock(m_mutex);
+      m_notes.push_back({Note::Kind::TlsFailed, 0, rc});
+    }
+  }
+  if (!linkUp) return;
+  // stopping: the destructor's DISCONNECT goes out, then libmosquitto closes the link
+  const auto until = std::chrono::steady_clock::now() + STOP_WAIT;
+  while (mosquitto_loop(m_mosq, LOOP_TIMEOUT_MS, 1) == MOSQ_ERR_SUCCESS && std::chrono::steady_clock::now() < until) {
+  }
 }
 
 bool Sender::connected() const {
@@ -190,6 +248,7 @@ void Sender::noteConnect(int reasonCode) {
   std::string birth;
   {
     const std::lock_guard lock(m_mutex);
+    m_connackSeen = true;
     if (reasonCode != 0) {
       m_notes.push_back({Note::Kind::Refused, 0, reasonCode});
       return;
@@ -213,8 +272,10 @@ void Sender::noteConnect(int reasonCode) {
 
 void Sender::noteDisconnect(int reasonCode) {
   const std::lock_guard lock(m_mutex);
+  // closed before its CONNACK: over TLS, the broker refused our certificate in the handshake
+  m_notes.push_back({m_connackSeen ? Note::Kind::Disconnected : Note::Kind::LostBeforeConnack, 0, reasonCode});
   m_connected = false;
-  m_notes.push_back({Note::Kind::Disconnected, 0, reasonCode});
+  m_connackSeen = false;
 }
 
 void Sender::notePublished(int mid, int reasonCode) {
@@ -291,6 +352,14 @@ Status Sender::pump(DiskQueue& queue) {
       case Note::Kind::Disconnected:
         log(true, "link to the broker lost (" + std::string(mosquitto_strerror(note.reasonCode)) +
                       "); records wait in the queue");
+        break;
+      case Note::Kind::TlsFailed:
+        log(true, tlsFailure());
+        break;
+      case Note::Kind::LostBeforeConnack:
+        log(true, m_tls ? tlsFailure()
+                        : "the broker closed the connection before accepting it (" +
+                              std::string(mosquitto_strerror(note.reasonCode)) + "); retrying, records wait in the queue");
         break;
       case Note::Kind::SubscribeRefused:
         log(true, "the broker refused the subscription to " + m_commandTopic + ": " +

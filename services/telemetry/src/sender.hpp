@@ -1,7 +1,9 @@
 #pragma once
 // vcu-telemetry's sender (docs/design/telemetry.md, "Store and forward"): the disk queue's
-// records to the broker over libmosquitto, MQTT v5, QoS 1. libmosquitto's network thread
-// connects, reconnects with backoff and calls back; the callbacks only note what happened,
+// records to the broker over libmosquitto, MQTT v5, QoS 1. A network thread of the sender's
+// own (runNetwork: mosquitto_loop, and mosquitto_reconnect with backoff after any failure, a
+// failed TLS handshake among them, which libmosquitto's own loop thread gives up on) runs
+// libmosquitto, which calls back; the callbacks only note what happened,
 // and pump() (on the owner's thread, which owns the queue) acts on it:
 //   - wakeFd() (an eventfd) turns readable when pump() should run at once rather than at the
 //     owner's next periodic call: at a connect, and while records wait in the queue beyond the
@@ -25,7 +27,9 @@
 //   sender->pump(queue);             // also periodically, on the queue's thread
 //   for (auto& message : sender->takeMessages()) handle(message);   // remote commands, same thread
 
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -33,6 +37,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "disk_queue.hpp"
@@ -67,7 +72,7 @@ struct SenderOptions {
 };
 
 /// @note restricted thread-safe: create, setBirth, start, pump and the destructor on one
-///       thread; libmosquitto's callbacks run on its network thread and only queue notes.
+///       thread; libmosquitto's callbacks run on the network thread and only queue notes.
 class Sender {
  public:
   /// Errors: libmosquitto cannot be set up (the TLS files, the password file).
@@ -78,8 +83,8 @@ class Sender {
 
   /// The retained birth published at each connect from now on.
   void setBirth(std::string birth);
-  /// Connects in the background: libmosquitto's network thread once the first connect is under
-  /// way (it reconnects from then on); until then pump() retries with the same backoff.
+  /// Connects in the background: the network thread once the first connect is under way (it
+  /// reconnects from then on); until then pump() retries with the same backoff.
   /// Error: the broker address cannot be used at all.
   Status start();
   /// Retries a first connect when due, acts on what the network thread noted and hands out
@@ -112,7 +117,7 @@ class Sender {
     bool done{false};
   };
   struct Note {
-    enum class Kind { Connected, Refused, Disconnected, Published, SubscribeRefused } kind;
+    enum class Kind { Connected, Refused, Disconnected, Published, SubscribeRefused, TlsFailed, LostBeforeConnack } kind;
     int mid{};
     int reasonCode{};
   };
@@ -120,6 +125,9 @@ class Sender {
   void signalWakeLocked();  ///< m_mutex held
   Status tryConnect();
   Status handOut(DiskQueue& queue);  ///< connected, room in the window
+  /// The network thread: runs libmosquitto until the destructor asks it to stop.
+  void runNetwork();
+  [[nodiscard]] std::string tlsFailure() const;
   void log(bool warning, const std::string& text) const;
 
   std::string m_topicRoot;  ///< "openvcu/<id>/"
@@ -132,8 +140,12 @@ class Sender {
   std::string m_host;
   int m_port{};
   std::string m_brokerUrl;
+  bool m_tls{false};      ///< mqtts://
   bool m_wanted{false};   ///< start() was called
   bool m_started{false};  ///< the network thread runs (after the first connect was under way)
+  std::thread m_network;
+  std::atomic<bool> m_stopping{false};  ///< set (under m_mutex) by the destructor
+  std::condition_variable m_wake;       ///< wakes the network thread's backoff wait to stop
   bool m_firstRetry{true};
   std::chrono::seconds m_retryDelay;
   std::chrono::steady_clock::time_point m_nextAttempt{};
@@ -141,6 +153,7 @@ class Sender {
   mutable std::mutex m_mutex;  // guards what the network thread writes:
   std::vector<Note> m_notes;
   bool m_connected{false};
+  bool m_connackSeen{false};  ///< a CONNACK (accepting or not) arrived on the current link
   std::string m_birth;
   LinkCounters m_counters;
   std::vector<InboundMessage> m_inbound;

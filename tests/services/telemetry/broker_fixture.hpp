@@ -1,8 +1,9 @@
 #pragma once
 // What the broker tests of vcu-telemetry share (test_broker.cpp, test_remote_commands.cpp,
-// test_queue_limit.cpp, test_fleet_watch.cpp): writing a file, a received message, a
-// subscriber to openvcu/# that keeps every message, a port check, a mosquitto configuration with a password file (made
-// by mosquitto_passwd at run time, test passwords only) and an ACL file, and an MQTT v5 client
+// test_queue_limit.cpp, test_fleet_watch.cpp, test_tls.cpp): writing a file, a received message, a
+// subscriber to openvcu/# that keeps every message (over TLS when asked), a port check, a mosquitto
+// configuration with a password file (made by mosquitto_passwd at run time, test passwords only)
+// and an ACL file, one with TLS listeners that want client certificates, and an MQTT v5 client
 // on libmosquitto that reports what the broker answered (CONNACK, SUBACK and PUBACK reason
 // codes). Runs inside tests/harness/run_isolated.sh only (loopback).
 //
@@ -77,6 +78,41 @@ inline harness::ProcessSpec brokerSpec(harness::Harness& sut, const fs::path& fo
   return harness::ProcessSpec{.name = "mosquitto",
                               .argv = {"/usr/sbin/mosquitto", "-c", (folder / "mosquitto.conf").string()}};
 }
+
+/// One TLS listener of tlsBrokerSpec: its port on 127.0.0.1, the CA its clients' certificates
+/// must be signed by, the broker's own certificate and key.
+struct TlsListener {
+  int port{8883};
+  fs::path caFile;
+  fs::path certFile;
+  fs::path keyFile;
+};
+
+/// mosquitto with one TLS listener per entry of `listeners`, each wanting a client certificate
+/// whose CN becomes the username (use_identity_as_username) for the ACL file `acl`; no password
+/// file, no anonymous access, no persistence. The configuration is written to `folder`.
+inline harness::ProcessSpec tlsBrokerSpec(const fs::path& folder, const fs::path& acl,
+                                          const std::vector<TlsListener>& listeners) {
+  fs::create_directories(folder);
+  std::string conf = "allow_anonymous false\nacl_file " + acl.string() + "\nuser root\nlog_dest stdout\n";
+  for (const TlsListener& listener : listeners) {
+    conf += "listener " + std::to_string(listener.port) + " 127.0.0.1\ncafile " + listener.caFile.string() +
+            "\ncertfile " + listener.certFile.string() + "\nkeyfile " + listener.keyFile.string() +
+            "\nrequire_certificate true\nuse_identity_as_username true\n";
+  }
+  writeFile(folder / "mosquitto.conf", conf);
+  return harness::ProcessSpec{.name = "mosquitto",
+                              .argv = {"/usr/sbin/mosquitto", "-c", (folder / "mosquitto.conf").string()}};
+}
+
+/// A TLS client's files: the CA it trusts for the broker's certificate and its own certificate
+/// and key. `insecure`: no check of the broker's name against its certificate (mosquitto_tls_insecure_set).
+struct TlsClientFiles {
+  fs::path caFile;
+  fs::path certFile;
+  fs::path keyFile;
+  bool insecure{false};
+};
 
 /// An MQTT v5 client (libmosquitto, its own network thread, no reconnects) that keeps every
 /// message of its subscriptions and reports the broker's reason codes.
@@ -215,6 +251,14 @@ class Subscriber {
     mosquitto_disconnect(m_mosq);
     mosquitto_loop_stop(m_mosq, true);
     mosquitto_destroy(m_mosq);
+  }
+  /// TLS for the next connect() (before it); false when libmosquitto refuses the files.
+  bool useTls(const TlsClientFiles& files) {
+    if (mosquitto_tls_set(m_mosq, files.caFile.c_str(), nullptr, files.certFile.c_str(), files.keyFile.c_str(),
+                          nullptr) != MOSQ_ERR_SUCCESS) {
+      return false;
+    }
+    return mosquitto_tls_insecure_set(m_mosq, files.insecure) == MOSQ_ERR_SUCCESS;
   }
   bool connect() {
     if (mosquitto_connect(m_mosq, "127.0.0.1", m_port, 10) != MOSQ_ERR_SUCCESS) return false;

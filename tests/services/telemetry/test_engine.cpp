@@ -54,7 +54,8 @@ struct Bench {
     std::vector<Json> samples;
     for (const auto& [topic, body] : records) {
       if (topic != "signals") continue;
-      for (const Json& sample : body["samples"]) samples.push_back({body["names"][sample[0].get<int>()], sample[1], sample[2]});
+      for (const Json& sample : body["samples"])
+        samples.push_back({body["names"][sample[0].get<int>()], sample[1], sample[2]});
     }
     return samples;
   }
@@ -93,7 +94,8 @@ TEST_CASE("telemetry engine: a value within the deadband of the last one sent is
 }
 
 TEST_CASE("telemetry engine: an unchanged signal is sent again after a minute, an unwritten one never") {
-  Bench bench({{.name = "BMS.SOC", .maxRateHz = 1, .deadband = 0}, {.name = "BMS.Current", .maxRateHz = 1, .deadband = 0}});
+  Bench bench(
+      {{.name = "BMS.SOC", .maxRateHz = 1, .deadband = 0}, {.name = "BMS.Current", .maxRateHz = 1, .deadband = 0}});
   bench.write("BMS.SOC", 80, START_NS);
   std::size_t sent = 0;
   for (std::int64_t second = 0; second <= 61; ++second) {
@@ -109,9 +111,14 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
   Bench bench({{.name = "BMS.SOC", .maxRateHz = 1, .deadband = 0}});
   bench.write("BMS.SOC", 80, START_NS);
   bench.sut->sample(START_NS);
-  bench.sut->onTransition({.timestampNs = START_UNIX_MS * MS, .fromState = "Init", .toState = "Ready", .cause = "boot"});
-  bench.sut->onFault({.timestampNs = START_UNIX_MS * MS, .name = "Contactor", .source = "vcu-fsm",
-                      .severity = ipc::FaultSeverity::Error, .active = true, .text = "welded"});
+  bench.sut->onTransition(
+      {.timestampNs = START_UNIX_MS * MS, .fromState = "Init", .toState = "Ready", .cause = "boot"});
+  bench.sut->onFault({.timestampNs = START_UNIX_MS * MS,
+                      .name = "Contactor",
+                      .source = "vcu-fsm",
+                      .severity = ipc::FaultSeverity::Error,
+                      .active = true,
+                      .text = "welded"});
 
   const auto first = bench.tick(41, START_NS + 500 * MS);
   REQUIRE(first.size() == 4);
@@ -132,9 +139,20 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
   CHECK(bench.tick(45, START_NS + 1500 * MS).empty());
 
   // a node's DM1 with two DTCs and the fault cleared: one faults message with the new set
-  bench.sut->onDm1({.node = "BMS", .source = 0xF3, .lamps = 0x04, .dtcs = {{100, 1, 3, false}, {200, 2, 1, false}}});
-  bench.sut->onFault({.timestampNs = 0, .name = "Contactor", .source = "vcu-fsm",
-                      .severity = ipc::FaultSeverity::Error, .active = false, .text = {}});
+  bench.sut->onDm1({.timestampNs = 0,
+                    .service = {},
+                    .instance = {},
+                    .bus = {},
+                    .node = "BMS",
+                    .source = 0xF3,
+                    .lamps = 0x04,
+                    .dtcs = {{100, 1, 3, false}, {200, 2, 1, false}}});
+  bench.sut->onFault({.timestampNs = 0,
+                      .name = "Contactor",
+                      .source = "vcu-fsm",
+                      .severity = ipc::FaultSeverity::Error,
+                      .active = false,
+                      .text = {}});
   const auto second = bench.tick(45, START_NS + 2500 * MS);
   REQUIRE(second.size() == 1);
   CHECK(second[0].first == "faults");
@@ -159,10 +177,25 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
 TEST_CASE("telemetry engine: the faults message carries each node's DM1 lamps and DTCs, again when one changes (#25)") {
   Bench bench({});
   // BMS: red stop and amber warning lamps on (DM1 byte 0 = 0x14), two DTCs; INV: a DM1 without DTCs
-  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x14, .flash = 0xFF,
+  bench.sut->onDm1({.timestampNs = 0,
+                    .service = {},
+                    .instance = {},
+                    .bus = "vehicle",
+                    .node = "BMS",
+                    .source = 0xF3,
+                    .lamps = 0x14,
+                    .flash = 0xFF,
                     .dtcs = {{.spn = 1234, .fmi = 3, .occurrences = 5, .conversionMethod = false},
                              {.spn = 524287, .fmi = 31, .occurrences = 127, .conversionMethod = true}}});
-  bench.sut->onDm1({.bus = "vehicle", .node = "INV", .source = 0xEF, .lamps = 0x00, .flash = 0xFF, .dtcs = {}});
+  bench.sut->onDm1({.timestampNs = 0,
+                    .service = {},
+                    .instance = {},
+                    .bus = "vehicle",
+                    .node = "INV",
+                    .source = 0xEF,
+                    .lamps = 0x00,
+                    .flash = 0xFF,
+                    .dtcs = {}});
   telemetry::TickInputs inputs;
   inputs.clocks = {.monoNs = START_NS, .unixMs = START_UNIX_MS};
   const std::vector<std::string> first = bench.sut->tick(7, inputs);
@@ -173,13 +206,27 @@ TEST_CASE("telemetry engine: the faults message carries each node's DM1 lamps an
         "\"dtcs\":[{\"spn\":1234,\"fmi\":3,\"oc\":5,\"cm\":0},{\"spn\":524287,\"fmi\":31,\"oc\":127,\"cm\":1}]}]}");
 
   // the same DM1 again (can-rx repeats it every second): no faults message
-  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x14, .flash = 0xFF,
+  bench.sut->onDm1({.timestampNs = 0,
+                    .service = {},
+                    .instance = {},
+                    .bus = "vehicle",
+                    .node = "BMS",
+                    .source = 0xF3,
+                    .lamps = 0x14,
+                    .flash = 0xFF,
                     .dtcs = {{1234, 3, 5, false}, {524287, 31, 127, true}}});
   inputs.clocks = {.monoNs = START_NS + 1000 * MS, .unixMs = START_UNIX_MS + 1000};
   CHECK(bench.sut->tick(9, inputs).empty());
 
   // only an occurrence count moves: the whole set goes out again
-  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x14, .flash = 0xFF,
+  bench.sut->onDm1({.timestampNs = 0,
+                    .service = {},
+                    .instance = {},
+                    .bus = "vehicle",
+                    .node = "BMS",
+                    .source = 0xF3,
+                    .lamps = 0x14,
+                    .flash = 0xFF,
                     .dtcs = {{1234, 3, 6, false}, {524287, 31, 127, true}}});
   const auto counted = bench.tick(9, START_NS + 2000 * MS);
   REQUIRE(counted.size() == 1);
@@ -187,7 +234,15 @@ TEST_CASE("telemetry engine: the faults message carries each node's DM1 lamps an
   CHECK(counted[0].second["dm1"][0]["dtcs"][0]["oc"] == 6);
 
   // the node's DTCs are gone: the node leaves the list
-  bench.sut->onDm1({.bus = "vehicle", .node = "BMS", .source = 0xF3, .lamps = 0x00, .flash = 0xFF, .dtcs = {}});
+  bench.sut->onDm1({.timestampNs = 0,
+                    .service = {},
+                    .instance = {},
+                    .bus = "vehicle",
+                    .node = "BMS",
+                    .source = 0xF3,
+                    .lamps = 0x00,
+                    .flash = 0xFF,
+                    .dtcs = {}});
   const auto cleared = bench.tick(10, START_NS + 3000 * MS);
   REQUIRE(cleared.size() == 1);
   CHECK(cleared[0].second["dm1"].empty());

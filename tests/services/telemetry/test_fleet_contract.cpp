@@ -23,8 +23,7 @@ constexpr const char* VEHICLE = "hhea-07";
 
 TEST_CASE("fleet contract: the engine's state, faults, health and signals records are read back by FleetView") {
   signals::testing::ScopedInstance instance{"fleet-contract"};
-  const signals::Catalog catalog =
-      signals::testing::makeCatalog({"BMS.SOC", "BMS.Current"});
+  const signals::Catalog catalog = signals::testing::makeCatalog({"BMS.SOC", "BMS.Current"});
   auto table = signals::SignalTable::open(catalog, instance.name());
   REQUIRE(table.ok());
   config::TelemetryConfig settings;
@@ -34,7 +33,14 @@ TEST_CASE("fleet contract: the engine's state, faults, health and signals record
   REQUIRE(engine);
   REQUIRE(table->writeBus(*catalog.indexOf("BMS.SOC"), 87.5, START_NS, 0xF3, signals::Quality::Valid));
   REQUIRE(table->writeBus(*catalog.indexOf("BMS.Current"), -12.25, START_NS, 0xF3, signals::Quality::Valid));
-  engine->onDm1({.node = "BMS", .source = 0xF3, .lamps = 0x04, .dtcs = {{100, 1, 3, false}, {200, 2, 1, false}}});
+  engine->onDm1({.timestampNs = 0,
+                 .service = {},
+                 .instance = {},
+                 .bus = {},
+                 .node = "BMS",
+                 .source = 0xF3,
+                 .lamps = 0x04,
+                 .dtcs = {{100, 1, 3, false}, {200, 2, 1, false}}});
   engine->onTransition(
       ipc::FsmTransition{.timestampNs = 0, .fromState = "Ready", .toState = "Driving", .cause = "drive"});
   engine->onFault(ipc::FaultEvent{.timestampNs = 0,
