@@ -49,8 +49,9 @@ void append(telemetry::DiskQueue& queue, std::size_t first, std::size_t count) {
 
 }  // namespace
 
-TEST_CASE("vcu-telemetry's sender (#25): the drain is paced by the broker's PUBACKs through wakeFd, in order, "
-          "no wake-up while nothing waits") {
+TEST_CASE(
+    "vcu-telemetry's sender (#25): the drain is paced by the broker's PUBACKs through wakeFd, in order, "
+    "no wake-up while nothing waits") {
   if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
   if (!fs::exists("/usr/sbin/mosquitto"))
     OPENVCU_SKIP("skipped: needs mosquitto (Debian's mosquitto package; scripts/install-deps.sh)");
@@ -61,10 +62,12 @@ TEST_CASE("vcu-telemetry's sender (#25): the drain is paced by the broker's PUBA
   telemetry_test::writeFile(work / "broker/mosquitto.conf", "listener " + std::to_string(PORT) +
                                                                 " 127.0.0.1\nallow_anonymous true\nmax_queued_messages "
                                                                 "0\nuser root\nlog_dest stdout\n");
-  auto broker = sut.start({.name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "broker/mosquitto.conf").string()}});
+  auto broker = sut.start(
+      {.name = "mosquitto", .argv = {"/usr/sbin/mosquitto", "-c", (work / "broker/mosquitto.conf").string()}});
   REQUIRE(broker);
   const auto until = std::chrono::steady_clock::now() + 10s;
-  while (!telemetry_test::listening(PORT) && std::chrono::steady_clock::now() < until) std::this_thread::sleep_for(50ms);
+  while (!telemetry_test::listening(PORT) && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(50ms);
   REQUIRE(telemetry_test::listening(PORT));
   telemetry_test::Subscriber watcher("drain-watcher", false);
   REQUIRE(watcher.connect());
