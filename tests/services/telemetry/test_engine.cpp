@@ -4,6 +4,9 @@
 #include <doctest/doctest.h>
 
 #include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "engine.hpp"
 #include "shared/signals/signals_test_support.hpp"
@@ -17,6 +20,19 @@ constexpr std::int64_t MS = 1'000'000;
 constexpr std::int64_t START_NS = 1'000'000 * MS;  ///< an arbitrary monotonic start
 constexpr std::int64_t START_UNIX_MS = 1'764'259'200'000;
 constexpr std::uint16_t SOURCE = 0xF3;
+
+/// A DM1 event as vcu-can-rx publishes it (docs/design/telemetry.md, "Payloads").
+ipc::NodeDm1 nodeDm1(std::string bus, std::string node, std::uint8_t source, std::uint8_t lamps, std::uint8_t flash,
+                     std::vector<ipc::NodeDtc> dtcs) {
+  ipc::NodeDm1 message;
+  message.bus = std::move(bus);
+  message.node = std::move(node);
+  message.source = source;
+  message.lamps = lamps;
+  message.flash = flash;
+  message.dtcs = std::move(dtcs);
+  return message;
+}
 
 struct Bench {
   signals::testing::ScopedInstance instance{"telemetry-engine"};
@@ -139,14 +155,7 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
   CHECK(bench.tick(45, START_NS + 1500 * MS).empty());
 
   // a node's DM1 with two DTCs and the fault cleared: one faults message with the new set
-  bench.sut->onDm1({.timestampNs = 0,
-                    .service = {},
-                    .instance = {},
-                    .bus = {},
-                    .node = "BMS",
-                    .source = 0xF3,
-                    .lamps = 0x04,
-                    .dtcs = {{100, 1, 3, false}, {200, 2, 1, false}}});
+  bench.sut->onDm1(nodeDm1("", "BMS", 0xF3, 0x04, 0, {{100, 1, 3, false}, {200, 2, 1, false}}));
   bench.sut->onFault({.timestampNs = 0,
                       .name = "Contactor",
                       .source = "vcu-fsm",
@@ -177,25 +186,10 @@ TEST_CASE("telemetry engine: records are numbered from the queue's next sequence
 TEST_CASE("telemetry engine: the faults message carries each node's DM1 lamps and DTCs, again when one changes (#25)") {
   Bench bench({});
   // BMS: red stop and amber warning lamps on (DM1 byte 0 = 0x14), two DTCs; INV: a DM1 without DTCs
-  bench.sut->onDm1({.timestampNs = 0,
-                    .service = {},
-                    .instance = {},
-                    .bus = "vehicle",
-                    .node = "BMS",
-                    .source = 0xF3,
-                    .lamps = 0x14,
-                    .flash = 0xFF,
-                    .dtcs = {{.spn = 1234, .fmi = 3, .occurrences = 5, .conversionMethod = false},
-                             {.spn = 524287, .fmi = 31, .occurrences = 127, .conversionMethod = true}}});
-  bench.sut->onDm1({.timestampNs = 0,
-                    .service = {},
-                    .instance = {},
-                    .bus = "vehicle",
-                    .node = "INV",
-                    .source = 0xEF,
-                    .lamps = 0x00,
-                    .flash = 0xFF,
-                    .dtcs = {}});
+  bench.sut->onDm1(nodeDm1("vehicle", "BMS", 0xF3, 0x14, 0xFF,
+                           {{.spn = 1234, .fmi = 3, .occurrences = 5, .conversionMethod = false},
+                            {.spn = 524287, .fmi = 31, .occurrences = 127, .conversionMethod = true}}));
+  bench.sut->onDm1(nodeDm1("vehicle", "INV", 0xEF, 0x00, 0xFF, {}));
   telemetry::TickInputs inputs;
   inputs.clocks = {.monoNs = START_NS, .unixMs = START_UNIX_MS};
   const std::vector<std::string> first = bench.sut->tick(7, inputs);
@@ -206,43 +200,19 @@ TEST_CASE("telemetry engine: the faults message carries each node's DM1 lamps an
         "\"dtcs\":[{\"spn\":1234,\"fmi\":3,\"oc\":5,\"cm\":0},{\"spn\":524287,\"fmi\":31,\"oc\":127,\"cm\":1}]}]}");
 
   // the same DM1 again (can-rx repeats it every second): no faults message
-  bench.sut->onDm1({.timestampNs = 0,
-                    .service = {},
-                    .instance = {},
-                    .bus = "vehicle",
-                    .node = "BMS",
-                    .source = 0xF3,
-                    .lamps = 0x14,
-                    .flash = 0xFF,
-                    .dtcs = {{1234, 3, 5, false}, {524287, 31, 127, true}}});
+  bench.sut->onDm1(nodeDm1("vehicle", "BMS", 0xF3, 0x14, 0xFF, {{1234, 3, 5, false}, {524287, 31, 127, true}}));
   inputs.clocks = {.monoNs = START_NS + 1000 * MS, .unixMs = START_UNIX_MS + 1000};
   CHECK(bench.sut->tick(9, inputs).empty());
 
   // only an occurrence count moves: the whole set goes out again
-  bench.sut->onDm1({.timestampNs = 0,
-                    .service = {},
-                    .instance = {},
-                    .bus = "vehicle",
-                    .node = "BMS",
-                    .source = 0xF3,
-                    .lamps = 0x14,
-                    .flash = 0xFF,
-                    .dtcs = {{1234, 3, 6, false}, {524287, 31, 127, true}}});
+  bench.sut->onDm1(nodeDm1("vehicle", "BMS", 0xF3, 0x14, 0xFF, {{1234, 3, 6, false}, {524287, 31, 127, true}}));
   const auto counted = bench.tick(9, START_NS + 2000 * MS);
   REQUIRE(counted.size() == 1);
   CHECK(counted[0].first == "faults");
   CHECK(counted[0].second["dm1"][0]["dtcs"][0]["oc"] == 6);
 
   // the node's DTCs are gone: the node leaves the list
-  bench.sut->onDm1({.timestampNs = 0,
-                    .service = {},
-                    .instance = {},
-                    .bus = "vehicle",
-                    .node = "BMS",
-                    .source = 0xF3,
-                    .lamps = 0x00,
-                    .flash = 0xFF,
-                    .dtcs = {}});
+  bench.sut->onDm1(nodeDm1("vehicle", "BMS", 0xF3, 0x00, 0xFF, {}));
   const auto cleared = bench.tick(10, START_NS + 3000 * MS);
   REQUIRE(cleared.size() == 1);
   CHECK(cleared[0].second["dm1"].empty());
