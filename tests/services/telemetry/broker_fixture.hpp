@@ -246,6 +246,12 @@ class Subscriber {
     mosquitto_message_callback_set(m_mosq, [](mosquitto*, void* self, const mosquitto_message* message) {
       static_cast<Subscriber*>(self)->add(message);
     });
+    mosquitto_subscribe_callback_set(m_mosq, [](mosquitto*, void* self, int, int, const int*) {
+      auto* subscriber = static_cast<Subscriber*>(self);
+      const std::lock_guard lock(subscriber->m_mutex);
+      ++subscriber->m_subacks;
+      subscriber->m_changed.notify_all();
+    });
   }
   ~Subscriber() {
     mosquitto_disconnect(m_mosq);
@@ -263,6 +269,11 @@ class Subscriber {
   bool connect() {
     if (mosquitto_connect(m_mosq, "127.0.0.1", m_port, 10) != MOSQ_ERR_SUCCESS) return false;
     return mosquitto_loop_start(m_mosq) == MOSQ_ERR_SUCCESS;
+  }
+  /// Waits until the broker has confirmed a subscription (its SUBACK); false on timeout.
+  bool waitSubscribed(std::chrono::milliseconds timeout) {
+    std::unique_lock lock(m_mutex);
+    return m_changed.wait_for(lock, timeout, [&] { return m_subacks > 0; });
   }
   void add(const mosquitto_message* message) {
     const std::string text(static_cast<const char*>(message->payload), static_cast<std::size_t>(message->payloadlen));
@@ -288,6 +299,7 @@ class Subscriber {
   int m_port;
   std::mutex m_mutex;
   std::condition_variable m_changed;
+  int m_subacks{0};  ///< SUBACKs received (one per connect)
   std::vector<Message> m_messages;
 };
 

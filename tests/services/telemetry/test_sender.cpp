@@ -71,7 +71,7 @@ TEST_CASE(
   REQUIRE(telemetry_test::listening(PORT));
   telemetry_test::Subscriber watcher("drain-watcher", false);
   REQUIRE(watcher.connect());
-  std::this_thread::sleep_for(300ms);  // its subscription confirmed before the first record
+  REQUIRE(watcher.waitSubscribed(5s));  // its subscription confirmed before the first record
 
   auto queue = telemetry::DiskQueue::open({.folder = (work / "queue").string(), .maxBytes = 8u << 20});
   REQUIRE(queue);
