@@ -34,8 +34,11 @@
 #      (-i1000), started with the listener for the same SECONDS; its histogram (1 us
 #      buckets up to 30 ms) gives the platform's wake-up latency p99 and max. CYCLICTEST=0:
 #      not run (platform_* = none).
-# Last line: RESULT tx_p99_us tx_max_us (the worst stream's p99 and max period error, by the
-# listener) platform_p99_us platform_max_us (cyclictest) delta_p99_us delta_max_us (the
+# Last line: RESULT tx_p99_us (the worst p99 period error of the streams with at least 100
+# intervals in the window: for shorter streams the p99 is their maximum) tx_max_us (the
+# worst stream's max) tx_pooled_p99_us (all streams' intervals together, as cyclictest pools
+# its wake-ups) tx_all_streams_p99_us (the worst p99 of every stream, the 1 s ones' maxima
+# included; this was tx_p99_us before 2026-11-27 23:00) platform_p99_us platform_max_us (cyclictest) delta_p99_us delta_max_us (the
 # worst safety pair's) pair_faults tx_cpu_pct (schedstat, all threads) spin_cpu_pct (the
 # transmit thread's on-CPU waits for SDMs, heartbeat sdm_spin_us; 0 for a build without it).
 # LISTENER_ARGS: more options for bench_tx_listener, e.g. "--late-events 100" or
@@ -286,12 +289,15 @@ fi
 echo "== vcu-can-tx log (last lines)"
 tail -n 5 "$work/can-tx.log"
 # the worst stream's and the worst pair's p99 and max, from the listener's target lines
-txP99="$(sed -n 's/^bench_tx_listener:.* worst_stream_p99_us=\([0-9.]*\).*/\1/p' "$listenerLog")"
+txP99="$(sed -n 's/^bench_tx_listener:.* sampled_stream_p99_us=\([0-9.]*\).*/\1/p' "$listenerLog")"
+txAllP99="$(sed -n 's/^bench_tx_listener:.* worst_stream_p99_us=\([0-9.]*\).*/\1/p' "$listenerLog")"
+txPooledP99="$(sed -n 's/^bench_tx_listener:.* period_p99_us=\([0-9.]*\).*/\1/p' "$listenerLog")"
 txMax="$(sed -n 's/^bench_tx_listener:.* worst_stream_max_us=\([0-9.]*\).*/\1/p' "$listenerLog")"
 deltaP99="$(sed -n 's/^   p99 <= .*pair delta \([0-9.]*\) us)$/\1/p' "$listenerLog")"
 deltaMax="$(sed -n 's/^   max <= .*pair delta \([0-9.]*\) us)$/\1/p' "$listenerLog")"
 pairFaults="$(sed -n 's/^bench_tx_listener:.* pair_faults=\([0-9]*\).*/\1/p' "$listenerLog")"
-echo "RESULT tx_p99_us=${txP99:-none} tx_max_us=${txMax:-none} platform_p99_us=$platformP99" \
+echo "RESULT tx_p99_us=${txP99:-none} tx_max_us=${txMax:-none} tx_pooled_p99_us=${txPooledP99:-none}" \
+  "tx_all_streams_p99_us=${txAllP99:-none} platform_p99_us=$platformP99" \
   "platform_max_us=$platformMax delta_p99_us=${deltaP99:-none} delta_max_us=${deltaMax:-none}" \
   "pair_faults=${pairFaults:-none} tx_cpu_pct=$schedCpu spin_cpu_pct=$spinCpu"
 exit "$status"

@@ -55,6 +55,7 @@ struct ScheduledEntry {
   std::vector<std::optional<double>> commanded;
   std::optional<j1939::SafetyPairBuilder> pair;
   std::optional<std::size_t> headerMessage;  ///< the DBC message describing the SHM, if any
+  std::size_t index{};                       ///< its place in the schedule (Scheduler's `scheduled`)
   std::int64_t nextNs{NEVER};                ///< next cyclic deadline
   std::int64_t nextCheckNs{NEVER};           ///< next on-change check
   std::int64_t lastCyclicSendNs{};
@@ -81,6 +82,11 @@ struct Scheduler::Impl {
   std::size_t room{};  ///< entries' reserved capacity: add() never reallocates
   std::vector<PreparedMessage> entries;  // pointers: atomics are not movable; reserved at create()
   SchedulerCounters counters;
+  /// `entries` in the order a burst of due messages goes out: shortest cycle first, then the
+  /// schedule's order (on-change-only messages last). With harmonic cycles a message then has
+  /// the same messages before it in every burst it is in, so a slot shared with longer
+  /// cycles does not shift its period (room reserved at create()).
+  std::vector<ScheduledEntry*> sendOrder;
   /// The J1939-76 pairs among `entries` (room for every entry reserved at create()).
   std::vector<ScheduledEntry*> pairs;
   /// Frames waiting for a pending SDM of their PGN, SA and DA (emit()); fixed room, no allocation.
@@ -408,6 +414,29 @@ struct Scheduler::Impl {
     entry.last = payload;
     entry.hasLast = true;
   }
+
+  // ---- the order of a burst ---------------------------------------------------------------
+
+  static bool sendsBefore(const ScheduledEntry& a, const ScheduledEntry& b) noexcept {
+    const std::int64_t cycleA = a.config.cycleNs > 0 ? a.config.cycleNs : NEVER;
+    const std::int64_t cycleB = b.config.cycleNs > 0 ? b.config.cycleNs : NEVER;
+    return cycleA != cycleB ? cycleA < cycleB : a.index < b.index;
+  }
+
+  /// Puts `entry` (not in sendOrder) at its place; within the reserved room: no allocation.
+  void placeInOrder(ScheduledEntry* entry) noexcept {
+    const auto at = std::find_if(sendOrder.begin(), sendOrder.end(),
+                                 [&](const ScheduledEntry* other) noexcept { return sendsBefore(*entry, *other); });
+    sendOrder.insert(at, entry);
+  }
+
+  /// After `entry`'s cycle changed.
+  void reorder(ScheduledEntry* entry) noexcept {
+    if (const auto at = std::find(sendOrder.begin(), sendOrder.end(), entry); at != sendOrder.end()) {
+      sendOrder.erase(at);
+    }
+    placeInOrder(entry);
+  }
 };
 
 Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig& vehicle, const Schedule& schedule,
@@ -434,6 +463,7 @@ Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig
   }
   impl->room = std::max(vehicle.database.messages.size(), schedule.messages.size());
   impl->entries.reserve(impl->room);
+  impl->sendOrder.reserve(impl->room);
   impl->pairs.reserve(impl->room);
   for (const ScheduledMessage& config : schedule.messages) {
     auto entry = impl->build(config);
@@ -441,6 +471,8 @@ Result<std::unique_ptr<Scheduler>> Scheduler::create(const config::VehicleConfig
     if (config.cycleNs > 0) (*entry)->nextNs = startNs + config.offsetNs;
     if (config.onChange) (*entry)->nextCheckNs = startNs + config.offsetNs;
     if ((*entry)->pair) impl->pairs.push_back(entry->get());
+    (*entry)->index = impl->entries.size();
+    impl->placeInOrder(entry->get());
     impl->entries.emplace_back(entry->release());
   }
   return std::unique_ptr<Scheduler>(new Scheduler(std::move(impl)));
@@ -453,7 +485,7 @@ void Scheduler::run(std::int64_t nowNs) noexcept {
   Impl& impl = *m_impl;
   // SDMs first: their deltas are the tightest deadlines.
   impl.sendDueData(nowNs);
-  for (auto& entry : impl.entries) {
+  for (ScheduledEntry* entry : impl.sendOrder) {
     const bool cyclicDue = entry->config.cycleNs > 0 && entry->nextNs <= nowNs;
     const bool checkDue = entry->config.onChange && entry->nextCheckNs <= nowNs;
     if (!cyclicDue && !checkDue) continue;
@@ -487,6 +519,7 @@ void Scheduler::setCycle(std::size_t scheduled, std::int64_t cycleNs, std::int64
   const std::int64_t previous = entry.config.cycleNs;
   entry.config.cycleNs = cycleNs;
   entry.consecutive = false;
+  m_impl->reorder(&entry);
   if (cycleNs <= 0) {
     entry.nextNs = NEVER;
     return;
@@ -559,6 +592,8 @@ bool Scheduler::add(PreparedMessage& message, std::int64_t nowNs) noexcept {
   if (message->config.cycleNs > 0) message->nextNs = nowNs;
   if (message->config.onChange) message->nextCheckNs = nowNs;
   if (message->pair) m_impl->pairs.push_back(message.get());  // reserved at create() as well
+  message->index = entries.size();
+  m_impl->placeInOrder(message.get());  // reserved at create() as well
   entries.push_back(std::move(message));  // within the reserved capacity: no allocation
   return true;
 }

@@ -9,6 +9,8 @@
 //   - each cyclic message is due at start + offset + k x cycle (absolute deadlines, no
 //     drift); after a stall the cycles that passed are skipped and counted as missed,
 //     never sent in a burst;
+//   - messages due at the same time go out shortest cycle first, then in the schedule's
+//     order, so a message has the same frames before it in every burst it is in;
 //   - a J1939-76 SDM: its SHM goes out when the message is due, the SDM (the same bytes the
 //     SHM's CRC covers) deltaNs after the SHM; the sequence number starts at 0 when the
 //     process starts, advances by one per pair and wraps at 32 (receivers resynchronise);

@@ -540,3 +540,31 @@ TEST_CASE("a command written again during the grace window is sent at once") {
   f.runUntil(f.clock.now + cantx::TABLE_DAMAGE_GRACE_NS);
   CHECK_FALSE(f.port.withId(S1_ES).empty());  // commanded again: the group stays on after the window
 }
+
+TEST_CASE("issue 27: messages due together go out shortest cycle first, so a shared slot does not shift a period") {
+  Fixture f;
+  f.command("internal.tx.keepAlive", 1);
+  f.port.sendTakesNs = 3 * US;  // about what a frame costs on the sim link
+  f.start();
+  f.runUntil(START + 1'000 * MS);
+  // 10 ms, 20 ms and 100 ms messages: each listed in the schedule after longer-cycle ones,
+  // whose slots they share every 100 ms (or 1 s)
+  for (const char* name : {"CMD_SYS_1", "HC1_Demands_4", "CMD_MOT_9", "PDU_Rx_1"}) {
+    CAPTURE(name);
+    const std::size_t scheduled = f.scheduledIndex(name);
+    const std::int64_t cycle = f.schedule.messages[scheduled].cycleNs;
+    const auto frames = f.port.withId(f.schedule.messages[scheduled].canId);
+    REQUIRE(frames.size() >= 2);
+    for (std::size_t i = 1; i < frames.size(); ++i) CHECK(frames[i].atNs - frames[i - 1].atNs == cycle);
+  }
+  // and within the first burst (every message due at START) the cycles never get shorter
+  std::int64_t previous = 0;
+  for (const Sent& item : f.port.sent) {
+    if (item.frame.id == S1_ES) break;  // the first SDM, 292 us after its SHM: the burst is over
+    for (const cantx::ScheduledMessage& message : f.schedule.messages) {
+      if (message.canId != item.frame.id || message.cycleNs <= 0) continue;
+      CHECK(message.cycleNs >= previous);
+      previous = message.cycleNs;
+    }
+  }
+}
