@@ -34,8 +34,9 @@
 #      (-i1000), started with the listener for the same SECONDS; its histogram (1 us
 #      buckets up to 30 ms) gives the platform's wake-up latency p99 and max. CYCLICTEST=0:
 #      not run (platform_* = none).
-# Last line: RESULT tx_p99_us (the worst p99 period error of the streams with at least 100
-# intervals in the window: for shorter streams the p99 is their maximum) tx_max_us (the
+# Last line: RESULT tx_p99_us (the worst p99 period error of the streams with at least 1,000
+# intervals in the window, so that 10 or more lie beyond it: in 60 s the 10 and 20 ms
+# streams; for a 1 s stream the p99 is its maximum) tx_max_us (the
 # worst stream's max) tx_pooled_p99_us (all streams' intervals together, as cyclictest pools
 # its wake-ups) tx_all_streams_p99_us (the worst p99 of every stream, the 1 s ones' maxima
 # included; this was tx_p99_us before 2026-11-27 23:00) platform_p99_us platform_max_us (cyclictest) delta_p99_us delta_max_us (the
@@ -132,7 +133,7 @@ if [[ -n "$rtPriority" ]]; then
   jq --arg dir "$configDir" --arg schedule "$work/schedule.json" '
     def absolute: if startswith("/") then . else $dir + "/" + . end;
     .dbc |= map(absolute) | .schedule = $schedule |
-    with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive", "diagnostics", "web")) then .value |= absolute else . end)' \
+    with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive", "dashboard", "diagnostics", "web", "telemetry")) then .value |= absolute else . end)' \
     "$config" >"$work/vehicle.json"
   config="$work/vehicle.json"
   echo "RT_PRIORITY=$rtPriority${SDM_SPIN_US:+ SDM_SPIN_US=$SDM_SPIN_US}: configuration copied to $config" \
