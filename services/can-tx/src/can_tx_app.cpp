@@ -385,6 +385,7 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
     heartbeat.addCounterSource("wakeups", [this] { return static_cast<std::int64_t>(thread->wakeups()); });
     heartbeat.addCounterSource("sdm_spins", [this] { return static_cast<std::int64_t>(thread->spins()); });
     heartbeat.addCounterSource("sdm_spin_us", [this] { return thread->spinNs() / 1000; });
+    heartbeat.addCounterSource("sdm_guard_us", [this] { return thread->guardNs() / 1000; });
     heartbeat.addCounterSource("inbox_refused", [this] { return static_cast<std::int64_t>(thread->refusedPosts()); });
     heartbeat.addCounterSource("one_shots", [this] {
       return static_cast<std::int64_t>(scheduler->counters().oneShots.load(std::memory_order_relaxed));

@@ -52,6 +52,19 @@ WaitPlan planWait(std::int64_t nowNs, std::int64_t nextNs, std::int64_t sdmNs, s
   return {WaitPlan::Kind::Sleep, std::min(nextNs, sdmNs - spinNs)};
 }
 
+void WakeGuard::record(std::int64_t latenessNs) noexcept {
+  if (m_capNs == 0) return;
+  m_window[m_count++] = latenessNs < 0 ? 0 : latenessNs;
+  if (m_count < WINDOW) return;
+  m_count = 0;
+  // nearest-rank p99 of 1,024: rank 1,014 (the eleventh largest)
+  constexpr std::size_t RANK = (WINDOW * 99 + 99) / 100 - 1;
+  std::nth_element(m_window.begin(), m_window.begin() + RANK, m_window.end());
+  const std::int64_t p99 = m_window[RANK];
+  m_guardNs = std::min(m_capNs, std::max(p99, m_previousNs) + MARGIN_NS);
+  m_previousNs = p99;
+}
+
 bool TxInbox::push(TxCommand&& command) noexcept {
   const std::uint64_t tail = m_tail.load(std::memory_order_relaxed);
   if (tail - m_head.load(std::memory_order_acquire) >= CAPACITY) return false;
@@ -75,7 +88,8 @@ TxThread::TxThread(Scheduler& scheduler, std::vector<can::Link*> links,
 TxThread::~TxThread() { stop(); }
 
 std::string TxThread::start(int realtimePriority, std::int64_t sdmSpinNs) {
-  m_sdmSpinNs = std::max<std::int64_t>(sdmSpinNs, 0);
+  m_guard = WakeGuard(sdmSpinNs);
+  m_guardNs.store(m_guard.guardNs(), std::memory_order_relaxed);
   m_thread = std::thread([this] { run(); });
   if (realtimePriority <= 0) return {};
   sched_param parameters{};
@@ -150,7 +164,7 @@ void TxThread::service(std::int64_t nowNs) noexcept {
 }
 
 void TxThread::spinUntil(std::int64_t deadlineNs) noexcept {
-  // Bounded by planWait: at most sdmSpinNs and at most the pair's delta. Under SCHED_FIFO a
+  // Bounded by planWait: at most the wake guard (so at most sdmSpinNs) and the pair's delta. Under SCHED_FIFO a
   // sched_yield() between clock reads lets a thread of the same priority on this core run
   // (it would otherwise wait for the whole spin); else the CPU's pause hint.
   const std::int64_t beginNs = clock::monotonicNs();
@@ -185,18 +199,24 @@ void TxThread::run() noexcept {
     const std::int64_t sdmNs = m_scheduler.nextDataDeadlineNs();
     // the link housekeeping (draining the links' receive queues, their events) waits while an
     // SDM is due within the spin time, so that it cannot delay that SDM; it runs right after it
-    const bool sdmSoon = sdmNs != INT64_MAX && sdmNs - now <= m_sdmSpinNs;
+    const std::int64_t guardNs = m_guard.guardNs();
+    const bool sdmSoon = sdmNs != INT64_MAX && sdmNs - now <= guardNs;
     if (now >= m_nextServiceNs && !sdmSoon) service(now);
     const std::int64_t serviceNs = sdmSoon ? INT64_MAX : m_nextServiceNs;
     const std::int64_t networkNs = m_network != nullptr ? m_network->nextDeadlineNs() : INT64_MAX;
     const WaitPlan plan = planWait(clock::monotonicNs(), std::min({m_scheduler.nextDeadlineNs(), serviceNs, networkNs}),
-                                   sdmNs, m_sdmSpinNs);
+                                   sdmNs, guardNs);
     if (plan.kind == WaitPlan::Kind::Sleep) {
       m_sleeping.store(true, std::memory_order_seq_cst);
       // a post between the load of `seen` and here changed the word: the wait returns at once
       futexWaitUntil(m_wake, seen, plan.untilNs);
       m_sleeping.store(false, std::memory_order_relaxed);
       m_wakeups.fetch_add(1, std::memory_order_relaxed);
+      // how late a sleep that ran to its deadline woke (one woken early by a post says nothing)
+      if (const std::int64_t woke = clock::monotonicNs(); woke >= plan.untilNs) {
+        m_guard.record(woke - plan.untilNs);
+        m_guardNs.store(m_guard.guardNs(), std::memory_order_relaxed);
+      }
     } else if (plan.kind == WaitPlan::Kind::Spin) {
       spinUntil(plan.untilNs);
     }

@@ -3,9 +3,10 @@
 // links. It sleeps on a futex with an absolute CLOCK_MONOTONIC deadline (the scheduler's
 // next one), so it wakes exactly when a frame is due, or at once when the service's loop
 // thread posts something (a one-shot frame, a request to answer, a schedule change).
-// The one exception (issue 27): when a J1939-76 SDM is due within `sdmSpinNs` it does not
-// sleep again but stays on the CPU until that deadline (planWait below), so a short
-// SHM -> SDM delta does not pay a second wake-up latency.
+// The one exception (issue 27): when a J1939-76 SDM is due within the wake guard it does
+// not sleep again but stays on the CPU until that deadline (planWait below), so a short
+// SHM -> SDM delta does not pay a second wake-up latency. The guard (WakeGuard below) is
+// how late this thread's recent timed sleeps woke (p99 + 20 us), at most `sdmSpinNs`.
 //
 //   cantx::TxThread thread(scheduler, links, onBusEvent);
 //   thread.start(priority, sdmSpinNs);                  // SCHED_FIFO when priority > 0
@@ -97,6 +98,34 @@ struct WaitPlan {
 [[nodiscard]] WaitPlan planWait(std::int64_t nowNs, std::int64_t nextNs, std::int64_t sdmNs,
                                 std::int64_t spinNs) noexcept;
 
+/// The wake guard: how long before an SDM the transmit thread stops sleeping and waits on
+/// the CPU. A fixed guard has to cover the worst platform the schedule may run on and
+/// spends that long on the CPU for every pair; this one follows how late the thread's own
+/// timed sleeps woke. Per window of WINDOW sleeps that ended at their deadline: the p99
+/// lateness (nearest rank: the eleventh largest of 1,024); the guard is the larger of the
+/// last two windows' figures plus MARGIN_NS, at most the cap (sdmSpinUs). So about 99 % of
+/// SDMs are waited for on the CPU from before the thread wakes, the rest are late by the
+/// platform's tail beyond the guard (the issue 27 target is a delta error p99 <= 50 us). It rises within
+/// one window (about 5 s on HHEA) and falls after two. Before the first window it is the
+/// cap; a cap of 0 keeps it 0 (never wait on the CPU). Fixed storage, no allocation.
+/// @note record() and guardNs() on one thread.
+class WakeGuard {
+ public:
+  static constexpr std::size_t WINDOW = 1024;
+  static constexpr std::int64_t MARGIN_NS = 20'000;
+  explicit WakeGuard(std::int64_t capNs = 0) noexcept : m_capNs(capNs < 0 ? 0 : capNs), m_guardNs(m_capNs) {}
+  /// A timed sleep ended `latenessNs` after its deadline.
+  void record(std::int64_t latenessNs) noexcept;
+  [[nodiscard]] std::int64_t guardNs() const noexcept { return m_guardNs; }
+
+ private:
+  std::int64_t m_capNs;
+  std::int64_t m_guardNs;
+  std::int64_t m_previousNs{-1};  ///< the previous window's p99; -1 before the first
+  std::size_t m_count{};
+  std::array<std::int64_t, WINDOW> m_window{};
+};
+
 /// Single-producer single-consumer ring of TxCommands.
 class TxInbox {
  public:
@@ -126,8 +155,8 @@ class TxThread {
   TxThread(const TxThread&) = delete;
   TxThread& operator=(const TxThread&) = delete;
 
-  /// Starts the thread; `realtimePriority` > 0 asks for SCHED_FIFO. `sdmSpinNs` (>= 0): an
-  /// SDM due within this is waited for on the CPU (planWait). Returns a warning text when
+  /// Starts the thread; `realtimePriority` > 0 asks for SCHED_FIFO. `sdmSpinNs` (>= 0): the
+  /// wake guard's cap; an SDM due within the guard is waited for on the CPU (planWait). Returns a warning text when
   /// SCHED_FIFO was refused (the thread then runs with normal scheduling), else empty.
   std::string start(int realtimePriority, std::int64_t sdmSpinNs = 0);
   /// Stops and joins the thread (idempotent).
@@ -142,6 +171,8 @@ class TxThread {
   /// Waits on the CPU for an SDM (planWait's Spin) and their total time, for the heartbeat.
   [[nodiscard]] std::uint64_t spins() const noexcept { return m_spins.load(std::memory_order_relaxed); }
   [[nodiscard]] std::int64_t spinNs() const noexcept { return m_spinTotalNs.load(std::memory_order_relaxed); }
+  /// The wake guard now (WakeGuard), for the heartbeat.
+  [[nodiscard]] std::int64_t guardNs() const noexcept { return m_guardNs.load(std::memory_order_relaxed); }
 
  private:
   void run() noexcept;
@@ -161,7 +192,8 @@ class TxThread {
   std::atomic<std::uint64_t> m_wakeups{};
   std::atomic<std::uint64_t> m_spins{};
   std::atomic<std::int64_t> m_spinTotalNs{};
-  std::int64_t m_sdmSpinNs{};            ///< set before the thread starts
+  WakeGuard m_guard;                     ///< set before the thread starts; then the thread's own
+  std::atomic<std::int64_t> m_guardNs{};  ///< m_guard's figure for other threads
   std::atomic<bool> m_realtime{};        ///< SCHED_FIFO granted: the spin yields to its peers
   std::int64_t m_nextServiceNs{};
   std::array<can::ReceivedFrame, 16> m_scratch{};

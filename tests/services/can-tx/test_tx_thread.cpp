@@ -87,6 +87,46 @@ TEST_CASE("planWait: nothing scheduled sleeps without a deadline") {
 
 namespace {
 
+/// Feeds `guard` one window of lateness `valueNs`, with `spikes` of them at `spikeNs`.
+void feedWindow(cantx::WakeGuard& guard, std::int64_t valueNs, std::size_t spikes = 0, std::int64_t spikeNs = 0) {
+  for (std::size_t i = 0; i < cantx::WakeGuard::WINDOW; ++i) guard.record(i < spikes ? spikeNs : valueNs);
+}
+
+}  // namespace
+
+TEST_CASE("WakeGuard: the cap until a window is seen, then the platform's p99 lateness plus the margin") {
+  cantx::WakeGuard guard(SPIN);
+  CHECK(guard.guardNs() == SPIN);
+  for (std::size_t i = 0; i + 1 < cantx::WakeGuard::WINDOW; ++i) guard.record(30 * US);
+  CHECK(guard.guardNs() == SPIN);  // one short of a window
+  guard.record(30 * US);
+  CHECK(guard.guardNs() == 30 * US + cantx::WakeGuard::MARGIN_NS);
+}
+
+TEST_CASE("WakeGuard: a window with 11 late wake-ups raises it at once; it falls only after two quiet windows") {
+  cantx::WakeGuard guard(SPIN);
+  feedWindow(guard, 30 * US);
+  feedWindow(guard, 30 * US, 11, 200 * US);  // 11 of 1,024: the p99 is the eleventh largest
+  CHECK(guard.guardNs() == 200 * US + cantx::WakeGuard::MARGIN_NS);
+  feedWindow(guard, 30 * US, 10, 900 * US);  // ten are beyond the p99
+  CHECK(guard.guardNs() == 200 * US + cantx::WakeGuard::MARGIN_NS);
+  feedWindow(guard, 30 * US);
+  CHECK(guard.guardNs() == 30 * US + cantx::WakeGuard::MARGIN_NS);
+}
+
+TEST_CASE("WakeGuard: never above the cap (sdmSpinUs); a cap of 0 keeps it 0") {
+  cantx::WakeGuard capped(SPIN);
+  feedWindow(capped, 2 * MS);
+  CHECK(capped.guardNs() == SPIN);
+  cantx::WakeGuard off(0);
+  feedWindow(off, 10 * US);
+  CHECK(off.guardNs() == 0);
+  cantx::WakeGuard negative(-5);
+  CHECK(negative.guardNs() == 0);
+}
+
+namespace {
+
 struct RealClock final : cantx::Clock {
   std::int64_t monotonicNs() noexcept override { return clock::monotonicNs(); }
   std::int64_t realtimeNs() noexcept override { return clock::realtimeNs(); }
