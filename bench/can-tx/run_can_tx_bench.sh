@@ -259,6 +259,7 @@ echo "   vcu-can-tx CPU $tickCpu % (ticks) / $schedCpu % (schedstat) of one core
 spins=$(( $(counter "$after" sdm_spins) - $(counter "$before" sdm_spins) ))
 spinUs=$(( $(counter "$after" sdm_spin_us) - $(counter "$before" sdm_spin_us) ))
 spinCpu="$(percent $(( spinUs * 1000 )) "$(( tAfter - tBefore ))")"
+echo "   wake guard at the end (heartbeat sdm_guard_us; 0 for a build without it): $(counter "$after" sdm_guard_us) us"
 echo "   on-CPU waits for SDMs (heartbeat sdm_spins, sdm_spin_us): $spins, $spinUs us = $spinCpu % of one core" \
   "(between two heartbeats $(awk -v w="$(( tAfter - tBefore ))" 'BEGIN { printf "%.1f", w / 1e9 }') s apart)"
 
