@@ -44,7 +44,8 @@ constexpr const char* TOP_DESCRIPTION = "Live view of a running stack: services,
 constexpr const char* TOP_FOOTER =
     "Refreshes once a second until Ctrl-C (or --for SECONDS): the services heard on the\n"
     "heartbeat channel (pid, uptime, restarts seen while top runs, heartbeat age, CPU %\n"
-    "and RSS of local processes, status), the FSM state and how long it has held, the\n"
+    "since the last table (\"-\" until two samples of it lie 0.2 s apart) and RSS of local\n"
+    "processes, status), the FSM state and how long it has held, the\n"
     "vehicle's key signals from its dashboard.json (BATTERY: SOC, voltage, current,\n"
     "charger; STATUS: the HMI's status keys), the GPIO lines, each bus's load, can-tx's\n"
     "worst period error p99 and the active faults (LCM fault events since top started).\n"
@@ -63,6 +64,7 @@ struct ServiceView {
   int restarts{};
   std::int64_t cpuTicks{-1};
   double cpuPercent{};
+  bool cpuMeasured{};  ///< cpuPercent spans two samples of this pid (else the table says "-")
   std::chrono::steady_clock::time_point cpuAt;
 };
 
@@ -136,7 +138,13 @@ class Top {
     ServiceView& view = m_services[beat.service];
     if (view.firstPid == 0) view.firstPid = beat.pid;
     if (view.last.pid != 0 && view.last.pid != beat.pid) ++view.restarts;
-    if (view.last.pid != beat.pid) view.cpuTicks = -1;
+    if (view.last.pid != beat.pid) {
+      view.cpuMeasured = false;
+      // the first CPU sample when a process is first heard, so that the next table (--once:
+      // at 1.5 s) can already give its CPU
+      view.cpuTicks = service::processCpuTicks(beat.pid);
+      view.cpuAt = std::chrono::steady_clock::now();
+    }
     view.last = beat;
   }
 
@@ -149,9 +157,13 @@ class Top {
       const std::int64_t ticks = service::processCpuTicks(view.last.pid);
       if (ticks >= 0 && view.cpuTicks >= 0) {
         const double seconds = std::chrono::duration<double>(clock - view.cpuAt).count();
-        if (seconds > 0.2) view.cpuPercent = static_cast<double>(ticks - view.cpuTicks) / ticksPerSecond / seconds * 100;
-      }
-      if (ticks >= 0) {
+        if (seconds > 0.2) {
+          view.cpuPercent = static_cast<double>(ticks - view.cpuTicks) / ticksPerSecond / seconds * 100;
+          view.cpuMeasured = true;
+          view.cpuTicks = ticks;
+          view.cpuAt = clock;
+        }
+      } else if (ticks >= 0) {
         view.cpuTicks = ticks;
         view.cpuAt = clock;
       }
@@ -159,7 +171,7 @@ class Top {
       const std::int64_t age = std::max<std::int64_t>(0, now - view.last.timestampNs);
       table.addRow({name, std::to_string(view.last.pid), formatDuration(view.last.uptimeMs * 1'000'000),
                     std::to_string(view.restarts), formatDuration(age) + (age > 3'000'000'000 ? " LATE" : ""),
-                    ticks >= 0 ? fixed(view.cpuPercent, 1) : "-", rss >= 0 ? fixed(rss, 1) : "-",
+                    ticks >= 0 && view.cpuMeasured ? fixed(view.cpuPercent, 1) : "-", rss >= 0 ? fixed(rss, 1) : "-",
                     view.last.status.empty() ? "-" : view.last.status});
     }
     if (table.empty()) {
