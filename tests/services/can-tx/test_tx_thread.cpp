@@ -103,7 +103,7 @@ TEST_CASE("WakeGuard: the cap until a window is seen, then the platform's p99 la
   CHECK(guard.guardNs() == 30 * US + cantx::WakeGuard::MARGIN_NS);
 }
 
-TEST_CASE("WakeGuard: a window with 11 late wake-ups raises it at once; it falls only after two quiet windows") {
+TEST_CASE("WakeGuard: a window with 11 late wake-ups raises it at once and it falls only after two quiet windows") {
   cantx::WakeGuard guard(SPIN);
   feedWindow(guard, 30 * US);
   feedWindow(guard, 30 * US, 11, 200 * US);  // 11 of 1,024: the p99 is the eleventh largest
@@ -114,7 +114,7 @@ TEST_CASE("WakeGuard: a window with 11 late wake-ups raises it at once; it falls
   CHECK(guard.guardNs() == 30 * US + cantx::WakeGuard::MARGIN_NS);
 }
 
-TEST_CASE("WakeGuard: never above the cap (sdmSpinUs); a cap of 0 keeps it 0") {
+TEST_CASE("WakeGuard: never above the cap (sdmSpinUs) and a cap of 0 keeps it 0") {
   cantx::WakeGuard capped(SPIN);
   feedWindow(capped, 2 * MS);
   CHECK(capped.guardNs() == SPIN);
