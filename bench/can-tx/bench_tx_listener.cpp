@@ -698,6 +698,7 @@ int report(const Recording& recording, const Analysis& analysis, const Targets& 
 
   // Targets: per stream and per pair, so one bad message cannot hide in a pooled figure.
   double streamP99 = worstP99 != nullptr ? toUs(worstP99->error.p99Ns) : 0.0;
+  const double sampledP99 = worstSampledP99 != nullptr ? toUs(worstSampledP99->error.p99Ns) : 0.0;
   double streamMax = worstMax != nullptr ? toUs(worstMax->error.maxNs) : 0.0;
   double pairP99 = 0.0, pairMax = 0.0;
   for (const PairResult& pair : analysis.pairs) {
@@ -724,7 +725,7 @@ int report(const Recording& recording, const Analysis& analysis, const Targets& 
       "missed=%llu pairs=%llu "
       "delta_p50_us=%.1f delta_p99_us=%.1f delta_max_us=%.1f pair_faults=%llu queue_lost=%llu verdict=%s\n",
       analysis.windowFrames, windowS, framesPerSecond, toUs(overall.p50Ns), toUs(overall.p99Ns), toUs(overall.maxNs),
-      streamP99, worstSampledP99 != nullptr ? toUs(worstSampledP99->error.p99Ns) : 0.0, streamMax, static_cast<unsigned long long>(gaps), static_cast<unsigned long long>(missed),
+      streamP99, sampledP99, streamMax, static_cast<unsigned long long>(gaps), static_cast<unsigned long long>(missed),
       static_cast<unsigned long long>(pairs), toUs(delta.p50Ns), toUs(delta.p99Ns), toUs(delta.maxNs),
       static_cast<unsigned long long>(pairFaults), static_cast<unsigned long long>(recording.queueLost),
       allMet ? "PASS" : "FAIL");

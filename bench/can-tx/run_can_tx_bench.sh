@@ -34,14 +34,18 @@
 #      (-i1000), started with the listener for the same SECONDS; its histogram (1 us
 #      buckets up to 30 ms) gives the platform's wake-up latency p99 and max. CYCLICTEST=0:
 #      not run (platform_* = none).
-# Last line: RESULT tx_p99_us (the worst p99 period error of the streams with at least 1,000
-# intervals in the window, so that 10 or more lie beyond it: in 60 s the 10 and 20 ms
-# streams; for a 1 s stream the p99 is its maximum) tx_max_us (the
-# worst stream's max) tx_pooled_p99_us (all streams' intervals together, as cyclictest pools
-# its wake-ups) tx_all_streams_p99_us (the worst p99 of every stream, the 1 s ones' maxima
-# included; this was tx_p99_us before 2026-11-27 23:00) platform_p99_us platform_max_us (cyclictest) delta_p99_us delta_max_us (the
-# worst safety pair's) pair_faults tx_cpu_pct (schedstat, all threads) spin_cpu_pct (the
-# transmit thread's on-CPU waits for SDMs, heartbeat sdm_spin_us; 0 for a build without it).
+# Last line: RESULT
+#   tx_p99_us: the worst p99 period error of the streams with at least 1,000 intervals in the
+#     window, so that 10 or more lie beyond it (in 60 s the 10 and 20 ms streams; for a 1 s
+#     stream the p99 is its maximum);
+#   tx_max_us: the worst stream's maximum;
+#   tx_pooled_p99_us: all streams' intervals together, as cyclictest pools its wake-ups;
+#   tx_all_streams_p99_us: the worst p99 of every stream, the 1 s ones' maxima included
+#     (this was tx_p99_us before 2026-11-27 23:00);
+#   platform_p99_us platform_max_us: cyclictest;
+#   delta_p99_us delta_max_us: the worst safety pair's;
+#   pair_faults; tx_cpu_pct: schedstat, all threads; spin_cpu_pct: the transmit thread's
+#     on-CPU waits for SDMs (heartbeat sdm_spin_us; 0 for a build without it).
 # LISTENER_ARGS: more options for bench_tx_listener, e.g. "--late-events 100" or
 # "--dump /work/tx.csv" (a path outside /tmp: the sandbox's /tmp is private).
 # Set TX_CPU= (empty) to run vcu-can-tx unpinned, LISTENER_CPU= for an unpinned listener.

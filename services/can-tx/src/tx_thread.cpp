@@ -164,9 +164,9 @@ void TxThread::service(std::int64_t nowNs) noexcept {
 }
 
 void TxThread::spinUntil(std::int64_t deadlineNs) noexcept {
-  // Bounded by planWait: at most the wake guard (so at most sdmSpinNs) and the pair's delta. Under SCHED_FIFO a
-  // sched_yield() between clock reads lets a thread of the same priority on this core run
-  // (it would otherwise wait for the whole spin); else the CPU's pause hint.
+  // Bounded by planWait: at most the wake guard (so at most sdmSpinNs) and the pair's delta.
+  // Under SCHED_FIFO a sched_yield() between clock reads lets a thread of the same priority
+  // on this core run (it would otherwise wait for the whole spin); else the CPU's pause hint.
   const std::int64_t beginNs = clock::monotonicNs();
   std::int64_t now = beginNs;
   const bool yield = m_realtime.load(std::memory_order_relaxed);
@@ -198,7 +198,7 @@ void TxThread::run() noexcept {
     now = clock::monotonicNs();
     const std::int64_t sdmNs = m_scheduler.nextDataDeadlineNs();
     // the link housekeeping (draining the links' receive queues, their events) waits while an
-    // SDM is due within the spin time, so that it cannot delay that SDM; it runs right after it
+    // SDM is due within the wake guard, so that it cannot delay that SDM; it runs right after it
     const std::int64_t guardNs = m_guard.guardNs();
     const bool sdmSoon = sdmNs != INT64_MAX && sdmNs - now <= guardNs;
     if (now >= m_nextServiceNs && !sdmSoon) service(now);

@@ -105,8 +105,8 @@ struct WaitPlan {
 /// lateness (nearest rank: the eleventh largest of 1,024); the guard is the larger of the
 /// last two windows' figures plus MARGIN_NS, at most the cap (sdmSpinUs). So about 99 % of
 /// SDMs are waited for on the CPU from before the thread wakes, the rest are late by the
-/// platform's tail beyond the guard (the issue 27 target is a delta error p99 <= 50 us). It rises within
-/// one window (about 5 s on HHEA) and falls after two. Before the first window it is the
+/// platform's tail beyond the guard (the issue 27 target is a delta error p99 <= 50 us).
+/// It rises within one window (about 5 s on HHEA) and falls after two. Before the first window it is the
 /// cap; a cap of 0 keeps it 0 (never wait on the CPU). Fixed storage, no allocation.
 /// @note record() and guardNs() on one thread.
 class WakeGuard {
