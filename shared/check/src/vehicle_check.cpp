@@ -314,6 +314,19 @@ void checkSimulationMessages(const config::VehicleConfig& vehicle, const Vehicle
   }
 }
 
+/// The HHEA simulation's wake signal must be a catalog key: vcu-ecu-sim looks it up at start
+/// and refuses to run without it (its loader has no catalog to check it with).
+void checkSimulationWakeSignal(const config::VehicleConfig& vehicle, const signals::Catalog& catalog,
+                               const VehicleFiles& files, std::vector<Error>& out) {
+  if (!files.simulation || files.simulation->wakeSignal.empty()) return;
+  const std::string& key = files.simulation->wakeSignal;
+  if (catalog.indexOf(key)) return;
+  std::string text = "unknown signal '" + key + "'";
+  if (auto suggestion = catalog.suggest(key)) text += "; did you mean '" + *suggestion + "'?";
+  text += " (the simulated VIC wakes only while this table key is 1)";
+  out.push_back(Error{std::move(text), Location::json(vehicle.simulationFile, "/wakeSignal")});
+}
+
 /// A warning per FSM state whose entry raises a fault that no DTC of diagnostics.json maps
 /// (the file's own errors and warnings come from loadFiles()).
 void checkUnmappedFaultStates(const config::VehicleConfig& vehicle, const VehicleFiles& files,
@@ -346,6 +359,7 @@ std::vector<Error> checkVehicle(const config::VehicleConfig& vehicle, const sign
   checkBusLoads(vehicle, files, out);
   checkAddresses(vehicle, files, out);
   checkSimulationMessages(vehicle, files, out);
+  checkSimulationWakeSignal(vehicle, catalog, files, out);
   checkUnmappedFaultStates(vehicle, files, out);
   return out;
 }

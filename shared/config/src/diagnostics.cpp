@@ -52,8 +52,8 @@ class Loader {
     if (!m_check.isObject(root, "")) return;
     m_check.onlyKeys(root, "", {"comment", "dtcs", "dm3", "dm11", "dm1PeriodMs", "identification", "countsFile"});
     dtcs(root);
-    m_config.dm3 = policy(root, "dm3");
-    m_config.dm11 = policy(root, "dm11");
+    m_config.dm3 = policy(root, "dm3", "DM3 (clear previously active DTCs)");
+    m_config.dm11 = policy(root, "dm11", "DM11 (clear active DTCs)");
     if (auto period = m_check.number(root, "", "dm1PeriodMs", false)) {
       if (!(*period >= MIN_DM1_PERIOD_MS && *period <= MAX_DM1_PERIOD_MS) || *period != std::floor(*period)) {
         m_check.error("/dm1PeriodMs", "must be a whole number of milliseconds from 100 to 10000 (J1939-73: 1000)");
@@ -263,10 +263,19 @@ class Loader {
     }
   }
 
-  ClearPolicy policy(const Json& root, std::string_view key) {
+  /// "accept" is a warning: the request carries nothing but its source address, which any
+  /// device on the bus may use, so accepting means accepting from every node.
+  ClearPolicy policy(const Json& root, std::string_view key, std::string_view request) {
     const auto text = m_check.string(root, "", key, false);
     if (!text) return ClearPolicy::Refuse;
-    if (*text == "accept") return ClearPolicy::Accept;
+    if (*text == "accept") {
+      m_check.warning(JsonChecker::join("", key),
+                      std::string(request) +
+                          " is accepted from any node on the bus: any device that can send on it (a node, a "
+                          "tool on the diagnostic connector) can erase the fault history; \"refuse\" unless a "
+                          "workshop must clear DTCs over J1939");
+      return ClearPolicy::Accept;
+    }
     if (*text != "refuse") m_check.error(JsonChecker::join("", key), "expected \"accept\" or \"refuse\"");
     return ClearPolicy::Refuse;
   }

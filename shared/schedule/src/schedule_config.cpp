@@ -22,6 +22,8 @@ namespace {
 constexpr std::int64_t NS_PER_MS = 1'000'000;
 constexpr double MAX_OFFSET_MS = config::MAX_CYCLE_MS;
 constexpr std::string_view GROUP_PREFIX = "internal.";
+/// A DBC writes a 29-bit identifier with this bit set (BO_ 2566869221 = 0x18FF50E5 | flag).
+constexpr std::uint32_t DBC_EXTENDED_FLAG = 0x80000000u;
 
 using config::Json;
 using config::JsonChecker;
@@ -71,8 +73,8 @@ bool isSafetyHeader(const dbc::Message& message) {
 
 double initialOf(const config::VehicleConfig& vehicle, std::string_view key) {
   for (const auto& internal : vehicle.internalSignals) {
-    if (key.size() == config::INTERNAL_PREFIX.size() + internal.name.size() && key.starts_with(config::INTERNAL_PREFIX) &&
-        key.substr(config::INTERNAL_PREFIX.size()) == internal.name) {
+    if (key.size() == config::INTERNAL_PREFIX.size() + internal.name.size() &&
+        key.starts_with(config::INTERNAL_PREFIX) && key.substr(config::INTERNAL_PREFIX.size()) == internal.name) {
       return internal.initial;
     }
   }
@@ -90,8 +92,9 @@ class Loader {
     schedule.overlay = defaultOverlayPath();
     if (root != nullptr) {
       if (!m_check.isObject(*root, "")) return schedule;
-      m_check.onlyKeys(*root, "", {"include", "exclude", "messages", "groups", "writers", "safeValues", "timeDate",
-                                   "realtimePriority", "sdmSpinUs", "overlay", "comment"});
+      m_check.onlyKeys(*root, "",
+                       {"include", "exclude", "messages", "groups", "writers", "safeValues", "timeDate",
+                        "realtimePriority", "sdmSpinUs", "overlay", "comment"});
     }
     groups(root, schedule);
     selectMessages(root, schedule);
@@ -109,8 +112,10 @@ class Loader {
       }
       if (auto spin = m_check.number(*root, "", "sdmSpinUs", false)) {
         if (!(*spin >= 0 && *spin <= static_cast<double>(MAX_SDM_SPIN_US)) || *spin != std::floor(*spin)) {
-          m_check.error("/sdmSpinUs", "must be a whole number of microseconds from 0 (the transmit thread always "
-                                      "sleeps) to " + std::to_string(MAX_SDM_SPIN_US));
+          m_check.error("/sdmSpinUs",
+                        "must be a whole number of microseconds from 0 (the transmit thread always "
+                        "sleeps) to " +
+                            std::to_string(MAX_SDM_SPIN_US));
         } else {
           schedule.sdmSpinNs = static_cast<std::int64_t>(*spin) * 1000;
         }
@@ -129,10 +134,10 @@ class Loader {
  private:
   std::string resolve(const std::string& path) const {
     if (path.empty() || path.front() == '/') return path;
-    const std::string base = std::filesystem::path(m_vehicle.scheduleFile.empty() ? m_vehicle.path
-                                                                                   : m_vehicle.scheduleFile)
-                                 .parent_path()
-                                 .string();
+    const std::string base =
+        std::filesystem::path(m_vehicle.scheduleFile.empty() ? m_vehicle.path : m_vehicle.scheduleFile)
+            .parent_path()
+            .string();
     return base.empty() ? path : base + "/" + path;
   }
 
@@ -144,7 +149,10 @@ class Loader {
     return resolve("schedule.overlay.json");
   }
 
-  std::optional<std::size_t> messageByName(const std::string& name, const std::string& path) {
+  /// The message named `name`, or empty with an error at `path`. `toSend`: the schedule
+  /// would send it, so it must be a message the vehicle's node transmits (or one the DBC
+  /// gives no transmitter).
+  std::optional<std::size_t> messageByName(const std::string& name, const std::string& path, bool toSend) {
     const auto& messages = m_vehicle.database.messages;
     for (std::size_t m = 0; m < messages.size(); ++m) {
       if (messages[m].name != name || messages[m].pseudo) continue;
@@ -152,15 +160,35 @@ class Loader {
         m_check.error(path, "message '" + name + "' is on no configured bus");
         return std::nullopt;
       }
+      if (toSend && !sendable(messages[m], path)) return std::nullopt;
       if (isSafetyHeader(messages[m])) {
-        m_check.error(path, "'" + name + "' is a J1939-76 safety header (PGN 0x0E00): it goes out with its SDM; "
-                                         "give the SDM \"safety\": {\"deltaUs\": ...} instead");
+        m_check.error(path, "'" + name +
+                                "' is a J1939-76 safety header (PGN 0x0E00): it goes out with its SDM; "
+                                "give the SDM \"safety\": {\"deltaUs\": ...} instead");
         return std::nullopt;
       }
       return m;
     }
     m_check.error(path, "unknown message '" + name + "'" + suggestion(name, messageNames(m_vehicle)));
     return std::nullopt;
+  }
+
+  /// False, with an error at `path`, when the DBC names transmitters of `message` and the
+  /// vehicle's node is not one of them: sending it would impersonate another node. A node
+  /// that really sends another's message (a gateway) is named in the DBC's BO_TX_BU_.
+  bool sendable(const dbc::Message& message, const std::string& path) {
+    if (message.transmitter.empty() || message.transmitter == dbc::NO_NODE) return true;
+    if (config::sentBy(message, m_vehicle.node)) return true;
+    std::string senders;
+    for (const std::string& sender : message.transmitters()) senders += (senders.empty() ? "" : ",") + sender;
+    const std::uint32_t dbcId = message.id | (message.extended ? DBC_EXTENDED_FLAG : 0u);
+    m_check.error(path, "message '" + message.name + "' is sent by " + senders + " (its DBC transmitter), not by " +
+                            m_vehicle.node + ": scheduling it would make the VCU impersonate " + senders + "; if " +
+                            m_vehicle.node +
+                            " really sends it (a gateway), name it among the message's transmitters in the DBC "
+                            "(BO_TX_BU_ " +
+                            std::to_string(dbcId) + " : " + senders + "," + m_vehicle.node + ";)");
+    return false;
   }
 
   void groups(const Json* root, Schedule& schedule) {
@@ -218,15 +246,18 @@ class Loader {
           m_check.error(path, "must be a message name");
           continue;
         }
-        if (auto index = messageByName((*include)[i].get<std::string>(), path)) addMessage(schedule, *index);
+        if (auto index = messageByName((*include)[i].get<std::string>(), path, true)) addMessage(schedule, *index);
       }
     } else {
       m_check.error("/include", "must be \"transmitted\" or a list of message names");
     }
     if (root != nullptr) {
-      if (const Json* messagesMap = m_check.member(*root, "", "messages", false); messagesMap && messagesMap->is_object()) {
+      if (const Json* messagesMap = m_check.member(*root, "", "messages", false);
+          messagesMap && messagesMap->is_object()) {
         for (const auto& [name, settings] : messagesMap->items()) {
-          if (auto index = messageByName(name, JsonChecker::join("/messages", name))) addMessage(schedule, *index);
+          if (auto index = messageByName(name, JsonChecker::join("/messages", name), true)) {
+            addMessage(schedule, *index);
+          }
         }
       }
     }
@@ -238,7 +269,7 @@ class Loader {
         m_check.error(path, "must be a message name");
         continue;
       }
-      const auto index = messageByName((*exclude)[i].get<std::string>(), path);
+      const auto index = messageByName((*exclude)[i].get<std::string>(), path, false);
       if (!index) continue;
       if (root->contains("messages") && (*root)["messages"].is_object() &&
           (*root)["messages"].contains(messages[*index].name)) {
@@ -269,8 +300,9 @@ class Loader {
       const auto index = static_cast<std::size_t>(message - m_vehicle.database.messages.data());
       ScheduledMessage* entry = schedule.find(index);
       if (entry == nullptr || !m_check.isObject(settings, path)) continue;
-      m_check.onlyKeys(settings, path, {"cycleMs", "offsetMs", "enabled", "group", "values", "computed", "onChange",
-                                        "minIntervalMs", "destination", "source", "safety", "comment"});
+      m_check.onlyKeys(settings, path,
+                       {"cycleMs", "offsetMs", "enabled", "group", "values", "computed", "onChange", "minIntervalMs",
+                        "destination", "source", "safety", "comment"});
       timing(settings, path, *entry);
       if (auto group = m_check.string(settings, path, "group", false)) {
         std::vector<std::string> names;
@@ -292,10 +324,12 @@ class Loader {
 
   void timing(const Json& settings, const std::string& path, ScheduledMessage& entry) {
     if (auto cycle = m_check.number(settings, path, "cycleMs", false)) {
-      if (*cycle == 0) {
-        entry.cycleNs = 0;  // not cyclic
-      } else if (auto problem = config::checkCycleMs(*cycle)) {
-        m_check.error(path + "/cycleMs", *problem + " (0: not cyclic)");
+      if (auto problem = config::checkCycleMs(*cycle)) {
+        // 0 would silently never send the message: a cycle is given or left to the DBC
+        if (*cycle == 0) {
+          *problem += "; leave \"cycleMs\" out for the DBC's GenMsgCycleTime (a message without one is not cyclic)";
+        }
+        m_check.error(path + "/cycleMs", *problem);
       } else {
         entry.cycleNs = static_cast<std::int64_t>(*cycle) * NS_PER_MS;
       }
@@ -367,8 +401,10 @@ class Loader {
       field.algorithm = found->algorithm;
       if (dbcSignal.valueType != dbc::ValueType::Integer || dbcSignal.isSigned || dbcSignal.size > 32 ||
           dbcSignal.muxRole == dbc::MuxRole::Multiplexed) {
-        m_check.error(itemPath + "/signal", "a computed field is an unsigned integer signal of 1..32 bits, not "
-                                            "multiplexed; '" + *name + "' is not");
+        m_check.error(itemPath + "/signal",
+                      "a computed field is an unsigned integer signal of 1..32 bits, not "
+                      "multiplexed; '" +
+                          *name + "' is not");
         continue;
       }
       const std::uint64_t span = std::uint64_t{1} << dbcSignal.size;
@@ -393,8 +429,8 @@ class Loader {
         continue;
       }
       if (field.algorithm == FieldAlgorithm::J1939Checksum4 && !message.extended) {
-        m_check.error(itemPath + "/algorithm", "j1939-checksum4 covers the 29-bit identifier; '" + message.name +
-                                                   "' has an 11-bit one");
+        m_check.error(itemPath + "/algorithm",
+                      "j1939-checksum4 covers the 29-bit identifier; '" + message.name + "' has an 11-bit one");
         continue;
       }
       for (const ComputedField& existing : entry.computed) {
@@ -412,8 +448,8 @@ class Loader {
       if (!settings.contains(key)) continue;
       const std::string keyPath = path + "/" + key;
       if (!message.extended) {
-        m_check.error(keyPath, "address substitution needs a 29-bit J1939 identifier; '" + message.name +
-                                   "' has an 11-bit one");
+        m_check.error(keyPath,
+                      "address substitution needs a 29-bit J1939 identifier; '" + message.name + "' has an 11-bit one");
         continue;
       }
       const auto address = parseAddress(settings.at(key));
@@ -442,8 +478,8 @@ class Loader {
     const auto delta = m_check.number(*object, path + "/safety", "deltaUs");
     if (!delta) return;
     if (!message.extended || message.length != j1939::SAFETY_MESSAGE_LENGTH) {
-      m_check.error(path + "/safety", "a J1939-76 safety data message is an 8-byte 29-bit frame; '" + message.name +
-                                          "' is not");
+      m_check.error(path + "/safety",
+                    "a J1939-76 safety data message is an 8-byte 29-bit frame; '" + message.name + "' is not");
       return;
     }
     if (!(*delta >= 1 && *delta <= 100'000) || *delta != std::floor(*delta)) {
@@ -452,8 +488,8 @@ class Loader {
     }
     const auto deltaNs = static_cast<std::int64_t>(*delta) * 1000;
     if (entry.cycleNs > 0 && deltaNs >= entry.cycleNs) {
-      m_check.error(path + "/safety/deltaUs", "must be shorter than the cycle (" +
-                                                  std::to_string(entry.cycleNs / 1000) + " us)");
+      m_check.error(path + "/safety/deltaUs",
+                    "must be shorter than the cycle (" + std::to_string(entry.cycleNs / 1000) + " us)");
       return;
     }
     entry.safetyDeltaNs = deltaNs;
@@ -618,7 +654,8 @@ std::optional<std::string> checkBusLoad(const Schedule& schedule, const config::
     }
     const double load = config::cyclicBusLoad(frames, bus);
     if (load <= config::MAX_CYCLIC_BUS_LOAD) continue;
-    std::sort(shares.begin(), shares.end(), [](const Share& left, const Share& right) { return left.load > right.load; });
+    std::sort(shares.begin(), shares.end(),
+              [](const Share& left, const Share& right) { return left.load > right.load; });
     const auto percent = [](double share) {
       std::ostringstream text;
       text << std::fixed << std::setprecision(1) << share * 100 << " %";
@@ -628,8 +665,8 @@ std::optional<std::string> checkBusLoad(const Schedule& schedule, const config::
     for (std::size_t i = 0; i < std::min<std::size_t>(3, shares.size()); ++i) {
       const ScheduledMessage& entry = *schedule.find(shares[i].message);
       heaviest += std::string(i == 0 ? "" : ", ") + vehicle.database.messages[shares[i].message].name + " every " +
-                  config::formatNumber(static_cast<double>(entry.cycleNs) / NS_PER_MS) + " ms: " +
-                  percent(shares[i].load);
+                  config::formatNumber(static_cast<double>(entry.cycleNs) / NS_PER_MS) +
+                  " ms: " + percent(shares[i].load);
     }
     return "the cyclic frames on bus '" + bus.name + "' would take " + percent(load) + " of its " +
            std::to_string(bus.bitrate) + " bit/s, more than the " + percent(config::MAX_CYCLIC_BUS_LOAD) +

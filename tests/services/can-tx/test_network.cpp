@@ -317,6 +317,7 @@ TEST_CASE("network: two active DTCs go out by BAM with TP.DT packets 50 ms apart
 
 TEST_CASE("network: a cleared fault is in DM2 with count 1 and an accepted DM3 clears it with a positive ACK") {
   Fixture f;
+  f.diagnostics.dm3 = config::ClearPolicy::Accept;  // HHEA's diagnostics.json refuses clears
   f.enterState("Crash");
   f.start();
   f.runAt(START);

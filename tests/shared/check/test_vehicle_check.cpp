@@ -381,3 +381,32 @@ TEST_CASE("a signal a DTC of diagnostics.json reads is not 'read by no file' (#2
   const auto withDtc = sut.check();
   CHECK_MESSAGE(withDtc.empty(), all(withDtc));
 }
+
+TEST_CASE("a diagnostics.json that accepts DTC clears from any node is a warning at its JSON path (#39)") {
+  VehicleFolder sut;
+  sut.diagnostics = R"({"dm3": "refuse", "dm11": "accept"})";
+  const auto diagnostics = sut.check();
+  REQUIRE_MESSAGE(diagnostics.size() == 1, all(diagnostics));
+  CHECK(diagnostics.front().severity == Severity::Warning);
+  CHECK(diagnostics.front().location.file == sut.file("diagnostics.json"));
+  CHECK(diagnostics.front().location.jsonPath == "/dm11");
+  CHECK(contains(diagnostics.front().message, "DM11 (clear active DTCs) is accepted from any node on the bus"));
+}
+
+TEST_CASE("a simulation wake signal the catalog does not have is an error naming the signal and path (#39)") {
+  VehicleFolder sut;
+  SUBCASE("a misspelt operator switch") {
+    sut.simulation = R"({"model": "hhea", "wakeSignal": "internal.operator.Strat"})";
+    const auto errors = withSeverity(sut.check(), Severity::Error);
+    REQUIRE_MESSAGE(errors.size() == 1, all(errors));
+    CHECK(errors.front().location.file == sut.file("simulation.json"));
+    CHECK(errors.front().location.jsonPath == "/wakeSignal");
+    CHECK(contains(errors.front().message,
+                   "unknown signal 'internal.operator.Strat'; did you mean 'internal.operator.Start'?"));
+  }
+  SUBCASE("a signal of the catalog") {
+    sut.simulation = R"({"model": "hhea", "wakeSignal": "internal.operator.Start"})";
+    const auto errors = withSeverity(sut.check(), Severity::Error);
+    CHECK_MESSAGE(errors.empty(), all(errors));
+  }
+}

@@ -166,6 +166,39 @@ TEST_CASE("diagnostics errors name the file and JSON path") {
   CHECK(fixture.errorOf(R"({"dtc": []})").find(file + ": /dtc: unknown key") == 0);
 }
 
+TEST_CASE("DM3 or DM11 accepted from any node loads with a warning naming the file and JSON path (#39)") {
+  DiagnosticsFixture fixture;
+  fixture.load("{}");  // writes the file; the defaults refuse: no warning
+  std::vector<Error> diagnostics;
+  REQUIRE(config::loadDiagnosticsConfig(fixture.vehicle, fixture.catalog, &FSM_STATES, &diagnostics));
+  CHECK(diagnostics.empty());
+
+  std::ofstream(fixture.vehicle.diagnosticsFile) << R"({"dm3": "accept", "dm11": "accept"})";
+  auto loaded = config::loadDiagnosticsConfig(fixture.vehicle, fixture.catalog, &FSM_STATES, &diagnostics);
+  REQUIRE(loaded);
+  CHECK(loaded->dm3 == config::ClearPolicy::Accept);
+  REQUIRE(diagnostics.size() == 2);
+  const std::string file = fixture.vehicle.diagnosticsFile;
+  CHECK(diagnostics[0].severity == Severity::Warning);
+  CHECK(diagnostics[0].toString().find(file + ": /dm3: warning: DM3 (clear previously active DTCs) is accepted "
+                                              "from any node on the bus") == 0);
+  CHECK(diagnostics[1].severity == Severity::Warning);
+  CHECK(diagnostics[1].toString().find(file + ": /dm11: warning: DM11 (clear active DTCs) is accepted") == 0);
+}
+
+TEST_CASE("the shipped HHEA diagnostics refuse DM3 and DM11 (#39)") {
+  auto vehicle = config::loadVehicleConfig(std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json");
+  REQUIRE_MESSAGE(vehicle, (vehicle ? "" : vehicle.error().toString()));
+  auto catalog = config::buildCatalog(*vehicle);
+  REQUIRE(catalog);
+  std::vector<Error> diagnostics;
+  auto sut = config::loadDiagnosticsConfig(*vehicle, *catalog, nullptr, &diagnostics);
+  REQUIRE_MESSAGE(sut, (sut ? "" : sut.error().toString()));
+  CHECK(sut->dm3 == config::ClearPolicy::Refuse);
+  CHECK(sut->dm11 == config::ClearPolicy::Refuse);
+  CHECK(diagnostics.empty());
+}
+
 TEST_CASE("an fsmState DTC is refused when the vehicle has no FSM") {
   DiagnosticsFixture fixture;
   fixture.vehicle.fsmFile.clear();

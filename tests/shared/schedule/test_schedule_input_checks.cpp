@@ -3,7 +3,6 @@
 // schedule whose cyclic frames would take more than config::MAX_CYCLIC_BUS_LOAD of a bus.
 
 #include <doctest/doctest.h>
-#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <filesystem>
@@ -13,6 +12,7 @@
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/config/transmit_limits.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
+#include "vehicle_fixture.hpp"
 
 using namespace openvcu;
 
@@ -25,9 +25,7 @@ struct Fixture : openvcu::testing::VehicleTable {
   std::filesystem::path folder =
       std::filesystem::temp_directory_path() / ("openvcu-txinput-" + std::to_string(::getpid()));
 
-  Fixture() : VehicleTable(HHEA) {
-    std::filesystem::create_directories(folder);
-  }
+  Fixture() : VehicleTable(HHEA) { std::filesystem::create_directories(folder); }
   ~Fixture() {
     std::error_code ignored;
     std::filesystem::remove_all(folder, ignored);
@@ -58,23 +56,47 @@ TEST_CASE("#19 a schedule entry given twice is refused with both places, not the
   CHECK(sut.ends_with("schedule.json:4:5: /messages: key \"PDU_Rx_1\" given twice (first at 3:5)"));
 }
 
-TEST_CASE("#19 a fractional or too short cycle in the schedule file is refused, 0 means not cyclic") {
+TEST_CASE("#19 a fractional or too short cycle in the schedule file is refused") {
   Fixture f;
   CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 0.5}}})")
             .ends_with("/messages/PDU_Rx_1/cycleMs: the cycle must be a whole number of ms from 1 to 3600000, "
-                       "not 0.5 (0: not cyclic)"));
+                       "not 0.5"));
   CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 20.5}}})").find("not 20.5") != std::string::npos);
   CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": 3600001}}})").find("/cycleMs") != std::string::npos);
   CHECK(f.error(R"({"messages": {"PDU_Rx_1": {"cycleMs": -1}}})").find("/cycleMs") != std::string::npos);
 
-  const auto whole = f.load(R"({"messages": {"PDU_Rx_1": {"cycleMs": 20}, "HC1_Demands": {"cycleMs": 0}}})");
+  const auto whole = f.load(R"({"messages": {"PDU_Rx_1": {"cycleMs": 20}}})");
   REQUIRE_MESSAGE(whole, whole.error().toString());
   const auto pdu = schedule::findScheduled(*whole, f.vehicle, "PDU_Rx_1");
-  const auto hc1 = schedule::findScheduled(*whole, f.vehicle, "HC1_Demands");
   REQUIRE(pdu);
-  REQUIRE(hc1);
   CHECK(whole->messages[*pdu].cycleNs == 20 * NS_PER_MS);
-  CHECK(whole->messages[*hc1].cycleNs == 0);
+}
+
+TEST_CASE("#39 cycleMs 0 in the schedule file is refused with the allowed range, not taken as 'never cyclic'") {
+  Fixture f;
+  const std::string sut = f.error(R"({"messages": {"HC1_Demands": {"cycleMs": 0}}})");
+  CHECK_MESSAGE(sut.ends_with("schedule.json: /messages/HC1_Demands/cycleMs: the cycle must be a whole number of ms "
+                              "from 1 to 3600000, not 0; leave \"cycleMs\" out for the DBC's GenMsgCycleTime "
+                              "(a message without one is not cyclic)"),
+                sut);
+}
+
+TEST_CASE("#39 a schedule naming another node's message is refused: the VCU would send as that node") {
+  Fixture f;
+  SUBCASE("under /messages") {
+    const std::string sut = f.error(R"({"messages": {"HVESSS1_PGN61590": {}}})");
+    CHECK_MESSAGE(sut.ends_with("schedule.json: /messages/HVESSS1_PGN61590: message 'HVESSS1_PGN61590' is sent by "
+                                "VIC (its DBC transmitter), not by Vehicle_Control_Unit: scheduling it would make "
+                                "the VCU impersonate VIC; if Vehicle_Control_Unit really sends it (a gateway), name "
+                                "it among the message's transmitters in the DBC (BO_TX_BU_ 2498795251 : "
+                                "VIC,Vehicle_Control_Unit;)"),
+                  sut);
+  }
+  SUBCASE("in the include list") {
+    const std::string sut = f.error(R"({"include": ["PDU_Rx_1", "HVESSS1_PGN61590"]})");
+    CHECK_MESSAGE(sut.find("schedule.json: /include/1: message 'HVESSS1_PGN61590' is sent by VIC") != std::string::npos,
+                  sut);
+  }
 }
 
 TEST_CASE("#19 runtime cycle changes and added messages take whole milliseconds only") {

@@ -202,8 +202,57 @@ std::string hheaCopyWithReceive(const std::string& name, const std::string& rece
   return vehicle;
 }
 
+/// A copy of config/hhea under `name` whose `file` has the first `from` replaced by `to`;
+/// returns the copy's vehicle.json.
+std::string hheaCopyEdited(const std::string& name, const std::string& file, const std::string& from,
+                           const std::string& to) {
+  const std::string vehicle = hheaCopy(name);
+  std::string text = readFile(fs::path(vehicle).parent_path() / file);
+  const auto at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  text.replace(at, from.size(), to);
+  writeScratchFile(name + "/" + file, text);
+  return vehicle;
+}
+
+TEST_CASE("vcu check refuses cycleMs 0, another node's message and an unknown wake signal, at their paths (#39)") {
+  SUBCASE("cycleMs 0 in the schedule") {
+    const std::string vehicle =
+        hheaCopyEdited("check_cycle0", "schedule.json", "\"PDU_Rx_1\": {", "\"PDU_Rx_1\": {\"cycleMs\": 0, ");
+    const RunResult result = runVcu({"check", "--config", vehicle});
+    CHECK(result.exitCode == EXIT_INPUT_ERROR);
+    CHECK_MESSAGE(contains(result.err,
+                           "check_cycle0/schedule.json: /messages/PDU_Rx_1/cycleMs: error: the cycle "
+                           "must be a whole number of ms from 1 to 3600000, not 0"),
+                  result.err);
+    CHECK(contains(result.out, "schedule.json: 1 error"));
+  }
+  SUBCASE("the schedule sends the VIC's battery status") {
+    const std::string vehicle = hheaCopyEdited("check_impersonate", "schedule.json", "\"messages\": {",
+                                               "\"messages\": {\"HVESSS1_PGN61590\": {}, ");
+    const RunResult result = runVcu({"check", "--config", vehicle});
+    CHECK(result.exitCode == EXIT_INPUT_ERROR);
+    CHECK_MESSAGE(contains(result.err,
+                           "check_impersonate/schedule.json: /messages/HVESSS1_PGN61590: error: message "
+                           "'HVESSS1_PGN61590' is sent by VIC (its DBC transmitter)"),
+                  result.err);
+    CHECK(contains(result.out, "schedule.json: 1 error"));
+  }
+  SUBCASE("a wake signal the catalog does not have") {
+    const std::string vehicle =
+        hheaCopyEdited("check_wake", "simulation.json", "internal.gpio.Cl15", "internal.gpio.Cl16");
+    const RunResult result = runVcu({"check", "--config", vehicle});
+    CHECK(result.exitCode == EXIT_INPUT_ERROR);
+    CHECK_MESSAGE(contains(result.err,
+                           "check_wake/simulation.json: /wakeSignal: error: unknown signal "
+                           "'internal.gpio.Cl16'; did you mean 'internal.gpio.Cl15'?"),
+                  result.err);
+  }
+}
+
 TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file and the JSON path (#19, #20)") {
-  const std::string vehicle = hheaCopy("check_simulation", "simulation.json", R"({"model": "hhea", "battery": {"initialSoc": 150}})");
+  const std::string vehicle =
+      hheaCopy("check_simulation", "simulation.json", R"({"model": "hhea", "battery": {"initialSoc": 150}})");
 
   const RunResult result = runVcu({"check", "--config", vehicle});
 
@@ -213,7 +262,8 @@ TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file
   CHECK(contains(result.out, "10 files, 1 error"));
 }
 
-TEST_CASE("vcu check refuses a receive file naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
+TEST_CASE(
+    "vcu check refuses a receive file naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
   const std::string vehicle =
       hheaCopyWithReceive("check_receive", R"({"messages": {"HVESSS1_PGN6159": {"timeoutMs": 300}}})");
 
@@ -251,8 +301,9 @@ TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two no
   const RunResult result = runVcu({"check", "--config", vehicle});
 
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
-  CHECK_MESSAGE(contains(result.err, "hhea.dbc: error: bus 'vehicle': J1939 source address 0xF3 (243) is used by 2 nodes"),
-                result.err);
+  CHECK_MESSAGE(
+      contains(result.err, "hhea.dbc: error: bus 'vehicle': J1939 source address 0xF3 (243) is used by 2 nodes"),
+      result.err);
   CHECK(contains(result.err, "OBC (NmStationAddress)"));
   CHECK(contains(result.out, "hhea.dbc: 1 error, 1 warning"));
   CHECK(contains(result.out, "vehicle 'hhea': 10 files, 1 error, 2 warnings\n"));
@@ -277,29 +328,35 @@ TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the
   CHECK(contains(result.out, "10 files, 1 error"));
 }
 
-TEST_CASE("vcu check refuses a dashboard naming a signal the catalog lacks, with the file and the JSON path (#19, #20)") {
+TEST_CASE(
+    "vcu check refuses a dashboard naming a signal the catalog lacks, with the file and the JSON path (#19, #20)") {
   const std::string vehicle =
-      hheaCopy("check_dashboard", "dashboard.json", R"({"items": [{"key": "internal.relay.Cl15"}, {"key": "internal.relay.Cl16"}]})");
+      hheaCopy("check_dashboard", "dashboard.json",
+               R"({"items": [{"key": "internal.relay.Cl15"}, {"key": "internal.relay.Cl16"}]})");
 
   const RunResult result = runVcu({"check", "--config", vehicle});
 
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
-  CHECK_MESSAGE(contains(result.err, "check_dashboard/dashboard.json: /items/1/key: error: unknown signal 'internal.relay.Cl16'"),
-                result.err);
+  CHECK_MESSAGE(
+      contains(result.err, "check_dashboard/dashboard.json: /items/1/key: error: unknown signal 'internal.relay.Cl16'"),
+      result.err);
   CHECK(contains(result.out, "dashboard.json: 1 error"));
   CHECK(contains(result.out, "10 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a telemetry.json naming a signal the catalog lacks, and one its loader refuses (#25)") {
-  const std::string unknown = hheaCopy("check_telemetry", "telemetry.json",
-                                       R"({"broker": "mqtt://127.0.0.1", "vehicleId": "v1", "signals": [{"name": "BMS.Nope"}]})");
+  const std::string unknown =
+      hheaCopy("check_telemetry", "telemetry.json",
+               R"({"broker": "mqtt://127.0.0.1", "vehicleId": "v1", "signals": [{"name": "BMS.Nope"}]})");
   const RunResult unknownResult = runVcu({"check", "--config", unknown});
   CHECK(unknownResult.exitCode == EXIT_INPUT_ERROR);
-  CHECK_MESSAGE(contains(unknownResult.err, "check_telemetry/telemetry.json: error: /signals: unknown signal 'BMS.Nope'"),
-                unknownResult.err);
+  CHECK_MESSAGE(
+      contains(unknownResult.err, "check_telemetry/telemetry.json: error: /signals: unknown signal 'BMS.Nope'"),
+      unknownResult.err);
   CHECK(contains(unknownResult.out, "telemetry.json: 1 error"));
 
-  const std::string refused = hheaCopy("check_telemetry_bad", "telemetry.json", R"({"broker": "http://x", "vehicleId": "v1"})");
+  const std::string refused =
+      hheaCopy("check_telemetry_bad", "telemetry.json", R"({"broker": "http://x", "vehicleId": "v1"})");
   const RunResult refusedResult = runVcu({"check", "--config", refused});
   CHECK(refusedResult.exitCode == EXIT_INPUT_ERROR);
   CHECK_MESSAGE(contains(refusedResult.err, "check_telemetry_bad/telemetry.json: /broker: error: "), refusedResult.err);

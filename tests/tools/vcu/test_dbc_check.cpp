@@ -63,6 +63,33 @@ TEST_CASE("check of /dev/zero is refused at once naming the file, not an interna
   CHECK(result.err == "/dev/zero: error: not a regular file (character device)\n");
 }
 
+TEST_CASE("check refuses an empty or VERSION-only DBC: a database without messages is an error (#39)") {
+  const std::string empty = writeScratchFile("empty.dbc", "");
+  const std::string versionOnly = writeScratchFile("version_only.dbc", "VERSION \"1.0\"\n");
+
+  for (const std::string& path : {empty, versionOnly}) {
+    const RunResult result = runVcu({"dbc", "check", path});
+
+    CHECK_MESSAGE(result.exitCode == EXIT_INPUT_ERROR, path);
+    CHECK(result.err == path + ": error: no messages (no BO_ line): a DBC describes at least one message\n");
+    CHECK(result.out == path + ": 0 messages, 0 signals, 0 nodes, 1 error, 0 warnings\n");
+  }
+}
+
+TEST_CASE("check of several files warns about one without messages and passes when the merge has some (#39)") {
+  const std::string nodesOnly = writeScratchFile("nodes_only.dbc", "VERSION \"\"\n\nBU_: Tool\n");
+
+  const RunResult result = runVcu({"dbc", "check", dataPath("vehicle.dbc"), nodesOnly});
+
+  CHECK(result.exitCode == EXIT_OK);
+  CHECK(contains(result.err, nodesOnly + ": warning: no messages (no BO_ line): "));
+  CHECK(contains(result.out, nodesOnly + ": 0 messages, 0 signals, 1 node, 0 errors, 1 warning\n"));
+
+  const RunResult noneAtAll = runVcu({"dbc", "check", nodesOnly, nodesOnly});
+  CHECK(noneAtAll.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(noneAtAll.err, "merged (2 files): no messages (no BO_ line)"));
+}
+
 TEST_CASE("check of files that agree prints a summary of the merged database") {
   const RunResult result = runVcu({"dbc", "check", dataPath("vehicle.dbc"), dataPath("body.dbc")});
 

@@ -23,6 +23,9 @@ std::string summaryLine(std::string_view name, const DatabaseCounts& counts, std
   return line;
 }
 
+/// A database without messages describes no traffic: "VERSION \"\"" alone parses cleanly.
+constexpr std::string_view NO_MESSAGES = "no messages (no BO_ line): a DBC describes at least one message";
+
 }  // namespace
 
 ExitCode runCheck(const CheckOptions& options, Streams streams) {
@@ -41,8 +44,19 @@ ExitCode runCheck(const CheckOptions& options, Streams streams) {
     for (const Error& diagnostic : parsed.diagnostics) {
       if (diagnostic.severity != Severity::Warning || !options.quiet) report(streams.err, diagnostic);
     }
-    streams.out.write(summaryLine(path, countDatabase(parsed.database), parsed.errorCount(), parsed.warningCount()));
-    if (parsed.hasErrors()) {
+    const DatabaseCounts counts = countDatabase(parsed.database);
+    std::size_t errors = parsed.errorCount();
+    std::size_t warnings = parsed.warningCount();
+    if (counts.messages == 0) {
+      // one file of several may hold only nodes or attributes; the merged set must have messages
+      const bool alone = options.files.size() < 2;
+      const Error empty{std::string(NO_MESSAGES), Location{path, 0, 0, {}},
+                        alone ? Severity::Error : Severity::Warning};
+      if (alone || !options.quiet) report(streams.err, empty);
+      ++(alone ? errors : warnings);
+    }
+    streams.out.write(summaryLine(path, counts, errors, warnings));
+    if (errors > 0) {
       failed = true;
       continue;
     }
@@ -62,7 +76,14 @@ ExitCode runCheck(const CheckOptions& options, Streams streams) {
     std::string name = "merged (" + plural(mergedFiles, "file");
     if (mergeConflicts > 0) name += ", " + plural(mergeConflicts, "conflicting file") + " left out";
     name += ')';
-    streams.out.write(summaryLine(name, countDatabase(*combined), mergeConflicts, 0));
+    const DatabaseCounts counts = countDatabase(*combined);
+    std::size_t errors = mergeConflicts;
+    if (counts.messages == 0) {
+      report(streams.err, Error{name + ": " + std::string(NO_MESSAGES)});
+      ++errors;
+      failed = true;
+    }
+    streams.out.write(summaryLine(name, counts, errors, 0));
   }
   return failed ? ExitCode::Failure : ExitCode::Ok;
 }

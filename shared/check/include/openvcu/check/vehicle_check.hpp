@@ -27,9 +27,10 @@
 //     an error from two nodes and a warning from one (priority-only twins; the VCU's own
 //     are can-tx's safety-identity warnings);
 //   - a simulation J1939-76 check on a message no configured bus carries: an error;
+//   - a simulation "wakeSignal" that is not a catalog key: an error at /wakeSignal;
 //   - diagnostics.json: its loader's errors and warnings with the FSM's state names (a DTC's
-//     "fsmState" must name one) and the catalog, and a warning per FSM state whose entry
-//     raises a fault that no DTC maps.
+//     "fsmState" must name one) and the catalog (DM3/DM11 "accept": a warning), and a
+//     warning per FSM state whose entry raises a fault that no DTC maps.
 // Messages the schedule, receive or simulation file names that are not in the DBC are the
 // loaders' errors (with file and JSON path); these checks do not repeat them. A file that
 // does not load is left out of the checks that need it, with one note saying so.

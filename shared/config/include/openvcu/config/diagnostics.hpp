@@ -10,7 +10,7 @@
 //             {"name": "contactor line", "signal": "internal.fault.Contactor",
 //              "activeWhen": {"eq": 1}, "spn": 520196, "fmi": 31, "lamps": ["red"],
 //              "flash": {"red": "fast"}}],
-//    "dm3": "accept", "dm11": "refuse", "dm1PeriodMs": 1000,
+//    "dm3": "refuse", "dm11": "refuse", "dm1PeriodMs": 1000,
 //    "identification": {"software": ["openvcu"], "ecu": {"partNumber": "..."},
 //                       "component": {"make": "..."}},
 //    "countsFile": "dtc_counts.json"}
@@ -18,7 +18,8 @@
 // Checked, each error with the file and JSON path: unknown keys, SPN <= 524287, FMI <= 31,
 // SPN 0 with FMI 0 (means "none"), the same SPN and FMI twice, names given twice, exactly one
 // of "fsmState" / "signal", a state the FSM does not have, a signal key the catalog does not
-// have, identification fields with '*' or over 200 bytes.
+// have, identification fields with '*' or over 200 bytes. Warned: "dm3" or "dm11" "accept"
+// (a clear request carries only a source address, so any node on the bus could clear).
 
 #include <cstdint>
 #include <optional>
