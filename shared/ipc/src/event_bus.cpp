@@ -1,6 +1,7 @@
 #include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/command_socket.hpp"
+#include "openvcu/ipc/host_filter.hpp"
 
 #include "openvcu/ipc/topics.hpp"
 
@@ -21,12 +22,15 @@
 // with -fsanitize=vptr (part of the Asan preset's -fsanitize=undefined); the C API is all we need.
 #include <lcm/lcm.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <climits>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <initializer_list>
 #include <stdexcept>
 #include <vector>
@@ -588,6 +592,51 @@ std::optional<FsmTransition> decodeFsmTransition(const void* data, std::size_t s
 std::optional<FaultEvent> decodeFaultEvent(const void* data, std::size_t size) {
   return decodeOne<openvcu_lcm::fault_event_t>(data, size);
 }
+std::vector<std::uint8_t> encodeFaultEvent(const FaultEvent& fault) {
+  return encodeOne<openvcu_lcm::fault_event_t>(fault);
+}
+
+namespace {
+
+constexpr std::string_view UDPM_SCHEME = "udpm://";
+constexpr std::string_view TCPQ_SCHEME = "tcpq://";
+/// LCM's own self-test channel: lcm-spy and lcm-logger already see one message on it from
+/// every LCM start, so the marker below adds no channel and no type to the event plane.
+constexpr const char* MARKER_CHANNEL = "LCM_SELF_TEST";
+constexpr std::chrono::milliseconds MARKER_TIMEOUT{2000};
+constexpr std::chrono::milliseconds MARKER_RESEND{100};
+/// LCM's port when the URL gives only an address ("udpm://" -> 239.255.76.67:7667).
+constexpr std::uint16_t LCM_DEFAULT_PORT = 7667;
+
+/// The port a udpm URL binds, parsed as LCM 1.3.1 parses it: "udpm://ADDR:PORT?opts";
+/// no network part -> 7667; an address without a port -> 0 (LCM binds a random port).
+/// "udpm://239.255.76.67:7667?ttl=0" -> 7667.
+std::uint16_t udpmPort(std::string_view url) noexcept {
+  std::string_view network = url.substr(UDPM_SCHEME.size());
+  network = network.substr(0, network.find('?'));
+  if (network.empty()) return LCM_DEFAULT_PORT;
+  const std::size_t colon = network.find(':');
+  if (colon == std::string_view::npos) return 0;
+  const std::string port(network.substr(colon + 1));
+  const long value = std::strtol(port.c_str(), nullptr, 0);
+  return value > 0 && value <= UINT16_MAX ? static_cast<std::uint16_t>(value) : 0;
+}
+
+/// The marker's text and whether it came back.
+struct Marker {
+  std::string text;
+  bool seen{false};
+};
+
+void onMarker(const lcm_recv_buf_t* buffer, const char* /*channel*/, void* userData) {
+  auto* marker = static_cast<Marker*>(userData);
+  if (buffer->data_size == marker->text.size() &&
+      std::memcmp(buffer->data, marker->text.data(), buffer->data_size) == 0) {
+    marker->seen = true;
+  }
+}
+
+}  // namespace
 
 struct EventBusImpl {
   struct Entry {
@@ -616,6 +665,31 @@ struct EventBusImpl {
   std::atomic<std::uint64_t> callbackErrors{0};
 
   const std::string& channel(EventKind kind) const { return channels.at(static_cast<std::size_t>(kind)); }
+
+  /// After the filter is on: publishes a marker and dispatches until it comes back, with
+  /// nothing subscribed but the marker. A datagram from another host that was queued on the
+  /// socket before the filter precedes the marker, so LCM drops it here (no subscriber)
+  /// instead of handing it to the subscriptions made after open().
+  Status dropWhatCameBeforeTheFilter() {
+    Marker marker;
+    marker.text = "openvcu event bus " + std::to_string(::getpid()) + " " + std::to_string(clock::monotonicNs());
+    lcm_subscription_t* subscription = lcm_subscribe(lcm, MARKER_CHANNEL, &onMarker, &marker);
+    if (subscription == nullptr) return Error{"cannot subscribe to " + std::string(MARKER_CHANNEL)};
+    const auto start = std::chrono::steady_clock::now();
+    auto nextSend = start;
+    for (auto now = start; !marker.seen && now - start < MARKER_TIMEOUT; now = std::chrono::steady_clock::now()) {
+      if (now >= nextSend) {
+        lcm_publish(lcm, MARKER_CHANNEL, marker.text.data(), static_cast<unsigned int>(marker.text.size()));
+        nextSend = now + MARKER_RESEND;
+      }
+      lcm_handle_timeout(lcm, static_cast<int>(MARKER_RESEND.count() / 5));
+    }
+    lcm_unsubscribe(lcm, subscription);
+    if (!marker.seen) {
+      return Error{"its own marker did not come back within " + std::to_string(MARKER_TIMEOUT.count()) + " ms"};
+    }
+    return {};
+  }
 
   template <typename LcmType, typename Plain>
   bool publish(EventKind kind, const Plain& message) noexcept {
@@ -706,11 +780,33 @@ Result<EventBus> EventBus::open(std::string_view url, std::string_view instance)
       impl->url.rfind("udpm://", 0) == 0
           ? " (multicast needs a route, e.g. `ip route add 224.0.0.0/4 dev lo`; see docs/design/ipc.md)"
           : "";
+  if (impl->url.rfind(TCPQ_SCHEME, 0) == 0) {
+    return Error{"refusing LCM URL " + impl->url +
+                 ": a tcpq hub (lcm.lcm.TCPService) relays what any client that reaches its port sends, "
+                 "so events could come from another host; use udpm:// (default " +
+                 std::string(DEFAULT_EVENT_URL) + ")"};
+  }
+  const bool udpm = impl->url.rfind(UDPM_SCHEME, 0) == 0;
+  const std::string refusal = "refusing events from " + impl->url + ": cannot restrict them to this host: ";
+  std::vector<std::uint64_t> socketsBefore;
+  if (udpm) {
+    auto known = openSocketInodes();
+    if (!known) return Error{refusal + known.error().message};
+    socketsBefore = std::move(*known);
+  }
   impl->lcm = lcm_create(impl->url.c_str());
   if (impl->lcm == nullptr) return Error{"cannot open LCM at " + impl->url + routeHint};
   // LCM sets up udpm's receive side lazily; ask for the fd now so a broken transport
   // (no multicast route: LCM's self test fails) is reported here, not on first wait.
   if (lcm_get_fileno(impl->lcm) < 0) return Error{"cannot receive on LCM at " + impl->url + routeHint};
+  if (udpm) {
+    // LCM does not hand out its receive socket: it is the new UDP socket bound to the
+    // URL's port (host_filter.hpp). Without the filter nothing is received at all.
+    auto restricted = restrictNewUdpSockets(socketsBefore, udpmPort(impl->url));
+    if (!restricted) return Error{refusal + restricted.error().message};
+    Status drained = impl->dropWhatCameBeforeTheFilter();
+    if (!drained) return Error{refusal + drained.error().message};
+  }
   return EventBus(std::move(impl));
 }
 

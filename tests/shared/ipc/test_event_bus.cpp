@@ -2,8 +2,13 @@
 // in-process memq:// transport, the names, and the errors before a Runtime exists.
 
 #include <doctest/doctest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <array>
 
 #include <chrono>
 #include <optional>
@@ -12,6 +17,7 @@
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
+#include "openvcu/ipc/host_filter.hpp"
 #include "openvcu/ipc/topics.hpp"
 #include "openvcu/ipc/waiter.hpp"
 
@@ -324,6 +330,90 @@ TEST_CASE("opening the event bus fails with a clear error for a bad URL or insta
   auto badInstance = ipc::EventBus::open(MEMQ_URL, "no spaces");
   REQUIRE_FALSE(badInstance.ok());
   CHECK(badInstance.error().message.find("invalid instance name") != std::string::npos);
+}
+
+TEST_CASE("a tcpq event URL is refused because its hub relays events from other hosts") {
+  auto sut = ipc::EventBus::open("tcpq://127.0.0.1:7700", "test");
+  REQUIRE_FALSE(sut.ok());
+  CHECK(sut.error().message.find("refusing LCM URL tcpq://127.0.0.1:7700") != std::string::npos);
+  CHECK(sut.error().message.find("another host") != std::string::npos);
+}
+
+TEST_CASE("a fault encoded for a datagram decodes to the same fault") {
+  const ipc::FaultEvent fault{SOME_TIME_NS, "BMS_Isolation", "vcu-can-rx", ipc::FaultSeverity::Critical, true, "low"};
+  const auto decoded = ipc::decodeFaultEvent(ipc::encodeFaultEvent(fault).data(), ipc::encodeFaultEvent(fault).size());
+  REQUIRE(decoded);
+  CHECK(*decoded == fault);
+}
+
+namespace {
+
+/// A UDP socket on 127.0.0.1 (an ephemeral port), closed at the end of the scope;
+/// `reuseAddress`: SO_REUSEADDR on, as LCM sets up its udpm receive socket.
+struct LoopbackUdp {
+  int fd{::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0)};
+  sockaddr_in address{};
+  explicit LoopbackUdp(bool reuseAddress = true) {
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    REQUIRE(fd >= 0);
+    const int on = reuseAddress ? 1 : 0;
+    REQUIRE(::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on) == 0);
+    REQUIRE(::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0);
+    socklen_t length = sizeof address;
+    REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) == 0);
+  }
+  LoopbackUdp(const LoopbackUdp&) = delete;
+  LoopbackUdp& operator=(const LoopbackUdp&) = delete;
+  ~LoopbackUdp() { ::close(fd); }
+  [[nodiscard]] std::uint16_t port() const { return ntohs(address.sin_port); }
+};
+
+}  // namespace
+
+TEST_CASE("a UDP socket restricted to this host still receives a datagram sent to it over loopback") {
+  LoopbackUdp sut;
+  LoopbackUdp sender;
+  REQUIRE(ipc::acceptOnlyFromThisHost(sut.fd).ok());
+  CHECK(ipc::acceptsOnlyFromThisHost(sut.fd));
+  CHECK_FALSE(ipc::acceptsOnlyFromThisHost(sender.fd));
+
+  const std::array<char, 5> sent{'h', 'e', 'l', 'l', 'o'};
+  REQUIRE(::sendto(sender.fd, sent.data(), sent.size(), 0, reinterpret_cast<const sockaddr*>(&sut.address),
+                   sizeof sut.address) == static_cast<ssize_t>(sent.size()));
+  pollfd readable{sut.fd, POLLIN, 0};
+  REQUIRE(::poll(&readable, 1, 1000) == 1);
+  std::array<char, 16> received{};
+  CHECK(::recv(sut.fd, received.data(), received.size(), 0) == static_cast<ssize_t>(sent.size()));
+}
+
+TEST_CASE("the host filter goes on a new UDP socket set up as LCM's receive socket and on no other") {
+  LoopbackUdp older;
+  const auto known = ipc::openSocketInodes();
+  REQUIRE(known.ok());
+  LoopbackUdp sut;
+  LoopbackUdp withoutReuse(false);  // as LCM's send socket or a resolver's query socket
+  LoopbackUdp otherPort;
+
+  const auto restricted = ipc::restrictNewUdpSockets(*known, sut.port());
+  REQUIRE_MESSAGE(restricted.ok(), (restricted.ok() ? "" : restricted.error().toString()));
+  CHECK(*restricted == 1);
+  CHECK(ipc::acceptsOnlyFromThisHost(sut.fd));
+  CHECK_FALSE(ipc::acceptsOnlyFromThisHost(older.fd));
+  CHECK_FALSE(ipc::acceptsOnlyFromThisHost(withoutReuse.fd));
+  CHECK_FALSE(ipc::acceptsOnlyFromThisHost(otherPort.fd));
+}
+
+TEST_CASE("finding no new UDP socket bound to the port is an error that names the port") {
+  LoopbackUdp older;
+  const auto known = ipc::openSocketInodes();
+  REQUIRE(known.ok());
+
+  const auto sut = ipc::restrictNewUdpSockets(*known, older.port());
+  REQUIRE_FALSE(sut.ok());
+  CHECK(sut.error().message.find("no new UDP socket bound to port " + std::to_string(older.port())) !=
+        std::string::npos);
+  CHECK_FALSE(ipc::acceptsOnlyFromThisHost(older.fd));
 }
 
 TEST_CASE("frame streams and waiters refuse to open before the runtime is initialised") {

@@ -10,7 +10,13 @@
 //   // in the main loop: poll/epoll/Waiter on events.fileno(), then events.handle(0ms)
 //
 // URLs: "udpm://239.255.76.67:7667?ttl=0" (default, this host only), "memq://" (in-process,
-// for unit tests), "file://LOG?speed=0" (replay), "tcpq://127.0.0.1:7700" (hub).
+// for unit tests), "file://LOG?speed=0" (replay). "tcpq://" (a hub) is refused: its hub
+// relays events from any host that reaches it.
+//
+// Events come from this host only: on udpm, open() attaches a kernel socket filter
+// (host_filter.hpp) to LCM's receive socket, so a datagram from another host (multicast
+// on the LAN, unicast to the host's address) never reaches a subscription; open() fails
+// rather than receive without it. lcm-spy and lcm-logger (plain LCM) still see everything.
 
 #include <chrono>
 #include <cstddef>
@@ -20,6 +26,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "openvcu/core/result.hpp"
 #include "openvcu/ipc/events.hpp"
@@ -53,12 +60,18 @@ enum class HandleResult : std::uint8_t {
 /// empty when it does not fit the layout or decode (event_log.hpp reads logs with these).
 [[nodiscard]] std::optional<FsmTransition> decodeFsmTransition(const void* data, std::size_t size);
 [[nodiscard]] std::optional<FaultEvent> decodeFaultEvent(const void* data, std::size_t size);
+/// A FaultEvent -> an encoded fault_event_t (with its fingerprint); empty when it cannot be
+/// encoded. For tools that write datagrams or logs themselves.
+[[nodiscard]] std::vector<std::uint8_t> encodeFaultEvent(const FaultEvent& fault);
 
 class EventBus {
  public:
   /// Connects to `url` (empty: DEFAULT_EVENT_URL). `instance` names the channels
   /// (isValidName). For udpm the host needs a multicast route (e.g. on lo); without one
-  /// LCM's self test fails and the error says so.
+  /// LCM's self test fails and the error says so. For udpm the receive socket accepts
+  /// datagrams from this host only (see above); an Error when that filter cannot be put on
+  /// (no /proc/self/fd, the socket not found, setsockopt refused). Errors for tcpq URLs.
+  /// Takes one local round trip more than LCM's own start (a marker on LCM_SELF_TEST).
   static Result<EventBus> open(std::string_view url, std::string_view instance);
 
   EventBus(EventBus&& other) noexcept;
