@@ -348,27 +348,29 @@ echo pull-down > "$SIMSYS/sim_gpio27/pull"
 peer_results "$OUT/j1939-diag.txt" j1939_dm1_bam j1939_rts_cts_to_kernel j1939_bam_to_kernel
 
 # ---------------------------------------------------------------- 5e. address claim against the kernel's can-j1939
-# Last on this stack: the VCU leaves 0x21. The VCU's NAME from the merged configuration
-# (bus "vehicle", "j1939" object; computed in python: bash arithmetic is signed 64-bit).
+# Last on this stack: the VCU loses 0x21. The VCU's NAME from the merged configuration
+# (bus "vehicle", "j1939" object; computed in python: bash arithmetic is signed 64-bit);
+# HHEA's is a fixed address (J1939-76 pairs), so losing 0x21 is Cannot Claim and silence.
 t "J1939: address claim"
-read -r VCU_NAME LOW HIGH <<< "$($PY -c "import json,sys
+VCU_NAME=$($PY -c "import json,sys
 c=json.load(open(sys.argv[1])); j=[b for b in c['buses'] if b['name']=='vehicle'][0]['j1939']; n=j['name']
 v=(n['arbitraryAddressCapable'] and 1)<<63|n['industryGroup']<<60|n['vehicleSystemInstance']<<56|n['vehicleSystem']<<49|n['function']<<40|n['functionInstance']<<35|n['ecuInstance']<<32|n['manufacturerCode']<<21|n['identityNumber']
-r=j.get('addressRange',[128,247]); print(hex(v), r[0], r[-1])" "$CFG" 2>&1)"
-$PY "$PEER" contest --vcu-name "$VCU_NAME" --range "$LOW" "$HIGH" > "$OUT/j1939-contest.txt" 2>&1
-new=$(grep -o 'NEWADDR=[0-9A-F]*' "$OUT/j1939-contest.txt" | cut -d= -f2)
-# the VCU's own view (vcu j1939: can-tx claimed at the new address, a node at 0x21)
-view="not looked at: no new address"
-if [[ -n $new ]]; then
-  "$VCU" j1939 --json --config "$CFG" > "$OUT/j1939-after-contest.json" 2>&1
-  view=$($PY -c "import json,sys
-d=json.load(open(sys.argv[1])); b=[x for x in d['buses'] if x['bus']=='vehicle']; new=int(sys.argv[2],16)
-ok=b and all(x['claimState']=='claimed' and x['address']==new for x in b) and any(0x21 in [n['address'] for n in x['nodes']] for x in b)
-print(('OK ' if ok else 'BAD ')+' '.join('%s %s at %d, nodes %s' % (x.get('service'), x['claimState'], x['address'], [n['address'] for n in x['nodes']]) for x in b))" "$OUT/j1939-after-contest.json" "$new" 2>&1)
+print(hex(v))" "$CFG" 2>&1)
+$PY "$PEER" contest --vcu-name "$VCU_NAME" > "$OUT/j1939-contest.txt" 2>&1
+# the fault (can-tx's log line of the event it published) and the VCU's own view
+wait_for 2 grep -q "fault raised: j1939_address_lost.vehicle" "$OUT/can-tx.log"
+fault=$(grep -m1 "fault raised: j1939_address_lost.vehicle" "$OUT/can-tx.log")
+"$VCU" j1939 --json --config "$CFG" > "$OUT/j1939-after-contest.json" 2>&1
+view=$($PY -c "import json,sys
+d=json.load(open(sys.argv[1])); b=[x for x in d['buses'] if x['bus']=='vehicle']
+ok=b and all(x['claimState']=='cannot claim' for x in b) and any(0x21 in [n['address'] for n in x['nodes']] for x in b)
+print(('OK ' if ok else 'BAD ')+' '.join('%s %s at %d, nodes %s' % (x.get('service'), x['claimState'], x['address'], [n['address'] for n in x['nodes']]) for x in b))" "$OUT/j1939-after-contest.json" 2>&1)
+name_hex=$($PY -c "import sys; print('0x%016X' % (int(sys.argv[1], 16) - 1))" "$VCU_NAME")
+if [[ $view != OK* || $fault != *"address 0x21 (33)"* || $fault != *"$name_hex"* ]]; then
+  sed -i "s/^j1939_address_lost PASS /j1939_address_lost FAIL /" "$OUT/j1939-contest.txt"
 fi
-if [[ $view != OK* ]]; then sed -i "s/^j1939_address_yield PASS /j1939_address_yield FAIL /" "$OUT/j1939-contest.txt"; fi
-sed -i "s|^\(j1939_address_yield [A-Z]* .*\)$|\1; vcu j1939: ${view//|/ }|" "$OUT/j1939-contest.txt"
-peer_results "$OUT/j1939-contest.txt" j1939_address_yield j1939_address_defend
+sed -i "s|^\(j1939_address_lost [A-Z]* .*\)$|\1; vcu j1939: ${view//|/ }; can-tx: ${fault:-no j1939_address_lost fault naming $name_hex}|" "$OUT/j1939-contest.txt"
+peer_results "$OUT/j1939-contest.txt" j1939_address_defend j1939_address_lost
 
 # ---------------------------------------------------------------- 4c. link down / up
 ip link set vcan0 down

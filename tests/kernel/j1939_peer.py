@@ -12,12 +12,14 @@ the VM test's independent view of the VCU as a J1939 network citizen (issue 24).
     j1939_bam_to_kernel: the same for Software Identification 65242 requested from all
       (0xFF): by BAM; the field count, the configured fields and "openvcu VERSION" (the field
       the service appends; VERSION as given, else any text without '*')
-  j1939_peer.py contest --vcu-name M [--address A] [--range LO HI]
-    j1939_address_yield: a kernel socket with NAME M-1 (higher priority) claims A (default
+  j1939_peer.py contest --vcu-name M [--address A]
+    j1939_address_defend: a kernel socket with NAME M+1 (lower priority) claims A (default
       0x21; the kernel sends the Address Claimed when the socket sends PGN 0xEE00 with its
-      NAME): the VCU (NAME M) must claim another address in LO..HI and send from it
-    j1939_address_defend: a kernel socket with NAME M+1 (lower priority) claims that new
-      address: the VCU must claim it again and no other address
+      NAME): the VCU (NAME M, a fixed address) must claim A again and no other address
+    j1939_address_lost: a kernel socket with NAME M-1 (higher priority) claims A: the VCU
+      must send Cannot Claim (its NAME from 0xFE) within 1 s, claim no other address, and
+      then send nothing from A and no J1939-76 SHM (PF 0x0E) from any address for 1 s; the
+      same claim three times more: no claim from the VCU at all (it does not wander)
 
 Prints one line "CHECK PASS|FAIL detail" per check, exit 0 when all passed.
 """
@@ -140,36 +142,44 @@ def cmd_claim(args):
             continue
         if data == vcu_name:
             vcu_claims.append((time.time() - sent, sa))
-            if args.expect == "yield" and args.low <= sa <= args.high:
-                break
     text = ", ".join("%02X at +%.2f s" % (sa, t) for t, sa in vcu_claims) or "none"
-    if args.expect == "yield":
-        moved = [sa for _, sa in vcu_claims if args.low <= sa <= args.high]
-        return bool(moved), ("kernel NAME %016X claimed %02X: the VCU (NAME %016X) claimed %s%s"
-               % (args.name, args.address, args.vcu_name, text, "; NEWADDR=%02X" % moved[0] if moved else ""))
+    if args.expect == "lost":
+        cannot = [t for t, sa in vcu_claims if sa == 0xFE]
+        others = [sa for _, sa in vcu_claims if sa != 0xFE]
+        return bool(cannot) and cannot[0] < 1.0 and not others, (
+               "kernel NAME %016X claimed %02X (higher priority): the VCU (NAME %016X) claimed %s (FE: Cannot Claim)"
+               % (args.name, args.address, args.vcu_name, text)), peer
     others = [sa for _, sa in vcu_claims if sa != args.address]
     return args.address in [sa for _, sa in vcu_claims] and not others, (
            "kernel NAME %016X claimed %02X (lower priority): the VCU (NAME %016X) claimed %s"
            % (args.name, args.address, args.vcu_name, text))
 
 
-def frames_from(address, seconds):
-    """frames other than Address Claimed from ADDRESS on the wire (a raw CAN socket) in SECONDS"""
+def frames_after_loss(address, seconds):
+    """(frames other than Address Claimed from ADDRESS, SHMs from any other address) on the
+    wire (a raw CAN socket, extended frames) in SECONDS, as {CAN ID: count} each"""
     raw = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
     raw.setsockopt(socket.SOL_CAN_RAW, socket.CAN_RAW_FILTER,
-                   struct.pack("=II", address | socket.CAN_EFF_FLAG, 0xFF | socket.CAN_EFF_FLAG))
+                   struct.pack("=II", socket.CAN_EFF_FLAG, socket.CAN_EFF_FLAG))
     raw.bind((IF,))
     raw.settimeout(0.2)
-    end, ids = time.time() + seconds, {}
+    end, from_address, shms = time.time() + seconds, {}, {}
     while time.time() < end:
         try:
             frame = raw.recv(72)
         except socket.timeout:
             continue
         can_id = struct.unpack_from("=I", frame)[0] & socket.CAN_EFF_MASK
-        if (can_id >> 8) & 0xFF00 != PGN_CLAIM:
-            ids[can_id] = ids.get(can_id, 0) + 1
-    return ids
+        sa, pf = can_id & 0xFF, (can_id >> 16) & 0xFF
+        if sa == address and pf != PGN_CLAIM >> 8:
+            from_address[can_id] = from_address.get(can_id, 0) + 1
+        if pf == 0x0E and sa != address:  # SAE J1939-76 SHM, PGN 0x0E00
+            shms[can_id] = shms.get(can_id, 0) + 1
+    return from_address, shms
+
+
+def ids_text(ids):
+    return "%d (%s)" % (sum(ids.values()), " ".join("%08X" % i for i in sorted(ids)[:6]) + (" ..." if len(ids) > 6 else ""))
 
 
 def diag(args):
@@ -182,20 +192,30 @@ def diag(args):
 
 
 def contest(args):
-    low, high = args.range
-    ok, text = cmd_claim(argparse.Namespace(name=args.vcu_name - 1, address=args.address, vcu_name=args.vcu_name,
-                                            expect="yield", low=low, high=high, timeout=2))
-    new = int(text.split("NEWADDR=")[1], 16) if ok else None
-    if new is not None:
-        ids = frames_from(new, 1.0)
-        ok = bool(ids)
-        text += "; %d frames from SA %02X in 1 s (%s)" % (
-            sum(ids.values()), new, " ".join("%08X" % i for i in sorted(ids)[:6]) + (" ..." if len(ids) > 6 else ""))
-    report("j1939_address_yield", ok, text)
-    if new is None:
-        return report("j1939_address_defend", False, "not run: the VCU did not yield")
-    return ok & report("j1939_address_defend", *cmd_claim(argparse.Namespace(
-        name=args.vcu_name + 1, address=new, vcu_name=args.vcu_name, expect="defend", low=low, high=high, timeout=2)))
+    ok = report("j1939_address_defend", *cmd_claim(argparse.Namespace(
+        name=args.vcu_name + 1, address=args.address, vcu_name=args.vcu_name, expect="defend", timeout=2)))
+    lost, text, peer = cmd_claim(argparse.Namespace(
+        name=args.vcu_name - 1, address=args.address, vcu_name=args.vcu_name, expect="lost", timeout=1.5))
+    from_address, shms = frames_after_loss(args.address, 1.0)
+    lost = lost and not from_address and not shms
+    text += "; then in 1 s: frames from %02X %s, SHMs from other addresses %s" % (
+        args.address, ids_text(from_address), ids_text(shms))
+    # the same claim three times more: the VCU, without an address, claims nothing
+    watch = j1939_socket(pgn=PGN_CLAIM, promisc=True)
+    watch.settimeout(0.2)
+    for _ in range(3):
+        peer.sendto((args.vcu_name - 1).to_bytes(8, "little"), (IF, socket.J1939_NO_NAME, PGN_CLAIM, 0xFF))
+    end, again = time.time() + 1.0, []
+    while time.time() < end:
+        try:
+            data, (_, _, _, sa) = watch.recvfrom(8)
+        except socket.timeout:
+            continue
+        if data == args.vcu_name.to_bytes(8, "little"):
+            again.append(sa)
+    lost = lost and not again
+    text += "; after 3 more claims the VCU claimed %s" % (" ".join("%02X" % a for a in again) or "nothing")
+    return ok & report("j1939_address_lost", lost, text)
 
 
 def number(text):
@@ -214,7 +234,6 @@ def main():
     c = sub.add_parser("contest")
     c.add_argument("--vcu-name", type=number, required=True)
     c.add_argument("--address", type=number, default=0x21)
-    c.add_argument("--range", type=number, nargs=2, default=(128, 247), metavar=("LO", "HI"))
     args = p.parse_args()
     ok = diag(args) if args.command == "diag" else contest(args)
     sys.exit(0 if ok else 1)

@@ -1,7 +1,5 @@
 #include "can_tx_app.hpp"
 
-#include "openvcu/service/app_impl.hpp"
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,16 +9,17 @@
 #include <filesystem>
 #include <optional>
 
+#include "network.hpp"
 #include "openvcu/config/diagnostics.hpp"
 #include "openvcu/core/clock.hpp"
-#include "openvcu/fsm/machine.hpp"
 #include "openvcu/core/text.hpp"
+#include "openvcu/fsm/machine.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/request_stream.hpp"
 #include "openvcu/j1939/request.hpp"
+#include "openvcu/service/app_impl.hpp"
 #include "openvcu/service/bus_ports.hpp"
 #include "openvcu/service/timer.hpp"
-#include "network.hpp"
 #include "schedule_commands.hpp"
 #include "scheduler.hpp"
 #include "tx_thread.hpp"
@@ -152,9 +151,14 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       static_cast<service::BusPorts&>(buses.emplace_back()) = std::move(*portsResult);
     }
     if (Status opened = openNetwork(); !opened) return opened.error();
+    std::vector<std::uint32_t> sdms;
+    for (const ScheduledMessage& entry : schedule.messages) {
+      if (entry.safetyDeltaNs && entry.extended) sdms.push_back(entry.canId);
+    }
+    network->holdSafetyMessages(sdms);
     startNs = clock::monotonicNs();
-    auto schedulerResult = Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *network, *this,
-                                             startNs);
+    auto schedulerResult =
+        Scheduler::create(vehicle, schedule, runtime.catalog(), runtime.table(), *network, *this, startNs);
     if (!schedulerResult) return schedulerResult.error();
     scheduler = std::move(*schedulerResult);
     commands.emplace(vehicle, runtime.catalog(), schedule, overlay, *scheduler, *this);
@@ -178,22 +182,26 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
     auto timerResult = service::PeriodicTimer::create(WATCH_PERIOD);
     if (!timerResult) return timerResult.error();
     watchTimer.emplace(std::move(*timerResult));
-    if (Status added = runtime.loop().addTimer(*watchTimer, [this](const service::TimerTick&) {
-          watchWriters();
-          watchNetwork();
-        });
+    if (Status added = runtime.loop().addTimer(*watchTimer,
+                                               [this](const service::TimerTick&) {
+                                                 watchWriters();
+                                                 watchNetwork();
+                                               });
         !added)
       return added.error();
 
     std::vector<can::Link*> links;
     for (BusIo& io : buses) links.push_back(io.link.get());
-    thread.emplace(*scheduler, std::move(links), [this](std::size_t bus, const can::BusEvent& event) {
-      // transmit thread: logging is thread-safe
-      if (event.kind == can::BusEventKind::LinkUp || event.kind == can::BusEventKind::LinkDown ||
-          event.kind == can::BusEventKind::BusOff || event.kind == can::BusEventKind::Restarted) {
-        runtime.log().warning("bus " + vehicle.buses[bus].name + ": " + std::string(can::busEventName(event.kind)));
-      }
-    }, network.get());
+    thread.emplace(
+        *scheduler, std::move(links),
+        [this](std::size_t bus, const can::BusEvent& event) {
+          // transmit thread: logging is thread-safe
+          if (event.kind == can::BusEventKind::LinkUp || event.kind == can::BusEventKind::LinkDown ||
+              event.kind == can::BusEventKind::BusOff || event.kind == can::BusEventKind::Restarted) {
+            runtime.log().warning("bus " + vehicle.buses[bus].name + ": " + std::string(can::busEventName(event.kind)));
+          }
+        },
+        network.get());
     registerCounters();
     if (const std::string warning = thread->start(schedule.realtimePriority, schedule.sdmSpinNs); !warning.empty()) {
       runtime.log().warning(warning);
@@ -237,6 +245,10 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   void watchNetwork() {
     if (!network->active()) return;
     for (const std::string& line : network->takeLog()) runtime.log().info(line);
+    for (const AddressLoss& loss : network->takeAddressLosses()) {
+      fault("j1939_address_lost." + loss.bus,
+            loss.critical() ? ipc::FaultSeverity::Critical : ipc::FaultSeverity::Warning, true, loss.describe());
+    }
     if (network->takeChanged()) publishNetwork();
     if (auto counts = network->takeCountsToSave()) {
       if (Status saved = config::saveDtcCounts(diagnostics.countsFile, *counts); !saved) {
@@ -368,14 +380,16 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   /// with the next tick.
   void restoreAfterDamage(std::int64_t now) {
     for (const auto& [key, value] : overlay.overrides) {
-      if (const auto index = runtime.catalog().indexOf(key)) runtime.table().setOverride(*index, value, now, CAN_TX_WRITER);
+      if (const auto index = runtime.catalog().indexOf(key))
+        runtime.table().setOverride(*index, value, now, CAN_TX_WRITER);
     }
-    const bool anyLost = std::any_of(writers.begin(), writers.end(), [](const WriterWatch& watch) { return watch.lost(); });
+    const bool anyLost =
+        std::any_of(writers.begin(), writers.end(), [](const WriterWatch& watch) { return watch.lost(); });
     if (anyLost) writeSafeValues(now);
     if (overlay.overrides.empty() && !anyLost) return;
-    runtime.log().warning("the signal table lost its values: " + std::to_string(overlay.overrides.size()) +
-                          " overrides" + (anyLost ? " and " + std::to_string(schedule.safeValues.size()) + " safe values" : "") +
-                          " written again");
+    runtime.log().warning(
+        "the signal table lost its values: " + std::to_string(overlay.overrides.size()) + " overrides" +
+        (anyLost ? " and " + std::to_string(schedule.safeValues.size()) + " safe values" : "") + " written again");
   }
 
   // ---- heartbeat ----------------------------------------------------------------------------
@@ -425,6 +439,8 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       add("j1939_requests_answered", &NetworkCounters::requestsAnswered);
       add("dtc_clears_accepted", &NetworkCounters::clearsAccepted);
       add("dtc_clears_refused", &NetworkCounters::clearsRefused);
+      add("j1939_addresses_lost", &NetworkCounters::addressesLost);
+      add("j1939_safety_frames_held", &NetworkCounters::safetyFramesHeld);
     }
     for (std::size_t b = 0; b < buses.size(); ++b) {
       const std::string prefix = vehicle.buses[b].name + ".";
@@ -447,8 +463,10 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
   /// The live schedule (cycle, enabled, added per message) on the SCHEDULE channel, which
   /// the HMI's ECU Setup shows: after every beat and after every accepted schedule command.
   void publishSchedule() {
-    ipc::TxSchedule live{.service = runtime.program(), .instance = runtime.config().instance,
-                         .pid = static_cast<std::int32_t>(::getpid()), .entries = {}};
+    ipc::TxSchedule live{.service = runtime.program(),
+                         .instance = runtime.config().instance,
+                         .pid = static_cast<std::int32_t>(::getpid()),
+                         .entries = {}};
     live.entries.reserve(schedule.messages.size());
     for (const ScheduledMessage& entry : schedule.messages) {
       live.entries.push_back(ipc::ScheduleEntry{vehicle.database.messages[entry.message].name, entry.cycleNs / 1000,

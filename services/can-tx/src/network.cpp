@@ -1,9 +1,10 @@
 #include "network.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <climits>
 #include <cstdio>
-#include <unistd.h>
 
 #include "openvcu/j1939/acknowledgement.hpp"
 #include "openvcu/j1939/address_claim.hpp"
@@ -11,6 +12,7 @@
 #include "openvcu/j1939/dm1.hpp"
 #include "openvcu/j1939/dm_encode.hpp"
 #include "openvcu/j1939/id.hpp"
+#include "openvcu/j1939/safety.hpp"
 #include "openvcu/j1939/transport.hpp"
 #include "openvcu/j1939/transport_sender.hpp"
 
@@ -35,12 +37,18 @@ std::string hexByte(std::uint8_t value) {
   return buffer;
 }
 
+/// A NAME as 16 hex digits: "0x3002800000000001".
+std::string hexName(std::uint64_t value) {
+  char buffer[24];
+  std::snprintf(buffer, sizeof buffer, "0x%016llX", static_cast<unsigned long long>(value));
+  return buffer;
+}
+
 /// A DM1's lamp byte (byte 0): protect bits 1-0, amber 3-2, red 5-4, malfunction 7-6.
 std::uint8_t lampByte(const j1939::LampStates& lamps) noexcept {
-  return static_cast<std::uint8_t>((static_cast<unsigned>(lamps.malfunction) << 6) |
-                                   (static_cast<unsigned>(lamps.redStop) << 4) |
-                                   (static_cast<unsigned>(lamps.amberWarning) << 2) |
-                                   static_cast<unsigned>(lamps.protect));
+  return static_cast<std::uint8_t>(
+      (static_cast<unsigned>(lamps.malfunction) << 6) | (static_cast<unsigned>(lamps.redStop) << 4) |
+      (static_cast<unsigned>(lamps.amberWarning) << 2) | static_cast<unsigned>(lamps.protect));
 }
 
 ipc::ClaimState toIpc(j1939::ClaimState state) noexcept {
@@ -62,8 +70,8 @@ ipc::ClaimState toIpc(j1939::ClaimState state) noexcept {
 /// One DTC's condition, resolved against the catalog.
 struct DtcCondition {
   const config::DtcConfig* config{};
-  signals::SignalIndex index{};    ///< the signal read (internal.fsm.state for FsmState)
-  double fsmStateIndex{-1};        ///< FsmState: the state's position in the FSM file
+  signals::SignalIndex index{};  ///< the signal read (internal.fsm.state for FsmState)
+  double fsmStateIndex{-1};      ///< FsmState: the state's position in the FSM file
 };
 
 /// One bus with a J1939 address.
@@ -77,11 +85,22 @@ struct NetworkBus final : j1939::ClaimSink, j1939::TpSendSink {
   std::uint64_t nameValue{};
   bool fd{};  ///< a CAN FD bus carries up to 64 bytes in one frame; a classic one needs TP above 8
 
+  // A lost address: addressLost() notes it, the addressChanged() that follows publishes it
+  // (transmit thread) under a sequence lock the loop thread reads (takeAddressLosses()).
+  bool lossPending{};
+  std::uint8_t pendingLostAddress{};
+  std::uint64_t pendingClaimant{};
+  std::atomic<std::uint32_t> lossSequence{};  ///< odd while the fields below are written
+  std::atomic<std::uint64_t> lostClaimant{};
+  std::atomic<std::uint32_t> lostOutcome{};  ///< lost address | new address << 8 | safety held << 16
+  std::uint32_t lossesTaken{};               ///< loop thread: lossSequence at the last take
+
   [[nodiscard]] std::uint8_t address() const noexcept { return claimer ? claimer->address() : preferred; }
   [[nodiscard]] bool mayTransmit() const noexcept { return !claimer || claimer->mayTransmit(); }
 
   void send(const j1939::ClaimFrame& frame) noexcept override;
   void addressChanged(std::uint8_t oldAddress, std::uint8_t newAddress, j1939::ClaimState state) noexcept override;
+  void addressLost(std::uint8_t address, const j1939::Name& claimant) noexcept override;
   void send(const j1939::TpFrame& frame) noexcept override;
   void finished(const j1939::TpSendResult& result) noexcept override;
 };
@@ -96,15 +115,24 @@ struct NetworkImpl {
   std::vector<DtcCondition> conditions;
   std::vector<std::uint8_t> activeScratch;  ///< bool per DTC, reused by evaluate()
   std::int64_t nextEvaluationNs{};
-  std::int64_t callNs{};  ///< the time of the call in progress (the claim sink has none)
+  std::int64_t callNs{};                               ///< the time of the call in progress (the claim sink has none)
   std::vector<std::uint8_t> software, ecu, component;  ///< identification payloads, built once
   std::array<std::uint8_t, j1939::DM1_MAX_LENGTH> dmScratch{};
   NetworkCounters counters;
+  std::vector<std::uint32_t> safetySdms;  ///< sorted 29-bit CAN IDs of the schedule's SDMs
+
+  /// An SHM, or an SDM of the schedule (both from the preferred address).
+  [[nodiscard]] bool isSafetyFrame(const can::Frame& frame) const noexcept {
+    if (!frame.extended()) return false;
+    const std::uint32_t id = frame.id & 0x1FFFFFFFu;
+    if (j1939::Id::fromCanId(id).pgn() == j1939::PGN_SAFETY_HEADER) return true;
+    return std::binary_search(safetySdms.begin(), safetySdms.end(), id);
+  }
 
   mutable std::mutex viewLock;  ///< guards the members below (the transmit thread try-locks)
   std::vector<ipc::J1939Network> view;
   bool viewChanged{true};
-  bool viewDirty{true};  ///< the transmit thread has something newer than `view`
+  bool viewDirty{true};        ///< the transmit thread has something newer than `view`
   std::int64_t viewRetryNs{};  ///< a missed try-lock (or no memory): publishView() again then
   bool countsDirty{};
   std::vector<j1939::Dtc> countsToSave;
@@ -176,7 +204,7 @@ struct NetworkImpl {
       bool active = false;
       if (value) {
         active = condition.config->source == config::DtcSource::FsmState ? *value == condition.fsmStateIndex
-                                                                          : condition.config->activeFor(*value);
+                                                                         : condition.config->activeFor(*value);
       }
       activeScratch[i] = active ? 1 : 0;
     }
@@ -233,8 +261,8 @@ struct NetworkImpl {
             const std::uint8_t count = dtcs->counts()[i];
             if (!dtcs->active(i) && count == 0) continue;
             const j1939::DtcDefinition& definition = dtcs->definitions()[i];
-            entry.dtcs.push_back(ipc::J1939Dtc{diagnostics.dtcs[i].name, definition.spn, definition.fmi, count,
-                                               dtcs->active(i)});
+            entry.dtcs.push_back(
+                ipc::J1939Dtc{diagnostics.dtcs[i].name, definition.spn, definition.fmi, count, dtcs->active(i)});
           }
           entry.lamps = lampByte(dtcs->lamps());
         }
@@ -285,9 +313,32 @@ void NetworkBus::addressChanged(std::uint8_t oldAddress, std::uint8_t newAddress
     owner->note("bus '" + name + "': J1939 address " + hexByte(oldAddress) + " -> " + hexByte(newAddress) + " (" +
                 std::string(j1939::claimStateName(state)) + ")");
   }
+  if (!lossPending) return;
+  lossPending = false;
+  const bool moved = newAddress < j1939::NULL_ADDRESS && newAddress != preferred;
+  const bool safetyHeld = moved && !owner->safetySdms.empty();
+  const std::uint32_t outcome = static_cast<std::uint32_t>(pendingLostAddress) |
+                                static_cast<std::uint32_t>(newAddress) << 8 | (safetyHeld ? 1u << 16 : 0u);
+  // sequence lock: odd while writing; the reader retries when it changed under it
+  const std::uint32_t sequence = lossSequence.load(std::memory_order_relaxed);
+  lossSequence.store(sequence + 1, std::memory_order_relaxed);
+  std::atomic_thread_fence(std::memory_order_release);
+  lostClaimant.store(pendingClaimant, std::memory_order_relaxed);
+  lostOutcome.store(outcome, std::memory_order_relaxed);
+  lossSequence.store(sequence + 2, std::memory_order_release);
+  owner->markChanged(false);
 }
 
-void NetworkBus::send(const j1939::TpFrame& frame) noexcept { owner->sendRaw(bus, frame.canId, frame.data); }
+void NetworkBus::addressLost(std::uint8_t address, const j1939::Name& claimant) noexcept {
+  lossPending = true;
+  pendingLostAddress = address;
+  pendingClaimant = claimant.toValue();
+  owner->counters.addressesLost.fetch_add(1, std::memory_order_relaxed);
+}
+
+void NetworkBus::send(const j1939::TpFrame& frame) noexcept {
+  owner->sendRaw(bus, frame.canId, frame.data);
+}
 
 void NetworkBus::finished(const j1939::TpSendResult& result) noexcept {
   if (result.outcome == j1939::TpSendOutcome::Completed) {
@@ -386,6 +437,13 @@ Result<std::unique_ptr<Network>> Network::create(const config::VehicleConfig& ve
 
 Network::Network(std::unique_ptr<NetworkImpl> impl) noexcept : m_impl(std::move(impl)) {}
 Network::~Network() = default;
+
+void Network::holdSafetyMessages(std::span<const std::uint32_t> sdmCanIds) {
+  std::vector<std::uint32_t>& sdms = m_impl->safetySdms;
+  sdms.clear();
+  for (const std::uint32_t id : sdmCanIds) sdms.push_back(id & 0x1FFFFFFFu);
+  std::sort(sdms.begin(), sdms.end());
+}
 
 void Network::restoreCounts(std::span<const j1939::Dtc> counts) noexcept {
   if (m_impl->dtcs) (void)m_impl->dtcs->restoreCounts(counts);
@@ -496,8 +554,8 @@ bool Network::answerRequest(std::size_t busIndex, const j1939::Request& request,
     }
     case j1939::PGN_DM2: {
       const std::size_t length = impl.dtcs->encodeDm2(impl.dmScratch);
-      impl.sendMessage(*bus, j1939::PGN_DM2, DM_PRIORITY,
-                       std::span<const std::uint8_t>(impl.dmScratch.data(), length), destination, nowNs);
+      impl.sendMessage(*bus, j1939::PGN_DM2, DM_PRIORITY, std::span<const std::uint8_t>(impl.dmScratch.data(), length),
+                       destination, nowNs);
       return answered();
     }
     case j1939::PGN_DM3:
@@ -507,8 +565,8 @@ bool Network::answerRequest(std::size_t busIndex, const j1939::Request& request,
       if (policy == config::ClearPolicy::Refuse) {
         impl.counters.clearsRefused.fetch_add(1, std::memory_order_relaxed);
         impl.acknowledge(*bus, j1939::AckControl::AccessDenied, request);
-        impl.note(std::string(dm3 ? "DM3" : "DM11") + " from " + hexByte(request.requester) + " on bus '" +
-                  bus->name + "' refused (diagnostics.json)");
+        impl.note(std::string(dm3 ? "DM3" : "DM11") + " from " + hexByte(request.requester) + " on bus '" + bus->name +
+                  "' refused (diagnostics.json)");
         return answered();
       }
       const bool dm1Changed = dm3 ? impl.dtcs->clearPreviouslyActive() : impl.dtcs->clearActive();
@@ -516,8 +574,8 @@ bool Network::answerRequest(std::size_t busIndex, const j1939::Request& request,
       impl.counters.clearsAccepted.fetch_add(1, std::memory_order_relaxed);
       impl.acknowledge(*bus, j1939::AckControl::Positive, request);
       impl.markChanged(true);
-      impl.note(std::string(dm3 ? "DM3 (previously active DTCs cleared)" : "DM11 (active DTCs cleared)") +
-                " from " + hexByte(request.requester) + " on bus '" + bus->name + "'");
+      impl.note(std::string(dm3 ? "DM3 (previously active DTCs cleared)" : "DM11 (active DTCs cleared)") + " from " +
+                hexByte(request.requester) + " on bus '" + bus->name + "'");
       return answered();
     }
     default:
@@ -525,7 +583,9 @@ bool Network::answerRequest(std::size_t busIndex, const j1939::Request& request,
   }
 }
 
-void Network::setNow(std::int64_t nowNs) noexcept { m_impl->callNs = nowNs; }
+void Network::setNow(std::int64_t nowNs) noexcept {
+  m_impl->callNs = nowNs;
+}
 
 can::SendStatus Network::send(std::size_t busIndex, const can::Frame& frame) noexcept {
   NetworkBus* bus = m_impl->busOf(busIndex);
@@ -537,6 +597,10 @@ can::SendStatus Network::send(std::size_t busIndex, const can::Frame& frame) noe
   }
   if (!frame.extended() || (frame.id & 0xFFu) != bus->preferred || bus->address() == bus->preferred) {
     return m_impl->out.send(busIndex, frame);
+  }
+  if (m_impl->isSafetyFrame(frame)) {
+    m_impl->counters.safetyFramesHeld.fetch_add(1, std::memory_order_relaxed);
+    return can::SendStatus::Down;
   }
   can::Frame moved = frame;
   moved.id = (frame.id & ~0xFFu) | bus->address();
@@ -586,8 +650,52 @@ std::vector<std::string> Network::takeLog() {
   return lines;
 }
 
-const NetworkCounters& Network::counters() const noexcept { return m_impl->counters; }
+std::vector<AddressLoss> Network::takeAddressLosses() {
+  std::vector<AddressLoss> losses;
+  for (const auto& bus : m_impl->buses) {
+    std::uint32_t sequence = bus->lossSequence.load(std::memory_order_acquire);
+    if (sequence == bus->lossesTaken) continue;
+    std::uint64_t claimant{};
+    std::uint32_t outcome{};
+    for (;;) {  // the writer publishes a loss in a few stores: at most a retry or two
+      if ((sequence & 1u) == 0) {
+        claimant = bus->lostClaimant.load(std::memory_order_relaxed);
+        outcome = bus->lostOutcome.load(std::memory_order_relaxed);
+        std::atomic_thread_fence(std::memory_order_acquire);
+        if (bus->lossSequence.load(std::memory_order_relaxed) == sequence) break;
+      }
+      sequence = bus->lossSequence.load(std::memory_order_acquire);
+    }
+    bus->lossesTaken = sequence;
+    losses.push_back(AddressLoss{bus->name, static_cast<std::uint8_t>(outcome & 0xFFu), claimant, bus->nameValue,
+                                 static_cast<std::uint8_t>((outcome >> 8) & 0xFFu), (outcome & (1u << 16)) != 0});
+  }
+  return losses;
+}
 
-bool Network::active() const noexcept { return !m_impl->buses.empty() || m_impl->dtcs.has_value(); }
+std::string AddressLoss::describe() const {
+  const auto addressText = [](std::uint8_t address) { return hexByte(address) + " (" + std::to_string(address) + ")"; };
+  std::string text = "bus '" + bus + "': address " + addressText(lostAddress) + " taken by NAME " + hexName(claimant) +
+                     ", which has priority over this VCU's NAME " + hexName(ourName) + "; ";
+  if (newAddress >= j1939::NULL_ADDRESS) {
+    return text + "the VCU sent Cannot Claim and sends nothing more on this bus (J1939-81) until vcu-can-tx restarts";
+  }
+  text += "the VCU moved to " + addressText(newAddress);
+  if (safetyPairsHeld)
+    text += "; its J1939-76 safety pairs are not sent from there (they leave only from its preferred address)";
+  return text;
+}
+
+bool AddressLoss::critical() const noexcept {
+  return newAddress >= j1939::NULL_ADDRESS || safetyPairsHeld;
+}
+
+const NetworkCounters& Network::counters() const noexcept {
+  return m_impl->counters;
+}
+
+bool Network::active() const noexcept {
+  return !m_impl->buses.empty() || m_impl->dtcs.has_value();
+}
 
 }  // namespace openvcu::cantx

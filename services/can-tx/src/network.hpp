@@ -4,7 +4,11 @@
 //     start, defends, moves within its range or sends Cannot Claim (j1939::AddressClaimer);
 //     while it may not transmit on a bus, nothing else leaves on that bus;
 //   - the schedule follows the claimed address: every frame whose source address is the
-//     preferred address leaves with the claimed one;
+//     preferred address leaves with the claimed one, except the J1939-76 safety pairs
+//     (SHM and the SDMs of holdSafetyMessages()), which leave only from the preferred one;
+//   - a lost address (a higher-priority NAME claimed it) is reported once per loss
+//     (takeAddressLosses(): bus, address, the claimant's NAME, where the VCU went), which
+//     the app raises as the fault j1939_address_lost.<bus>;
 //   - its own diagnostics (J1939-73, diagnostics.json): DM1 once per dm1 period and on
 //     change (by BAM above one DTC), DM2 on request, DM3 and DM11 by policy, occurrence
 //     counts handed to the service to persist;
@@ -25,6 +29,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -50,11 +55,31 @@ struct NetworkCounters {
   std::atomic<std::uint64_t> dm1Sent{};            ///< DM1s that left, one per bus (none while a bus has no address)
   std::atomic<std::uint64_t> tpStarted{};
   std::atomic<std::uint64_t> tpCompleted{};
-  std::atomic<std::uint64_t> tpFailed{};           ///< aborted, timed out, ended by an address change
-  std::atomic<std::uint64_t> tpRefused{};          ///< TpSender refused (queue full, no address)
-  std::atomic<std::uint64_t> requestsAnswered{};   ///< requests this component answered
-  std::atomic<std::uint64_t> clearsAccepted{};     ///< DM3/DM11
+  std::atomic<std::uint64_t> tpFailed{};          ///< aborted, timed out, ended by an address change
+  std::atomic<std::uint64_t> tpRefused{};         ///< TpSender refused (queue full, no address)
+  std::atomic<std::uint64_t> requestsAnswered{};  ///< requests this component answered
+  std::atomic<std::uint64_t> clearsAccepted{};    ///< DM3/DM11
   std::atomic<std::uint64_t> clearsRefused{};
+  std::atomic<std::uint64_t> addressesLost{};     ///< a higher-priority NAME took our address
+  std::atomic<std::uint64_t> safetyFramesHeld{};  ///< SHM/SDM not sent: the bus' address is not the preferred one
+};
+
+/// One lost address: a higher-priority NAME claimed the address the VCU held (or its
+/// preferred address at start), and what the VCU did (J1939-81).
+struct AddressLoss {
+  std::string bus;
+  std::uint8_t lostAddress{};
+  std::uint64_t claimant{};   ///< the claimant's NAME
+  std::uint64_t ourName{};    ///< the VCU's NAME on that bus
+  std::uint8_t newAddress{};  ///< where the VCU went; NULL_ADDRESS (254): Cannot Claim, silent on the bus
+  bool safetyPairsHeld{};     ///< the VCU moved and its J1939-76 pairs on that bus are not sent
+
+  /// "bus 'vehicle': address 0x21 (33) taken by NAME 0x3002800000000000, which has priority
+  /// over this VCU's NAME 0x3002800000000001; the VCU sent Cannot Claim and sends nothing
+  /// more on this bus (J1939-81) until vcu-can-tx restarts".
+  [[nodiscard]] std::string describe() const;
+  /// Critical when the VCU has no address or its safety pairs are held, else a warning.
+  [[nodiscard]] bool critical() const noexcept;
 };
 
 struct NetworkBus;
@@ -75,6 +100,11 @@ class Network final : public TxPort {
   Network(const Network&) = delete;
   Network& operator=(const Network&) = delete;
 
+  /// The J1939-76 SDMs the schedule sends (their CAN IDs from the preferred address),
+  /// before start(). They and every SHM (PGN 0x0E00) leave only from the preferred
+  /// address: while the VCU holds another one on their bus they are not sent (Down,
+  /// counted in safetyFramesHeld), as a J1939-76 receiver expects its pairs from a fixed SA.
+  void holdSafetyMessages(std::span<const std::uint32_t> sdmCanIds);
   /// Restores occurrence counts read at start (before start()).
   void restoreCounts(std::span<const j1939::Dtc> counts) noexcept;
   /// Sends the first claims.
@@ -108,6 +138,9 @@ class Network final : public TxPort {
   [[nodiscard]] std::optional<std::vector<j1939::Dtc>> takeCountsToSave();
   /// Lines for the log since the last call (claims won and lost, DM3/DM11), oldest first.
   [[nodiscard]] std::vector<std::string> takeLog();
+  /// The addresses lost since the last call, one entry per bus that lost one (its latest
+  /// loss). Loop thread; never misses a loss (per-bus atomics, no try-lock).
+  [[nodiscard]] std::vector<AddressLoss> takeAddressLosses();
 
   [[nodiscard]] const NetworkCounters& counters() const noexcept;
   /// true when a bus claims an address or diagnostics are configured.

@@ -18,6 +18,7 @@
 #include "openvcu/j1939/request.hpp"
 #include "openvcu/j1939/safety.hpp"
 #include "openvcu/j1939/transport.hpp"
+#include "j1939_checks.hpp"
 #include "vehicle_files.hpp"
 
 namespace openvcu::check {
@@ -358,6 +359,7 @@ std::vector<Error> checkVehicle(const config::VehicleConfig& vehicle, const sign
   checkUnwrittenConditions(vehicle, catalog, files, out);
   checkBusLoads(vehicle, files, out);
   checkAddresses(vehicle, files, out);
+  checkSafetyAddressPolicy(vehicle, files, out);
   checkSimulationMessages(vehicle, files, out);
   checkSimulationWakeSignal(vehicle, catalog, files, out);
   checkUnmappedFaultStates(vehicle, files, out);

@@ -23,7 +23,10 @@ void AddressClaimer::start(std::int64_t nowNs, ClaimSink& sink) noexcept {
     claim(preferred, nowNs, sink);
     return;
   }
-  if (preferred <= MAX_CLAIMABLE_ADDRESS) ++m_counters.addressesSkipped;
+  if (preferred <= MAX_CLAIMABLE_ADDRESS) {
+    ++m_counters.addressesSkipped;
+    if (const std::optional<Name> holder = m_table.nameAt(preferred)) sink.addressLost(preferred, *holder);
+  }
   if (m_config.name.arbitraryAddressCapable) {
     claimNextFree(preferred, nowNs, sink);
   } else {
@@ -49,6 +52,7 @@ void AddressClaimer::onAddressClaimed(std::uint8_t sourceAddress, const Name& na
     return;
   }
   ++m_counters.contestsLost;
+  sink.addressLost(sourceAddress, name);
   if (m_config.name.arbitraryAddressCapable) {
     claimNextFree(sourceAddress, nowNs, sink);
   } else {

@@ -26,7 +26,8 @@ namespace {
 constexpr std::int64_t MS = 1'000'000;
 constexpr std::int64_t START = 5'000 * MS;
 const std::string HHEA = std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json";
-constexpr std::uint64_t OUR_NAME = 0xB002800000000001u;              // config/hhea/vehicle.json
+constexpr std::uint64_t OUR_NAME = 0x3002800000000001u;              // config/hhea/vehicle.json: fixed address
+constexpr std::uint64_t AAC_BIT = std::uint64_t{1} << 63;            // arbitrary address capable
 constexpr std::uint64_t HIGHER_PRIORITY_NAME = 0x0000000000000010u;  // lower value wins
 constexpr std::uint64_t LOWER_PRIORITY_NAME = 0xFFFFFFFFFFFFFFF0u;
 constexpr std::uint8_t TOOL = 0xF9;  // a service tool's address
@@ -192,6 +193,7 @@ TEST_CASE("network: start claims the preferred address with the NAME LSB first a
 
 TEST_CASE("network: a higher-priority NAME takes 0x21 and the VCU moves into 128..247 with its frames") {
   Fixture f;
+  f.vehicle.buses[f.bus].j1939->name.arbitraryAddressCapable = true;  // may move
   f.start();
   f.runAt(START + 300 * MS);
   f.port.frames.clear();
@@ -202,7 +204,7 @@ TEST_CASE("network: a higher-priority NAME takes 0x21 and the VCU moves into 128
   const std::uint8_t moved = static_cast<std::uint8_t>(claim.id & 0xFFu);
   CHECK(moved >= 128);
   CHECK(moved <= 247);
-  CHECK(bytes(claim) == nameBytes(OUR_NAME));
+  CHECK(bytes(claim) == nameBytes(OUR_NAME | AAC_BIT));
   CHECK(f.sut->counters().contestsLost.load() == 1);
   // 128..247: 250 ms before other traffic
   CHECK(f.sendScheduled(SCHEDULED) == can::SendStatus::Down);
@@ -245,7 +247,7 @@ TEST_CASE(
   f.runUntil(f.now + 200 * MS);
   const auto cannot = f.port.withId(0x18EEFFFEu);
   REQUIRE(cannot.size() == 1);
-  CHECK(bytes(cannot[0]) == nameBytes(OUR_NAME & ~(std::uint64_t{1} << 63)));
+  CHECK(bytes(cannot[0]) == nameBytes(OUR_NAME & ~AAC_BIT));
   CHECK(f.sut->counters().cannotClaim.load() == 1);
   f.port.frames.clear();
   CHECK(f.sendScheduled(SCHEDULED) == can::SendStatus::Down);
@@ -520,6 +522,7 @@ TEST_CASE("network: a destination-specific request for a one-frame PDU2 answer i
 
 TEST_CASE("network: answers after a lost contest leave from the new address") {
   Fixture f;
+  f.vehicle.buses[f.bus].j1939->name.arbitraryAddressCapable = true;  // may move
   f.start();
   f.runAt(START + 300 * MS);
   f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME), f.now);
@@ -550,6 +553,7 @@ TEST_CASE("network: Cannot Claim ends a transport session in progress") {
 
 TEST_CASE("network: the log names the address change after a lost contest") {
   Fixture f;
+  f.vehicle.buses[f.bus].j1939->name.arbitraryAddressCapable = true;  // may move
   f.start();
   f.runAt(START + 300 * MS);
   (void)f.sut->takeLog();
@@ -579,4 +583,81 @@ TEST_CASE("network: a scheduled message longer than 8 bytes leaves a classic bus
   (void)f.sut->send(f.bus, extended(0x18FF40E5, payload));
   REQUIRE(f.port.frames.size() == 1);
   CHECK(f.port.frames[0].frame.id == 0x18FF40E5u);  // handed on as it is: the link refuses it
+}
+
+TEST_CASE("network: a lost address is reported once with the bus, the address and the claimant's NAME") {
+  Fixture f;
+  f.start();
+  f.runAt(START + 300 * MS);
+  CHECK(f.sut->takeAddressLosses().empty());
+  f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME), f.now);
+
+  const auto losses = f.sut->takeAddressLosses();
+  REQUIRE(losses.size() == 1);
+  const cantx::AddressLoss& loss = losses[0];
+  CHECK(loss.bus == f.vehicle.buses[f.bus].name);
+  CHECK(loss.lostAddress == 0x21);
+  CHECK(loss.claimant == HIGHER_PRIORITY_NAME);
+  CHECK(loss.ourName == OUR_NAME);
+  CHECK(loss.newAddress == j1939::NULL_ADDRESS);
+  CHECK(loss.critical());
+  CHECK(loss.describe() ==
+        "bus 'vehicle': address 0x21 (33) taken by NAME 0x0000000000000010, which has priority over this VCU's NAME "
+        "0x3002800000000001; the VCU sent Cannot Claim and sends nothing more on this bus (J1939-81) until "
+        "vcu-can-tx restarts");
+  CHECK(f.sut->counters().addressesLost.load() == 1);
+  CHECK(f.sut->takeAddressLosses().empty());
+
+  // The claim again: nothing more is lost, nothing is sent, the VCU stays without an address.
+  f.port.frames.clear();
+  for (int i = 0; i < 3; ++i) f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME - 1), f.now + i * MS);
+  f.runUntil(f.now + 500 * MS);
+  CHECK(f.sut->takeAddressLosses().empty());
+  CHECK(f.port.frames.empty());
+  CHECK(f.sut->snapshot()[0].claimState == ipc::ClaimState::CannotClaim);
+}
+
+TEST_CASE("network: a VCU that moved does not send its J1939-76 pairs from the new address") {
+  constexpr std::uint32_t S1_ES = 0x0CEFF321;      // HHEA's ignition SDM, from 0x21 to 0xF3
+  constexpr std::uint32_t S1_ES_SHM = 0x0C0EF321;  // its SHM (PGN 0x0E00)
+  Fixture f;
+  f.vehicle.buses[f.bus].j1939->name.arbitraryAddressCapable = true;  // warned by vcu check
+  f.create();
+  const std::vector<std::uint32_t> sdms{S1_ES};
+  f.sut->holdSafetyMessages(sdms);
+  f.sut->start(f.now);
+  f.runAt(START + 300 * MS);
+  CHECK(f.sendScheduled(S1_ES_SHM) == can::SendStatus::Sent);  // from 0x21: as configured
+  CHECK(f.sendScheduled(S1_ES) == can::SendStatus::Sent);
+
+  f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME), f.now);
+  f.runUntil(f.now + 300 * MS);
+  f.port.frames.clear();
+
+  CHECK(f.sendScheduled(S1_ES_SHM) == can::SendStatus::Down);
+  CHECK(f.sendScheduled(S1_ES) == can::SendStatus::Down);
+  CHECK(f.sendScheduled(SCHEDULED) == can::SendStatus::Sent);  // other traffic follows the address
+  REQUIRE(f.port.frames.size() == 1);
+  const std::uint8_t moved = static_cast<std::uint8_t>(f.port.frames[0].frame.id & 0xFFu);
+  CHECK(moved >= 128);
+  CHECK(f.sut->counters().safetyFramesHeld.load() == 2);
+  const auto losses = f.sut->takeAddressLosses();
+  REQUIRE(losses.size() == 1);
+  CHECK(losses[0].newAddress == moved);
+  CHECK(losses[0].safetyPairsHeld);
+  CHECK(losses[0].critical());
+  CHECK(losses[0].describe().find("the VCU moved to 0x80 (128); its J1939-76 safety pairs are not sent from there") !=
+        std::string::npos);
+}
+
+TEST_CASE("network: a VCU without safety pairs that moved is a warning, not critical") {
+  Fixture f;
+  f.vehicle.buses[f.bus].j1939->name.arbitraryAddressCapable = true;
+  f.start();
+  f.sut->onFrame(f.bus, claimFrame(0x21, HIGHER_PRIORITY_NAME), f.now + MS);
+  const auto losses = f.sut->takeAddressLosses();
+  REQUIRE(losses.size() == 1);
+  CHECK(losses[0].newAddress == 0x80);
+  CHECK_FALSE(losses[0].safetyPairsHeld);
+  CHECK_FALSE(losses[0].critical());
 }

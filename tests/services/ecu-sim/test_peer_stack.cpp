@@ -1,8 +1,10 @@
 // Issue 24 on the simulated bus: vcu-ecu-sim's scripted J1939 peer (tests/data/j1939-peer/
 // simulation.json over a copy of config/hhea) beside iox-roudi, vcu-can-rx and vcu-can-tx.
 // The peer requests DM1, SOFT and ECU ID (both longer than 8 bytes: RTS/CTS to the peer)
-// and DM2 from the VCU, then claims 0x21 with a NAME of higher priority: the VCU must move
-// into 128..247, send its schedule from there and answer DM1 at its new address.
+// and DM2 from the VCU, then claims 0x21 with a NAME of higher priority. HHEA's own NAME is
+// fixed (it sends J1939-76 pairs from 0x21); this copy makes it arbitrary address capable,
+// so the VCU must move into 128..247, send its schedule from there except the J1939-76
+// pairs (they leave only from 0x21) and answer DM1 at its new address.
 
 #include <regex>
 
@@ -33,6 +35,12 @@ TEST_CASE("#24 a scripted J1939 peer gets DM1, DM2 and identification from the V
   SKIP_UNLESS_ISOLATED();
   const fs::path vehicle = copyHheaConfig(fs::temp_directory_path() / "hhea-peer");
   fs::copy_file(PEER_SIMULATION, vehicle.parent_path() / "simulation.json", fs::copy_options::overwrite_existing);
+  {
+    std::ifstream in(vehicle);
+    nlohmann::json document = nlohmann::json::parse(in);
+    document["buses"][0]["j1939"]["name"]["arbitraryAddressCapable"] = true;
+    std::ofstream(vehicle) << document.dump(2);
+  }
   ConfiguredStack s(vehicle);
   REQUIRE_STATUS(s.sut.startRoudi());
   s.startService("can-rx", CAN_RX_BINARY);
@@ -83,10 +91,18 @@ TEST_CASE("#24 a scripted J1939 peer gets DM1, DM2 and identification from the V
   for (const nlohmann::json& node : bus["nodes"]) peerListed |= node["address"] == 0x21 && node["name"] == peerName;
   CHECK_MESSAGE(peerListed, bus.dump());
 
-  // The schedule now comes from the new address: CCVS1 (PGN 65265 = 0xFEF1) on the wire.
+  // The schedule now comes from the new address: PropA_C4 (PGN 0xEF00 to 0xF3) on the wire;
+  // the J1939-76 pairs (S1_ES 0x0CEFF321 and its SHM 0x0C0EF321) from neither address.
   const auto wire = s.vcu({"dump", "vehicle", "--stream", "wire", "-n", "200", "--timeout", "2"});
-  char ccvs1[16];
-  std::snprintf(ccvs1, sizeof ccvs1, "18FEF1%02X#", address);
-  CHECK_MESSAGE(contains(wire.out, ccvs1), wire.describe());
-  CHECK_MESSAGE(!contains(wire.out, "18FEF121#"), wire.describe());
+  char propA[16];
+  std::snprintf(propA, sizeof propA, "18EFF3%02X#", address);
+  CHECK_MESSAGE(contains(wire.out, propA), wire.describe());
+  CHECK_MESSAGE(!contains(wire.out, "18EFF321#"), wire.describe());
+  char s1Es[16];
+  char s1EsShm[16];
+  std::snprintf(s1Es, sizeof s1Es, "0CEFF3%02X#", address);
+  std::snprintf(s1EsShm, sizeof s1EsShm, "0C0EF3%02X#", address);
+  CHECK_MESSAGE(!contains(wire.out, s1Es), wire.describe());
+  CHECK_MESSAGE(!contains(wire.out, s1EsShm), wire.describe());
+  CHECK_MESSAGE(!contains(wire.out, "0C0EF321#"), wire.describe());
 }

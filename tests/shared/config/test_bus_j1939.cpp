@@ -100,7 +100,7 @@ TEST_CASE("#24 the HHEA vehicle bus claims 0x21 with its construction-equipment 
   REQUIRE(bus->j1939);
   CHECK(bus->j1939->preferredAddress == 0x21);  // the DBC's NmStationAddress
   CHECK(bus->j1939->name.industryGroup == 3);
-  CHECK(bus->j1939->name.arbitraryAddressCapable);
+  CHECK_FALSE(bus->j1939->name.arbitraryAddressCapable);  // a fixed address: it sends J1939-76 pairs
   CHECK(bus->j1939->claim);
 }
 

@@ -54,7 +54,7 @@ TEST_CASE("#24 the test file's j1939Peer loads: bus, address, NAME, the VCU's NA
   CHECK(peer.busIndex == 0);
   CHECK(peer.address == 249);
   CHECK(peer.name.toValue() == 0x3002800000000007u);
-  CHECK(peer.vcuName.toValue() == 0xB002800000000001u);
+  CHECK(peer.vcuName.toValue() == 0x3002800000000001u);  // config/hhea: a fixed address
   REQUIRE(peer.script.size() == 6);
   CHECK(peer.script[4].kind == config::SimPeerStep::Kind::Claim);
   CHECK(peer.script[4].address == 0x21);

@@ -64,12 +64,20 @@ class RecordingSink final : public ClaimSink {
   void addressChanged(std::uint8_t oldAddress, std::uint8_t newAddress, ClaimState state) noexcept override {
     changes.push_back({oldAddress, newAddress, state});
   }
+  void addressLost(std::uint8_t address, const Name& claimant) noexcept override {
+    losses.push_back({address, claimant});
+    lossBeforeChange.push_back(changes.size());
+  }
   void clear() {
     frames.clear();
     changes.clear();
+    losses.clear();
+    lossBeforeChange.clear();
   }
   std::vector<ClaimFrame> frames;
   std::vector<AddressChange> changes;
+  std::vector<AddressClaimed> losses;         ///< {the address lost, the claimant's NAME}
+  std::vector<std::size_t> lossBeforeChange;  ///< changes.size() when each loss was reported
 };
 
 ClaimFrame claimOf(std::uint8_t address, const Name& name = OUR_NAME) {
@@ -429,4 +437,82 @@ TEST_CASE("parseAddressClaimed reads the source and NAME of PGN 60928 frames onl
   CHECK_FALSE(parseAddressClaimed(0x18EFFF21u, true, bytes));                                     // PGN 0xEF00
   CHECK_FALSE(parseAddressClaimed(0x19EEFF21u, true, bytes));  // data page 1: PGN 0x1EE00
   CHECK_FALSE(parseAddressClaimed(0x18EEFF21u, true, shortPayload));
+}
+
+TEST_CASE("claimer reports the address it lost and the claimant's NAME before it gives the address up") {
+  RecordingSink sink;
+  AddressClaimer fixed({OUR_NAME_FIXED, VCU_ADDRESS});
+  fixed.start(T0_NS, sink);
+  fixed.poll(T0_NS + ADDRESS_CLAIM_WAIT_NS, sink);
+  sink.clear();
+
+  fixed.onAddressClaimed(VCU_ADDRESS, HIGHER_PRIORITY, T0_NS + 1'000 * MS, sink);
+
+  CHECK(sink.losses == std::vector<AddressClaimed>{{VCU_ADDRESS, HIGHER_PRIORITY}});
+  CHECK(sink.lossBeforeChange == std::vector<std::size_t>{0});
+  CHECK(sink.changes == std::vector<AddressChange>{{VCU_ADDRESS, NULL_ADDRESS, ClaimState::CannotClaim}});
+
+  RecordingSink capableSink;
+  AddressClaimer capable(VCU_CONFIG);
+  capable.start(T0_NS, capableSink);
+  capable.poll(T0_NS + ADDRESS_CLAIM_WAIT_NS, capableSink);
+  capableSink.clear();
+  capable.onAddressClaimed(VCU_ADDRESS, HIGHER_PRIORITY, T0_NS + 1'000 * MS, capableSink);
+  CHECK(capableSink.losses == std::vector<AddressClaimed>{{VCU_ADDRESS, HIGHER_PRIORITY}});
+  CHECK(capableSink.changes == std::vector<AddressChange>{{VCU_ADDRESS, RANGE_FIRST, ClaimState::Claiming}});
+}
+
+TEST_CASE("claimer reports a preferred address a known higher-priority NAME holds at start") {
+  RecordingSink sink;
+  AddressClaimer sut({OUR_NAME_FIXED, VCU_ADDRESS});
+  sut.onAddressClaimed(VCU_ADDRESS, HIGHER_PRIORITY, T0_NS - 1 * MS, sink);
+  CHECK(sink.losses.empty());  // not ours yet: only the table
+
+  sut.start(T0_NS, sink);
+
+  CHECK(sink.losses == std::vector<AddressClaimed>{{VCU_ADDRESS, HIGHER_PRIORITY}});
+  CHECK(sut.state() == ClaimState::CannotClaim);
+}
+
+TEST_CASE("claimer does not report a defended address or claims of addresses it does not hold") {
+  RecordingSink sink;
+  AddressClaimer sut({OUR_NAME_FIXED, VCU_ADDRESS});
+  sut.start(T0_NS, sink);
+
+  sut.onAddressClaimed(VCU_ADDRESS, LOWER_PRIORITY, T0_NS + 1 * MS, sink);  // defended
+  sut.onAddressClaimed(OTHER_ADDRESS, HIGHER_PRIORITY, T0_NS + 2 * MS, sink);
+  sut.onAddressClaimed(VCU_ADDRESS, OUR_NAME_FIXED, T0_NS + 3 * MS, sink);  // our echo
+
+  CHECK(sink.losses.empty());
+  CHECK(sut.address() == VCU_ADDRESS);
+}
+
+TEST_CASE("claimer without an address stays without one however often a hostile node claims (no wandering)") {
+  // A node that claims the VCU's address with a NAME one below the VCU's, again and again.
+  constexpr Name HOSTILE = Name::fromValue(0x3002800000000100u - 1);
+  RecordingSink sink;
+  AddressClaimer sut({OUR_NAME_FIXED, VCU_ADDRESS});
+  sut.start(T0_NS, sink);
+  sut.poll(T0_NS + ADDRESS_CLAIM_WAIT_NS, sink);
+  sut.onAddressClaimed(VCU_ADDRESS, HOSTILE, T0_NS + 1'000 * MS, sink);
+  REQUIRE(sut.state() == ClaimState::CannotClaim);
+  REQUIRE(sink.losses.size() == 1);
+  sink.clear();
+
+  constexpr int REPEATS = 20;
+  for (int i = 0; i < REPEATS; ++i) {
+    const std::int64_t at = T0_NS + (2'000 + 10 * i) * MS;
+    sut.onAddressClaimed(VCU_ADDRESS, HOSTILE, at, sink);
+    sut.onAddressClaimed(static_cast<std::uint8_t>(RANGE_FIRST + i), HOSTILE, at, sink);
+    sut.poll(at + 5 * MS, sink);
+  }
+
+  CHECK(sink.frames.empty());
+  CHECK(sink.changes.empty());
+  CHECK(sink.losses.empty());
+  CHECK(sut.state() == ClaimState::CannotClaim);
+  CHECK(sut.address() == NULL_ADDRESS);
+  CHECK_FALSE(sut.mayTransmit());
+  CHECK(sut.counters().claimsSent == 1);  // the claim at start, never one from another address
+  CHECK(sut.counters().cannotClaimSent == 1);
 }

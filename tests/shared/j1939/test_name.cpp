@@ -10,8 +10,9 @@ using namespace openvcu::j1939;
 
 namespace {
 
-// The HHEA VCU's NAME (config/hhea/vehicle.json): AAC, construction (3), skid steer
-// loader (1), function 128 "main controller", identity 1.
+// The HHEA VCU's NAME fields with the AAC bit set (config/hhea/vehicle.json has them
+// without it, a fixed address): construction (3), skid steer loader (1), function 128
+// "main controller", identity 1.
 constexpr Name HHEA_VCU{true, 3, 0, 1, false, 0x80, 0, 0, 0, 1};
 constexpr std::uint64_t HHEA_VCU_VALUE = 0xB002800000000001u;
 constexpr NamePayload HHEA_VCU_BYTES{0x01, 0x00, 0x00, 0x00, 0x00, 0x80, 0x02, 0xB0};

@@ -28,6 +28,8 @@
 //     are can-tx's safety-identity warnings);
 //   - a simulation J1939-76 check on a message no configured bus carries: an error;
 //   - a simulation "wakeSignal" that is not a catalog key: an error at /wakeSignal;
+//   - an arbitrary-address-capable NAME claiming on a bus where the schedule sends J1939-76
+//     pairs: a warning at /buses/<i>/j1939/name/arbitraryAddressCapable (j1939_checks.hpp);
 //   - diagnostics.json: its loader's errors and warnings with the FSM's state names (a DTC's
 //     "fsmState" must name one) and the catalog (DM3/DM11 "accept": a warning), and a
 //     warning per FSM state whose entry raises a fault that no DTC maps.

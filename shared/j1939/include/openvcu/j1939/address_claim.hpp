@@ -16,6 +16,9 @@
 //                                            address of the range, Claiming again;
 //                                            else (or the range is full): Cannot Claim
 //     a higher NAME claims our address    -> our claim again (defended)
+//     every lost address                  -> ClaimSink::addressLost(address, claimant NAME)
+//   Without an address (Cannot Claim) further claims only fill the table: the CA stays
+//   where it is until start() runs again, however often its old address is claimed.
 
 #include <cstdint>
 #include <optional>
@@ -125,6 +128,14 @@ class ClaimSink {
   /// before the frame that announces a new address: from this call on, send nothing from
   /// `oldAddress`.
   virtual void addressChanged(std::uint8_t oldAddress, std::uint8_t newAddress, ClaimState state) noexcept = 0;
+  /// `claimant`, a NAME of higher priority, took `address` from us: it claimed the address
+  /// we held or were claiming, or held our preferred address at start(). Comes before the
+  /// addressChanged() that moves us (or leaves us without an address). A claimant that
+  /// takes an address we no longer use does not call it again. Default: nothing.
+  virtual void addressLost(std::uint8_t address, const Name& claimant) noexcept {
+    (void)address;
+    (void)claimant;
+  }
 };
 
 struct AddressClaimerConfig {
