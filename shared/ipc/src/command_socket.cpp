@@ -1,4 +1,3 @@
-#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 
 #include <dirent.h>
@@ -9,6 +8,7 @@
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/timerfd.h>
 #include <sys/un.h>
 #include <time.h>
 #include <unistd.h>
@@ -19,9 +19,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/topics.hpp"
 
 namespace openvcu::ipc {
@@ -78,6 +80,17 @@ bool sendMessage(int fd, const std::vector<std::uint8_t>& bytes) noexcept {
   if (bytes.empty()) return false;
   const ssize_t sent = ::send(fd, bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
   return sent == static_cast<ssize_t>(bytes.size());
+}
+
+/// What waits on a connection, seen without taking it.
+enum class Queued : std::uint8_t { Nothing, Message, Closed };
+
+Queued peekAt(int fd) noexcept {
+  char byte = 0;
+  const ssize_t size = ::recv(fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+  if (size > 0) return Queued::Message;
+  if (size == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) return Queued::Closed;
+  return Queued::Nothing;
 }
 
 /// "uid 65534 (pid 812)".
@@ -146,7 +159,11 @@ struct CommandListenerImpl {
   struct Connection {
     Fd fd;
     PeerCredentials peer;
+    std::int64_t activeNs{};  ///< accepted, last request taken or last answer sent (CLOCK_MONOTONIC)
+    std::uint32_t owed{};     ///< requests taken and not answered yet
   };
+  /// The epoll data of the idle timer (connections are 1, 2, ...; the listening socket 0).
+  static constexpr std::uint64_t IDLE_TIMER = std::numeric_limits<std::uint64_t>::max();
 
   CommandListener::Options options;
   std::string directory;
@@ -154,11 +171,14 @@ struct CommandListenerImpl {
   std::optional<std::uint32_t> group;
   Fd epoll;
   Fd listening;
+  Fd idleTimer;            ///< timerfd (CLOCK_MONOTONIC, absolute) in `epoll`
+  std::int64_t armedNs{};  ///< when idleTimer fires; 0: disarmed
   ino_t inode{};
   std::map<std::uint64_t, Connection> connections;  // by id; the epoll data is the id
   std::uint64_t nextId{1};
   std::uint64_t refusedPeers{0};
   std::uint64_t malformed{0};
+  std::uint64_t closedIdle{0};
   std::vector<std::uint8_t> buffer = std::vector<std::uint8_t>(MAX_COMMAND_BYTES + 1);
 
   ~CommandListenerImpl() {
@@ -177,6 +197,101 @@ struct CommandListenerImpl {
     ++refusedPeers;
   }
 
+  [[nodiscard]] std::int64_t idleNs() const noexcept { return options.idleTimeout.count(); }
+
+  [[nodiscard]] std::size_t connectionsOf(std::uint32_t uid) const noexcept {
+    return static_cast<std::size_t>(std::count_if(connections.begin(), connections.end(),
+                                                  [uid](const auto& entry) { return entry.second.peer.uid == uid; }));
+  }
+
+  /// No answer owed and no request waiting: it may be closed. A connection whose peer has gone
+  /// counts as idle; one with a request waiting counts as active from now.
+  bool idle(Connection& connection, std::int64_t nowNs) noexcept {
+    if (connection.owed > 0) return false;
+    if (peekAt(connection.fd.get()) != Queued::Message) return true;
+    connection.activeNs = nowNs;
+    return false;
+  }
+
+  /// The oldest idle connection of `uid`, or with no uid given, of the user holding the most
+  /// connections; nothing when every candidate waits for an answer.
+  std::optional<std::uint64_t> oldestIdle(std::optional<std::uint32_t> uid, std::int64_t nowNs) {
+    std::optional<std::uint64_t> chosen;
+    std::size_t chosenHolds = 0;
+    std::int64_t chosenSince = 0;
+    for (auto& [id, connection] : connections) {
+      if (uid && connection.peer.uid != *uid) continue;
+      if (!idle(connection, nowNs)) continue;
+      const std::size_t holds = uid ? 0 : connectionsOf(connection.peer.uid);
+      if (chosen && (holds < chosenHolds || (holds == chosenHolds && connection.activeNs >= chosenSince))) continue;
+      chosen = id;
+      chosenHolds = holds;
+      chosenSince = connection.activeNs;
+    }
+    return chosen;
+  }
+
+  /// Makes room for a connection of `uid`; a refusal reason when every connection in the way
+  /// waits for an answer.
+  std::optional<std::string> makeRoom(std::uint32_t uid, std::int64_t nowNs) {
+    const std::size_t fromUser = connectionsOf(uid);
+    if (fromUser >= options.maxConnectionsPerUser) {
+      const auto victim = oldestIdle(uid, nowNs);
+      if (!victim) {
+        return "too many open command connections for uid " + std::to_string(uid) + ": its " +
+               std::to_string(fromUser) + " all wait for answers (" + std::to_string(connections.size()) +
+               " in all); try again";
+      }
+      drop(*victim);
+      ++closedIdle;
+    }
+    if (connections.size() >= options.maxConnections) {
+      const auto victim = oldestIdle(std::nullopt, nowNs);
+      if (!victim) {
+        return "too many open command connections: all " + std::to_string(connections.size()) + " wait for answers (" +
+               std::to_string(connectionsOf(uid)) + " from uid " + std::to_string(uid) + "); try again";
+      }
+      drop(*victim);
+      ++closedIdle;
+    }
+    return std::nullopt;
+  }
+
+  /// Closes the connections idle for idleTimeout.
+  void closeIdle(std::int64_t nowNs) {
+    for (auto entry = connections.begin(); entry != connections.end();) {
+      Connection& connection = entry->second;
+      if (nowNs - connection.activeNs < idleNs() || !idle(connection, nowNs)) {
+        ++entry;
+        continue;
+      }
+      ::epoll_ctl(epoll.get(), EPOLL_CTL_DEL, connection.fd.get(), nullptr);
+      entry = connections.erase(entry);
+      ++closedIdle;
+    }
+  }
+
+  /// Arms the idle timer for the earliest connection that may go idle, unless it is armed
+  /// earlier already (an early wake-up finds nothing to close and arms again).
+  void armIdleTimer() noexcept {
+    std::int64_t earliest = std::numeric_limits<std::int64_t>::max();
+    for (const auto& [id, connection] : connections) {
+      if (connection.owed == 0) earliest = std::min(earliest, connection.activeNs + idleNs());
+    }
+    if (earliest == std::numeric_limits<std::int64_t>::max() || (armedNs != 0 && armedNs <= earliest)) return;
+    itimerspec due{};
+    due.it_value.tv_sec = static_cast<time_t>(earliest / 1'000'000'000);
+    due.it_value.tv_nsec = static_cast<long>(earliest % 1'000'000'000);
+    if (::timerfd_settime(idleTimer.get(), TFD_TIMER_ABSTIME, &due, nullptr) == 0) armedNs = earliest;
+  }
+
+  void onIdleTimer() {
+    std::uint64_t expirations = 0;
+    [[maybe_unused]] const auto got = ::read(idleTimer.get(), &expirations, sizeof expirations);
+    armedNs = 0;  // a one-shot timer that fired is disarmed
+    closeIdle(clock::monotonicNs());
+  }
+
   void acceptAll() {
     for (int accepted = 0; accepted < 64; ++accepted) {
       Fd fd(::accept4(listening.get(), nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC));
@@ -191,12 +306,9 @@ struct CommandListenerImpl {
                                   groupText(group, options.groupName) + " may");
         continue;
       }
-      const auto fromUser = static_cast<std::size_t>(std::count_if(
-          connections.begin(), connections.end(), [&](const auto& entry) { return entry.second.peer.uid == peer->uid; }));
-      if (connections.size() >= options.maxConnections || fromUser >= options.maxConnectionsPerUser) {
-        refuse(std::move(fd), "too many open command connections (" + std::to_string(fromUser) + " from uid " +
-                                  std::to_string(peer->uid) + ", " + std::to_string(connections.size()) +
-                                  " in all); try again");
+      const std::int64_t nowNs = clock::monotonicNs();
+      if (auto refusal = makeRoom(peer->uid, nowNs)) {
+        refuse(std::move(fd), *refusal);
         continue;
       }
       const std::uint64_t id = nextId++;
@@ -204,7 +316,7 @@ struct CommandListenerImpl {
       event.events = EPOLLIN;
       event.data.u64 = id;
       if (::epoll_ctl(epoll.get(), EPOLL_CTL_ADD, fd.get(), &event) != 0) continue;
-      connections.emplace(id, Connection{std::move(fd), *peer});
+      connections.emplace(id, Connection{std::move(fd), *peer, nowNs, 0});
     }
   }
 
@@ -229,6 +341,7 @@ struct CommandListenerImpl {
       if ((events & (EPOLLHUP | EPOLLERR)) != 0) drop(id);
       return;
     }
+    connection.activeNs = clock::monotonicNs();
     std::optional<CommandRequest> request;
     if (static_cast<std::size_t>(size) <= MAX_COMMAND_BYTES) {
       request = decodeCommandRequest(buffer.data(), static_cast<std::size_t>(size));
@@ -237,13 +350,14 @@ struct CommandListenerImpl {
       ++malformed;
       CommandAck ack;
       ack.responder = options.program;
-      ack.reason = static_cast<std::size_t>(size) > MAX_COMMAND_BYTES
-                       ? "malformed request: " + std::to_string(size) + " bytes, more than " +
-                             std::to_string(MAX_COMMAND_BYTES)
-                       : "malformed request: not one command_request_t";
+      ack.reason =
+          static_cast<std::size_t>(size) > MAX_COMMAND_BYTES
+              ? "malformed request: " + std::to_string(size) + " bytes, more than " + std::to_string(MAX_COMMAND_BYTES)
+              : "malformed request: not one command_request_t";
       (void)sendMessage(connection.fd.get(), encodeCommandAck(ack));
       return;
     }
+    ++connection.owed;
     out.push_back(ReceivedCommand{id, connection.peer, std::move(*request)});
   }
 };
@@ -291,10 +405,9 @@ Result<CommandListener> CommandListener::open(Options options) {
   if (::lstat(impl->path.c_str(), &existing) == 0) {
     if (!S_ISSOCK(existing.st_mode)) return Error{impl->path + " exists and is not a socket"};
     Fd probe(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
-    if (probe.valid() &&
-        ::connect(probe.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0) {
-      return Error{"another " + options.program + " of instance '" + options.instance + "' is running (" +
-                   impl->path + " answers)"};
+    if (probe.valid() && ::connect(probe.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0) {
+      return Error{"another " + options.program + " of instance '" + options.instance + "' is running (" + impl->path +
+                   " answers)"};
     }
     ::unlink(impl->path.c_str());
   }
@@ -314,7 +427,8 @@ Result<CommandListener> CommandListener::open(Options options) {
   }
   struct stat bound {};
   if (::lstat(impl->path.c_str(), &bound) == 0) impl->inode = bound.st_ino;
-  if (::listen(impl->listening.get(), 64) != 0) return Error{"cannot listen on " + impl->path + ": " + errnoText(errno)};
+  if (::listen(impl->listening.get(), 64) != 0)
+    return Error{"cannot listen on " + impl->path + ": " + errnoText(errno)};
 
   impl->epoll = Fd(::epoll_create1(EPOLL_CLOEXEC));
   if (!impl->epoll.valid()) return Error{"epoll_create1: " + errnoText(errno)};
@@ -322,6 +436,12 @@ Result<CommandListener> CommandListener::open(Options options) {
   event.events = EPOLLIN;
   event.data.u64 = 0;  // 0: the listening socket; connections are 1, 2, ...
   if (::epoll_ctl(impl->epoll.get(), EPOLL_CTL_ADD, impl->listening.get(), &event) != 0) {
+    return Error{"epoll_ctl: " + errnoText(errno)};
+  }
+  impl->idleTimer = Fd(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+  if (!impl->idleTimer.valid()) return Error{"timerfd_create: " + errnoText(errno)};
+  event.data.u64 = CommandListenerImpl::IDLE_TIMER;
+  if (::epoll_ctl(impl->epoll.get(), EPOLL_CTL_ADD, impl->idleTimer.get(), &event) != 0) {
     return Error{"epoll_ctl: " + errnoText(errno)};
   }
   impl->options = std::move(options);
@@ -350,17 +470,24 @@ void CommandListener::poll(std::vector<ReceivedCommand>& out) {
     const epoll_event& event = ready.at(static_cast<std::size_t>(i));
     if (event.data.u64 == 0) {
       m_impl->acceptAll();
+    } else if (event.data.u64 == CommandListenerImpl::IDLE_TIMER) {
+      m_impl->onIdleTimer();
     } else {
       m_impl->takeOne(event.data.u64, event.events, out);
     }
   }
+  m_impl->armIdleTimer();
 }
 
 bool CommandListener::reply(std::uint64_t connection, const CommandAck& ack) noexcept {
   const auto found = m_impl->connections.find(connection);
   if (found == m_impl->connections.end()) return false;
+  CommandListenerImpl::Connection& open = found->second;
+  if (open.owed > 0) --open.owed;
+  open.activeNs = clock::monotonicNs();
+  m_impl->armIdleTimer();
   try {
-    return sendMessage(found->second.fd.get(), encodeCommandAck(ack));
+    return sendMessage(open.fd.get(), encodeCommandAck(ack));
   } catch (...) {
     return false;
   }
@@ -372,6 +499,9 @@ std::uint64_t CommandListener::refusedPeers() const noexcept {
 std::uint64_t CommandListener::malformed() const noexcept {
   return m_impl->malformed;
 }
+std::uint64_t CommandListener::closedIdle() const noexcept {
+  return m_impl->closedIdle;
+}
 std::size_t CommandListener::connections() const noexcept {
   return m_impl->connections.size();
 }
@@ -381,11 +511,75 @@ std::size_t CommandListener::connections() const noexcept {
 struct CommandClientImpl {
   struct Service {
     std::string name;
+    std::string path;
     Fd fd;
   };
   std::string directory;
+  std::uint32_t folderOwner{};
   std::vector<Service> services;
   std::vector<std::uint8_t> buffer = std::vector<std::uint8_t>(MAX_COMMAND_BYTES + 1);
+
+  /// A connection to the socket at `path`, served by root or the folder's owner.
+  /// `connectError` is connect(2)'s errno when that failed, else 0.
+  Result<Fd> connectTo(const std::string& path, int& connectError) const {
+    connectError = 0;
+    sockaddr_un address{};
+    if (!fillAddress(path, address)) {
+      connectError = ENAMETOOLONG;
+      return Error{path + ": path too long for a Unix socket"};
+    }
+    Fd fd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0));
+    if (!fd.valid()) return Error{"cannot create a socket: " + errnoText(errno)};
+    if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
+      connectError = errno;
+      return Error{path + ": " + errnoText(connectError)};
+    }
+    const auto server = peerOf(fd.get());
+    if (!server || (server->uid != 0 && server->uid != folderOwner)) {
+      return Error{"refusing " + path + ": served by uid " + (server ? std::to_string(server->uid) : "?") +
+                   ", not by root or the folder's owner"};
+    }
+    return fd;
+  }
+
+  /// The listener's refusal of this connection (request id 0, not accepted), read from what
+  /// the service left on it before closing it; answers to earlier requests are skipped.
+  std::optional<CommandAck> takeRefusal(int fd) {
+    for (int message = 0; message < 64; ++message) {
+      const ssize_t size = ::recv(fd, buffer.data(), buffer.size(), MSG_DONTWAIT);
+      if (size <= 0) return std::nullopt;
+      auto ack = decodeCommandAck(buffer.data(), static_cast<std::size_t>(size));
+      if (ack && ack->requestId == 0 && !ack->accepted) return ack;
+    }
+    return std::nullopt;
+  }
+
+  enum class Delivery : std::uint8_t { Sent, Busy, Refused, Gone };
+
+  /// Sends `bytes` to service `index`. A connection the service closed without a word (idle
+  /// for COMMAND_IDLE_TIMEOUT, or the service restarted) is opened again once; one it closed
+  /// with a refusal puts that into `refusal`.
+  Delivery deliver(std::size_t index, const std::vector<std::uint8_t>& bytes, std::optional<CommandAck>& refusal) {
+    Service& service = services[index];
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      if (::send(service.fd.get(), bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL) ==
+          static_cast<ssize_t>(bytes.size())) {
+        return Delivery::Sent;
+      }
+      // A full socket buffer means a busy service: it does not get this request.
+      if (errno == EAGAIN || errno == EWOULDBLOCK) return Delivery::Busy;
+      if (auto refused = takeRefusal(service.fd.get())) {
+        refusal = std::move(refused);
+        return Delivery::Refused;
+      }
+      if (attempt > 0) break;
+      int connectError = 0;
+      auto again = connectTo(service.path, connectError);
+      if (!again) return Delivery::Gone;
+      service.fd = std::move(*again);
+    }
+    return Delivery::Gone;
+  }
 };
 
 Result<CommandClient> CommandClient::connect(std::string_view instance) {
@@ -404,12 +598,13 @@ Result<CommandClient> CommandClient::connect(std::string_view instance) {
   // Trust only a folder that root, this user or the installed stack's user owns and nobody
   // else can write.
   const std::optional<std::uint32_t> stackUser = userId(STACK_USER);
-  const bool trustedOwner = folder.st_uid == 0 || folder.st_uid == ::geteuid() ||
-                            (stackUser && folder.st_uid == *stackUser);
+  const bool trustedOwner =
+      folder.st_uid == 0 || folder.st_uid == ::geteuid() || (stackUser && folder.st_uid == *stackUser);
   if (!trustedOwner || (folder.st_mode & 0022) != 0) {
     return Error{"refusing " + impl->directory + ": owned by uid " + std::to_string(folder.st_uid) +
                  " or writable by others, so its sockets cannot be trusted"};
   }
+  impl->folderOwner = folder.st_uid;
   DIR* listing = ::opendir(impl->directory.c_str());
   if (listing == nullptr) return Error{"cannot read " + impl->directory + ": " + errnoText(errno) + who};
   std::vector<std::string> names;
@@ -423,21 +618,16 @@ Result<CommandClient> CommandClient::connect(std::string_view instance) {
   std::string lastError;
   for (const std::string& name : names) {
     const std::string path = impl->directory + "/" + name + ".sock";
-    sockaddr_un address{};
-    if (!fillAddress(path, address)) continue;
-    Fd fd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0));
-    if (!fd.valid()) return Error{"cannot create a socket: " + errnoText(errno)};
-    if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
-      if (errno == EACCES || errno == EPERM) return Error{"cannot connect to " + path + ": " + errnoText(errno) + who};
-      lastError = path + ": " + errnoText(errno);  // ECONNREFUSED: a service that is not running
+    int connectError = 0;
+    auto fd = impl->connectTo(path, connectError);
+    if (!fd) {
+      if (connectError == EACCES || connectError == EPERM)
+        return Error{"cannot connect to " + fd.error().message + who};
+      if (connectError == 0) return fd.error();  // no socket of our own, or an untrusted server
+      lastError = fd.error().message;            // ECONNREFUSED: a service that is not running
       continue;
     }
-    const auto server = peerOf(fd.get());
-    if (!server || (server->uid != 0 && server->uid != folder.st_uid)) {
-      return Error{"refusing " + path + ": served by uid " + (server ? std::to_string(server->uid) : "?") +
-                   ", not by root or the folder's owner"};
-    }
-    impl->services.push_back(CommandClientImpl::Service{name, std::move(fd)});
+    impl->services.push_back(CommandClientImpl::Service{name, path, std::move(*fd)});
   }
   if (impl->services.empty()) {
     return Error{"no service of instance '" + std::string(instance) + "' answers commands (" +
@@ -469,13 +659,21 @@ Result<CommandAck> CommandClient::send(CommandRequest request, std::chrono::nano
   }
   auto& services = m_impl->services;
   std::vector<bool> waiting(services.size(), false);
+  std::optional<CommandAck> refusal;  // a service's listener refused the connection: why
   std::size_t open = 0;
+  std::size_t refused = 0;
   for (std::size_t i = 0; i < services.size(); ++i) {
-    // A full socket buffer means a busy service: it does not get this request.
-    if (::send(services[i].fd.get(), bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL) ==
-        static_cast<ssize_t>(bytes.size())) {
-      waiting[i] = true;
-      ++open;
+    switch (m_impl->deliver(i, bytes, refusal)) {
+      case CommandClientImpl::Delivery::Sent:
+        waiting[i] = true;
+        ++open;
+        break;
+      case CommandClientImpl::Delivery::Refused:
+        ++refused;
+        break;
+      case CommandClientImpl::Delivery::Busy:
+      case CommandClientImpl::Delivery::Gone:
+        break;
     }
   }
   std::vector<std::string> notOwners;
@@ -499,13 +697,27 @@ Result<CommandAck> CommandClient::send(CommandRequest request, std::chrono::nano
       }
       const auto ack = decodeCommandAck(m_impl->buffer.data(), static_cast<std::size_t>(size));
       if (!ack) continue;
-      if (ack->requestId == 0 && !ack->accepted) return *ack;  // the listener refused the connection
-      if (ack->requestId != request.requestId) continue;      // an answer to an earlier, expired request
+      if (ack->requestId == 0 && !ack->accepted) {  // the listener refused the connection
+        refusal = *ack;
+        ++refused;
+        waiting[i] = false;
+        --open;
+        continue;
+      }
+      if (ack->requestId != request.requestId) continue;  // an answer to an earlier, expired request
       if (ack->owner) return *ack;
       notOwners.push_back(services[i].name);
       waiting[i] = false;
       --open;
     }
+  }
+  if (open == 0 && refusal && notOwners.size() + refused == services.size()) {
+    // Nobody else owns the command: the refusal is the answer; the service never saw it.
+    CommandAck answer = std::move(*refusal);
+    answer.requestId = request.requestId;
+    answer.issuer = request.issuer;
+    answer.owner = true;
+    return answer;
   }
   if (open == 0 && notOwners.size() == services.size()) {
     std::string names;
@@ -514,7 +726,9 @@ Result<CommandAck> CommandClient::send(CommandRequest request, std::chrono::nano
   }
   const double seconds = static_cast<double>(timeout.count()) / 1e9;
   std::ostringstream text;
-  text << "no service answered within " << seconds << " s; the command expired and will not be applied";
+  text << "no service answered within " << seconds << " s";
+  if (refusal) text << " (" << refusal->responder << " refused the connection: " << refusal->reason << ")";
+  text << "; the command expired and will not be applied";
   return Error{text.str()};
 }
 

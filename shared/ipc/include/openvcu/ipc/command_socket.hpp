@@ -9,6 +9,12 @@
 // (SO_PEERCRED and its groups) once more. One message is one LCM-encoded
 // command_request_t or command_ack_t (shared/ipc/lcm), at most MAX_COMMAND_BYTES.
 //
+// Connections are few (64 per service, 16 per user) and short: an issuer connects, sends,
+// reads its answer and closes. A connection that owes no answer and has sent nothing for
+// COMMAND_IDLE_TIMEOUT is closed; when a user's (or the service's) limit is reached, the
+// oldest idle connection makes room for the new one. Only when every connection waits for an
+// answer is the new one refused, with the reason, which the issuer reports as the answer.
+//
 // An issuer (CommandClient) connects to every socket of the instance, sends the request to
 // each and takes the answer of the one service that owns the command; the others answer
 // `owner = false`. It trusts only a folder owned by root, by itself or by the system user
@@ -44,6 +50,10 @@ inline constexpr const char* COMMAND_ROOT_ENV = "OPENVCU_RUN_DIR";
 inline constexpr std::size_t MAX_COMMAND_BYTES = 8192;
 /// A request whose deadline lies further ahead than this is refused.
 inline constexpr std::int64_t MAX_COMMAND_HORIZON_NS = 30'000'000'000;
+/// A connection that owes no answer and has sent no request for this long (since it was
+/// accepted, since its last request or since its last answer) is closed by the listener,
+/// without a message. Issuers connect and send at once, so only stuck clients meet it.
+inline constexpr std::chrono::seconds COMMAND_IDLE_TIMEOUT{5};
 
 /// $OPENVCU_RUN_DIR, else /run/openvcu.
 [[nodiscard]] std::string commandRoot();
@@ -56,7 +66,6 @@ inline constexpr std::int64_t MAX_COMMAND_HORIZON_NS = 30'000'000'000;
 [[nodiscard]] std::optional<CommandRequest> decodeCommandRequest(const void* data, std::size_t size);
 [[nodiscard]] std::vector<std::uint8_t> encodeCommandAck(const CommandAck& ack);
 [[nodiscard]] std::optional<CommandAck> decodeCommandAck(const void* data, std::size_t size);
-
 
 /// Who is at the other end of a Unix socket (SO_PEERCRED).
 struct PeerCredentials {
@@ -93,11 +102,13 @@ struct CommandListenerImpl;
 class CommandListener {
  public:
   struct Options {
-    std::string instance;                ///< isValidName
-    std::string program;                 ///< "vcu-fsm": the socket is <program>.sock
-    std::string groupName{"openvcu"};    ///< the command group
-    std::size_t maxConnections{64};      ///< open connections in all
+    std::string instance;              ///< isValidName
+    std::string program;               ///< "vcu-fsm": the socket is <program>.sock
+    std::string groupName{"openvcu"};  ///< the command group
+    std::size_t maxConnections{64};    ///< open connections in all
     std::size_t maxConnectionsPerUser{16};
+    /// Idle connections are closed after this (COMMAND_IDLE_TIMEOUT; tests may shorten it).
+    std::chrono::nanoseconds idleTimeout{COMMAND_IDLE_TIMEOUT};
   };
 
   /// Creates the folder (0750, or 0700 without the group) and the socket (0660/0600).
@@ -112,23 +123,31 @@ class CommandListener {
   /// Closes every connection and removes the socket (when it is still this one's).
   ~CommandListener();
 
-  /// Readable while a connection waits to be accepted or a request to be taken.
+  /// Readable while a connection waits to be accepted, a request to be taken or an idle
+  /// connection to be closed (a timerfd inside it: the service's loop needs no timer for it).
   [[nodiscard]] int fd() const noexcept;
   [[nodiscard]] const std::string& path() const noexcept;
   /// true when the command group exists (socket 0660) rather than owner-only (0600).
   [[nodiscard]] bool groupAccess() const noexcept;
 
-  /// Accepts waiting connections (refusing peers that may not command and connections
-  /// beyond the limits, with an answer that says why) and takes at most ONE request from
-  /// each connection that has one, so a flood on one connection waits its turn behind the
-  /// others. Malformed messages are answered "refused: malformed request" here. Appends to
-  /// `out`; never blocks.
+  /// Accepts waiting connections and takes at most ONE request from each connection that has
+  /// one, so a flood on one connection waits its turn behind the others. A peer that may not
+  /// command is refused with an answer that says why. A connection beyond the limits closes
+  /// the oldest idle connection (no answer owed, no request waiting) of its user, or, when
+  /// the service's limit is reached, of the user holding the most; it is refused ("too many
+  /// open command connections for uid N: its 16 all wait for answers ...") only when none is
+  /// idle. Connections idle for Options::idleTimeout are closed. Malformed messages are
+  /// answered "refused: malformed request" here. Every request appended to `out` is owed one
+  /// reply(). Appends to `out`; never blocks.
   void poll(std::vector<ReceivedCommand>& out);
-  /// Sends `ack` on `connection`. false when the connection is gone or full.
+  /// Sends `ack` on `connection` (one answer owed by a request from poll()); the connection
+  /// counts as idle again from now. false when the connection is gone or full.
   bool reply(std::uint64_t connection, const CommandAck& ack) noexcept;
 
   [[nodiscard]] std::uint64_t refusedPeers() const noexcept;
   [[nodiscard]] std::uint64_t malformed() const noexcept;
+  /// Connections closed because they were idle (timed out, or made room for a new one).
+  [[nodiscard]] std::uint64_t closedIdle() const noexcept;
   [[nodiscard]] std::size_t connections() const noexcept;
 
  private:
@@ -157,6 +176,11 @@ class CommandClient {
   /// becomes a fresh random one; a zero deadlineNs becomes now + `timeout` (an issuer that
   /// tracks its own timeouts, like the HMI, sets both). An error when no service owns it or
   /// none answered by the deadline: then nothing was or will be applied.
+  /// A service that refused the connection (its limits, the peer check) sent its reason: when
+  /// no owner answered and every other service did, that refusal is the answer (accepted =
+  /// false, the request's id and issuer, responder = that service); at the deadline it is part
+  /// of the error. A connection the service closed as idle is opened again once, before
+  /// sending (the request had not reached it).
   Result<CommandAck> send(CommandRequest request, std::chrono::nanoseconds timeout);
 
   /// The services connected ("vcu-fsm", ...).
