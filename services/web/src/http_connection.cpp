@@ -99,6 +99,7 @@ void Connection::close() {
   m_stream.socket().shutdown(asio::ip::tcp::socket::shutdown_both, ec);
   m_stream.close();
   m_tick.cancel();
+  const bool wasStream = m_source != nullptr;
   if (m_source) {
     m_source.reset();
     m_core.streamCount.fetch_sub(1);
@@ -109,7 +110,7 @@ void Connection::close() {
     std::filesystem::remove(m_uploadFile, removeError);
     m_uploadFile.clear();
   }
-  m_core.connectionClosed(m_id, m_address);
+  m_core.connectionClosed(m_id, m_address, wasStream);
 }
 
 // ---- requests -------------------------------------------------------------------------
@@ -124,7 +125,31 @@ void Connection::readHeader() {
   m_uploadParser.reset();
   m_upload = nullptr;
   m_request = Request{};
+  m_waiting = true;
+  m_waitingSince = Clock::now();
+  if (m_buffer.size() > 0) {  // the client sent its next request already
+    readRequestHeader();
+    return;
+  }
+  // idle until the first byte (readTimeout); from there the request has its own deadline
   m_stream.expires_after(m_core.options.readTimeout);
+  m_stream.async_read_some(m_buffer.prepare(FIRST_READ_BYTES),
+                           [self = shared_from_this()](const beast::error_code& ec, std::size_t n) {
+                             if (self->m_closed) return;
+                             if (ec) {
+                               self->close();  // gone, or idle for readTimeout: nothing to answer
+                               return;
+                             }
+                             self->m_buffer.commit(n);
+                             self->readRequestHeader();
+                           });
+}
+
+void Connection::readRequestHeader() {
+  // one deadline for the whole request, not renewed by each byte: a client trickling its
+  // header or body holds a connection for requestTimeout at most
+  m_requestDeadline = Clock::now() + m_core.options.requestTimeout;
+  m_stream.expires_at(m_requestDeadline);
   http::async_read_header(
       m_stream, m_buffer, *m_headerParser,
       [self = shared_from_this()](const beast::error_code& ec, std::size_t) { self->onHeader(ec); });
@@ -208,6 +233,7 @@ void Connection::onHeader(const beast::error_code& ec) {
 
   if (m_request.method == Method::Post) {
     if (const UploadRoute* upload = m_core.findUpload(m_request.path)) {
+      m_waiting = false;  // authorized uploads are busy connections with a timeout per read
       startUpload(*upload);
       return;
     }
@@ -247,7 +273,7 @@ void Connection::continueThen(void (Connection::*next)()) {
 
 void Connection::readBody() {
   if (m_closed) return;
-  m_stream.expires_after(m_core.options.readTimeout);  // per read: a body that keeps coming is fine
+  m_stream.expires_at(m_requestDeadline);  // the header's deadline: the body is part of the request
   http::async_read_some(m_stream, m_buffer, *m_bodyParser,
                         [self = shared_from_this()](const beast::error_code& ec, std::size_t) {
                           if (self->m_closed) return;
@@ -266,6 +292,7 @@ void Connection::readBody() {
 }
 
 void Connection::dispatchRequest() {
+  m_waiting = false;
   const std::string& path = m_request.path;
   if (m_request.method == Method::Get) {
     if (const StreamOpener* opener = m_core.findStream(path)) {
@@ -368,6 +395,7 @@ void Connection::prepareHeaders(http::response<Body>& message, const Response& r
 void Connection::respond(Response response, bool closeAfter) {
   if (m_closed) return;
   m_awaiting = false;
+  m_waiting = false;
   const bool keepAlive = m_clientKeepAlive && !closeAfter && !m_core.stopping;
   try {
     if (response.file) {
@@ -438,6 +466,8 @@ void Connection::afterResponse(bool keepAlive) {
   beast::error_code ec;
   m_stream.socket().shutdown(asio::ip::tcp::socket::shutdown_send, ec);
   m_stream.expires_after(LINGER_TIME);
+  m_waiting = true;  // answered: the first to give way when the table is full
+  m_waitingSince = Clock::time_point{};
   lingerThenClose(0);
 }
 

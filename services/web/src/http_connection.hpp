@@ -45,6 +45,8 @@ inline constexpr std::chrono::seconds LINGER_TIME{2};
 inline constexpr std::size_t LINGER_BYTES = 1024 * 1024;
 /// Address entries without connections are pruned beyond this many.
 inline constexpr std::size_t ADDRESS_TABLE_PRUNE_SIZE = 1024;
+/// The first read of a request (which starts its deadline) takes up to this much.
+inline constexpr std::size_t FIRST_READ_BYTES = 4096;
 
 /// How a Responder (any thread) reaches the io context; `io` is cleared under the mutex when
 /// the server is destroyed, so a late Responder drops its answer instead of touching it.
@@ -67,7 +69,8 @@ struct ServerCore {
     Handler handler;
   };
   struct AddressState {
-    std::size_t connections{};
+    std::size_t connections{};  ///< open, event streams not included
+    std::size_t streams{};      ///< open event streams
     double tokens{};
     Clock::time_point refilled{};
   };
@@ -84,8 +87,17 @@ struct ServerCore {
   bool takeToken(const std::string& address, unsigned& retryAfterS);
   void accept();
   void closeAll();
+  /// Closes the connection that has waited longest for a request (of `address` when given);
+  /// false when every such connection is busy. O(connections), only when a limit is reached.
+  bool evictWaiting(const std::string* address);
+  /// Called when maxStreams are open and `address` asks for one more: ends the oldest stream of
+  /// the address holding the most streams (`address` itself on a tie) when that address holds
+  /// more than `address` would; otherwise returns why the new stream is refused.
+  std::optional<std::string> makeRoomForStream(const std::string& address);
+  /// Called by a Connection that became an event stream: its address counts it as a stream.
+  void connectionBecameStream(const std::string& address);
   /// Called once by Connection::close().
-  void connectionClosed(std::uint64_t id, const std::string& address);
+  void connectionClosed(std::uint64_t id, const std::string& address, bool wasStream);
 
   ServerOptions options;
   std::vector<RouteEntry> routes;
@@ -100,6 +112,8 @@ struct ServerCore {
 
   std::atomic<std::uint64_t> requests{0};
   std::atomic<std::uint64_t> refusedConnections{0};
+  std::atomic<std::uint64_t> evictedConnections{0};
+  std::atomic<std::uint64_t> evictedStreams{0};
   std::atomic<std::uint64_t> rateLimited{0};
   std::atomic<std::uint64_t> eventsSent{0};
   std::atomic<std::uint64_t> eventsSkipped{0};
@@ -130,11 +144,22 @@ class Connection : public std::enable_shared_from_this<Connection> {
   void start();
   /// Closes the socket, stops the stream, removes a partial upload; idempotent.
   void close();
+  /// Waiting for a request, receiving one, or lingering after its last answer: closing it
+  /// loses no answer. Since when (the oldest gives way first; lingering ones before all).
+  [[nodiscard]] bool waiting() const noexcept { return m_waiting && !m_closed; }
+  [[nodiscard]] Clock::time_point waitingSince() const noexcept { return m_waitingSince; }
+  /// An open event stream, and since when.
+  [[nodiscard]] bool streaming() const noexcept { return m_source != nullptr && !m_closed; }
+  [[nodiscard]] Clock::time_point streamingSince() const noexcept { return m_streamingSince; }
+  [[nodiscard]] const std::string& address() const noexcept { return m_address; }
   /// The answer to request `sequence` (posted by its Responder); dropped when stale.
   void answer(std::uint64_t sequence, Response response);
 
  private:
+  /// Waits (readTimeout) for the first byte of the next request, then reads its header.
   void readHeader();
+  /// Reads the header with the request deadline (requestTimeout from the first byte).
+  void readRequestHeader();
   void onHeader(const beast::error_code& ec);
   void readBody();
   void dispatchRequest();
@@ -177,9 +202,13 @@ class Connection : public std::enable_shared_from_this<Connection> {
   std::uint64_t m_sequence{0};
   bool m_awaiting{false};
   bool m_closed{false};
+  bool m_waiting{false};
+  Clock::time_point m_waitingSince{};
+  Clock::time_point m_requestDeadline{};
 
   // event stream
   std::unique_ptr<EventSource> m_source;
+  Clock::time_point m_streamingSince{};
   asio::steady_timer m_tick;
   Clock::duration m_tickPeriod{};
   std::string m_eventText;

@@ -84,10 +84,12 @@ auto findBest(const Entries& entries, const std::string& path) -> decltype(&entr
   return best;
 }
 
-/// Sent (best effort, without waiting) to a connection refused for a limit.
-constexpr std::string_view REFUSED_RESPONSE =
-    "HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json\r\nContent-Length: 34\r\n"
-    "Connection: close\r\n\r\n{\"error\": \"too many connections\"}\n";
+/// The 503 sent (best effort, without waiting) to a connection refused for a limit.
+std::string refusal(std::string_view reason) {
+  const std::string body = "{\"error\": \"" + jsonEscape(reason) + "\"}\n";
+  return "HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json\r\nContent-Length: " +
+         std::to_string(body.size()) + "\r\nRetry-After: 1\r\nConnection: close\r\n\r\n" + body;
+}
 
 }  // namespace
 
@@ -164,7 +166,8 @@ void ServerCore::pruneAddresses(Clock::time_point now) {
   for (auto it = addresses.begin(); it != addresses.end();) {
     const double elapsedS = std::chrono::duration<double>(now - it->second.refilled).count();
     const bool full = rate <= 0 || it->second.tokens + elapsedS * rate >= burst;
-    it = (it->second.connections == 0 && full) ? addresses.erase(it) : std::next(it);
+    const bool unused = it->second.connections == 0 && it->second.streams == 0;
+    it = (unused && full) ? addresses.erase(it) : std::next(it);
   }
 }
 
@@ -199,17 +202,29 @@ void ServerCore::onAccept(const beast::error_code& ec, asio::ip::tcp::socket soc
       it->second.tokens = std::max(1.0, options.requestBurstPerAddress);
       it->second.refilled = now;
     }
-    if (connections.size() >= options.maxConnections || it->second.connections >= options.maxConnectionsPerAddress) {
+    // a full table makes room by closing a connection that only waits (an idle keep-alive, a
+    // request trickling in); busy ones (answers, uploads, streams) are kept and the new one refused
+    AddressState& state = it->second;
+    std::string refused;
+    if (state.connections >= options.maxConnectionsPerAddress && !evictWaiting(&address)) {
+      refused = "too many connections from " + address + ": all " + std::to_string(state.connections) +
+                " are busy with requests";
+    } else if (connections.size() >= options.maxConnections && !evictWaiting(nullptr)) {
+      refused = "too many connections: all " + std::to_string(connections.size()) +
+                " are busy with requests or event streams";
+    }
+    if (!refused.empty()) {
       refusedConnections.fetch_add(1, std::memory_order_relaxed);
+      const std::string text = refusal(refused);
       beast::error_code ignored;
       socket.non_blocking(true, ignored);
-      socket.write_some(asio::buffer(REFUSED_RESPONSE.data(), REFUSED_RESPONSE.size()), ignored);
+      socket.write_some(asio::buffer(text.data(), text.size()), ignored);
       socket.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
       socket.close(ignored);
     } else {
       beast::error_code ignored;
       socket.set_option(asio::ip::tcp::no_delay(true), ignored);  // events go out as written
-      ++it->second.connections;
+      ++state.connections;
       const std::uint64_t id = nextConnectionId++;
       auto connection = std::make_shared<Connection>(*this, id, std::move(socket), std::move(address));
       connections.emplace(id, connection);
@@ -229,11 +244,66 @@ void ServerCore::closeAll() {
   for (const auto& connection : open) connection->close();
 }
 
-void ServerCore::connectionClosed(std::uint64_t id, const std::string& address) {
+bool ServerCore::evictWaiting(const std::string* address) {
+  std::shared_ptr<Connection> victim;
+  for (const auto& [id, connection] : connections) {
+    if (!connection->waiting() || (address != nullptr && connection->address() != *address)) continue;
+    if (!victim || connection->waitingSince() < victim->waitingSince()) victim = connection;
+  }
+  if (!victim) return false;
+  evictedConnections.fetch_add(1, std::memory_order_relaxed);
+  victim->close();
+  return true;
+}
+
+std::optional<std::string> ServerCore::makeRoomForStream(const std::string& address) {
+  std::size_t own = 0;
+  std::size_t most = 0;
+  const std::string* holder = nullptr;
+  for (const auto& [name, state] : addresses) {
+    if (name == address) own = state.streams;
+    if (state.streams > most) {
+      most = state.streams;
+      holder = &name;
+    }
+  }
+  // fair shares: a second page of one address replaces its first before it takes another's
+  const std::string* from = nullptr;
+  if (own > 0 && own >= most) {
+    from = &address;
+  } else if (most > own + 1) {
+    from = holder;
+  }
+  std::shared_ptr<Connection> victim;
+  if (from != nullptr) {
+    for (const auto& [id, connection] : connections) {
+      if (!connection->streaming() || connection->address() != *from) continue;
+      if (!victim || connection->streamingSince() < victim->streamingSince()) victim = connection;
+    }
+  }
+  if (!victim) {
+    return "too many event streams: all " + std::to_string(streamCount.load()) + " are open, at most " +
+           std::to_string(most) + " per address";
+  }
+  evictedStreams.fetch_add(1, std::memory_order_relaxed);
+  victim->close();
+  return std::nullopt;
+}
+
+void ServerCore::connectionBecameStream(const std::string& address) {
+  const auto it = addresses.find(address);
+  if (it == addresses.end()) return;
+  if (it->second.connections > 0) --it->second.connections;
+  ++it->second.streams;
+}
+
+void ServerCore::connectionClosed(std::uint64_t id, const std::string& address, bool wasStream) {
   connections.erase(id);
   connectionCount.store(connections.size());
   const auto it = addresses.find(address);
-  if (it != addresses.end() && it->second.connections > 0) --it->second.connections;
+  if (it == addresses.end()) return;
+  std::size_t& count = wasStream ? it->second.streams : it->second.connections;
+  if (count > 0) --count;
 }
 
 }  // namespace detail
@@ -328,6 +398,8 @@ ServerCounters HttpServer::counters() const {
   ServerCounters counters;
   counters.requests = m_impl->requests.load();
   counters.refusedConnections = m_impl->refusedConnections.load();
+  counters.evictedConnections = m_impl->evictedConnections.load();
+  counters.evictedStreams = m_impl->evictedStreams.load();
   counters.rateLimited = m_impl->rateLimited.load();
   counters.eventsSent = m_impl->eventsSent.load();
   counters.eventsSkipped = m_impl->eventsSkipped.load();

@@ -3,7 +3,8 @@
 // static files, bodies with a size limit, uploads streamed to disk, server-sent-event streams
 // with a per-client update cap, and the limits that keep a slow or malicious client from
 // stalling the service (connections total and per address, requests per second per address,
-// header/body limits, read and write timeouts).
+// header/body limits, a deadline per request, read and write timeouts). A full connection table
+// closes connections that are only waiting, so idle or trickling clients never lock others out.
 //
 //   web::HttpServer server(options);               // nothing listens yet
 //   server.route(web::Method::Get, "/api/info", [&](const web::Request& request, web::Responder respond) {
@@ -45,11 +46,11 @@ enum class Method : std::uint8_t { Get, Post, Delete };
 /// (Post to a route(): up to ServerOptions::maxBodyBytes; an upload route gets the file instead).
 struct Request {
   Method method{Method::Get};
-  std::string path;                               ///< "/api/recordings/drive1/archive", percent-decoded
-  std::map<std::string, std::string> query;       ///< "?signals=a,b" -> {"signals": "a,b"}, percent-decoded
-  std::map<std::string, std::string> headers;     ///< names lower-case: "cookie", "content-type"
-  std::string body;                               ///< empty for GET
-  std::string clientAddress;                      ///< "127.0.0.1"
+  std::string path;                            ///< "/api/recordings/drive1/archive", percent-decoded
+  std::map<std::string, std::string> query;    ///< "?signals=a,b" -> {"signals": "a,b"}, percent-decoded
+  std::map<std::string, std::string> headers;  ///< names lower-case: "cookie", "content-type"
+  std::string body;                            ///< empty for GET
+  std::string clientAddress;                   ///< "127.0.0.1"
   /// The value of cookie `name` from the Cookie header, empty when absent.
   [[nodiscard]] std::string cookie(std::string_view name) const;
   /// The header `lowerCaseName`, empty when absent.
@@ -104,19 +105,31 @@ using StreamOpener = std::function<Result<std::unique_ptr<EventSource>>(const Re
 
 struct ServerOptions {
   std::string address{"127.0.0.1"};
-  std::uint16_t port{8080};               ///< 0: any free port (tests); see HttpServer::port()
-  std::filesystem::path staticRoot;       ///< GET of any other path: a file under this folder
-  std::filesystem::path uploadFolder;     ///< where UploadRoute bodies are written
-  std::size_t maxBodyBytes{64 * 1024};    ///< JSON bodies of route() POSTs; beyond: 413
+  std::uint16_t port{8080};             ///< 0: any free port (tests); see HttpServer::port()
+  std::filesystem::path staticRoot;     ///< GET of any other path: a file under this folder
+  std::filesystem::path uploadFolder;   ///< where UploadRoute bodies are written
+  std::size_t maxBodyBytes{64 * 1024};  ///< JSON bodies of route() POSTs; beyond: 413
   std::uint64_t maxUploadBytes{256ull << 20};
-  std::size_t maxConnections{64};         ///< beyond: the connection is closed at once (after a 503 sent without waiting)
+  /// Connections at once, event streams included. A new connection beyond it closes the
+  /// connection that has waited longest for a request (idle, or its request not complete yet);
+  /// when every connection is busy (a request being answered, an upload, a stream), the new one
+  /// gets a 503 naming the limit, sent without waiting, and is closed.
+  std::size_t maxConnections{64};
+  /// The same per client address, event streams not counted (they have maxStreams): beyond it
+  /// the address's own connection that has waited longest gives way, else a 503.
   std::size_t maxConnectionsPerAddress{16};
   double requestsPerSecondPerAddress{50};  ///< token bucket; beyond: 429
   double requestBurstPerAddress{100};
-  std::size_t maxStreams{32};              ///< event streams at once; beyond: 503
-  double maxUpdatesPerSecond{20};          ///< per event stream
-  std::chrono::seconds readTimeout{15};    ///< a request header (or upload) not progressing
-  std::chrono::seconds writeTimeout{15};   ///< a response or event not accepted by the client
+  /// Event streams at once. A new stream beyond it ends the oldest stream of the address that
+  /// holds the most (its own address on a tie) when that address holds more than the new
+  /// stream's would; else 503 ("all N are open, at most M per address").
+  std::size_t maxStreams{32};
+  double maxUpdatesPerSecond{20};        ///< per event stream
+  std::chrono::seconds readTimeout{15};  ///< idle before a request's first byte; each read of an upload
+  /// From a request's first byte until its header and (for a route) its body have arrived, however
+  /// the bytes trickle in: a whole request (8 KiB header, maxBodyBytes body) or the connection is closed.
+  std::chrono::seconds requestTimeout{10};
+  std::chrono::seconds writeTimeout{15};  ///< a response or event not accepted by the client
   /// Host header names (lower case, without the port; IPv6 in brackets) a request may carry;
   /// another is answered 421 (a DNS-rebinding page). Empty: any.
   std::vector<std::string> allowedHosts;
@@ -125,7 +138,9 @@ struct ServerOptions {
 /// Counters for the heartbeat and the benchmark.
 struct ServerCounters {
   std::uint64_t requests{};
-  std::uint64_t refusedConnections{};
+  std::uint64_t refusedConnections{};  ///< refused with a 503 at accept
+  std::uint64_t evictedConnections{};  ///< closed while waiting for a request, to let a new one in
+  std::uint64_t evictedStreams{};      ///< ended to let a new stream in (maxStreams)
   std::uint64_t rateLimited{};
   std::uint64_t eventsSent{};
   std::uint64_t eventsSkipped{};  ///< next() not asked because the previous event was still being written

@@ -10,10 +10,6 @@
 namespace openvcu::web::detail {
 
 void Connection::startStream(const StreamOpener& opener) {
-  if (m_core.streamCount.load() >= m_core.options.maxStreams) {
-    respond(Response::error(503, "too many event streams"));
-    return;
-  }
   std::unique_ptr<EventSource> source;
   try {
     auto opened = opener(m_request);
@@ -30,8 +26,16 @@ void Connection::startStream(const StreamOpener& opener) {
     respond(Response::error(500, "no event source"));
     return;
   }
+  if (m_core.streamCount.load() >= m_core.options.maxStreams) {
+    if (auto refused = m_core.makeRoomForStream(m_address)) {
+      respond(Response::error(503, *refused));
+      return;
+    }
+  }
   m_source = std::move(source);
+  m_streamingSince = Clock::now();
   m_core.streamCount.fetch_add(1);
+  m_core.connectionBecameStream(m_address);
   const double rate = std::clamp(m_core.options.maxUpdatesPerSecond, 0.01, 1000.0);
   m_tickPeriod = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
   m_stream.expires_never();  // the stream keeps its own write deadline (onTick)

@@ -3,10 +3,12 @@
 // and the paths that must not leave their root, body and upload limits, rate and connection
 // limits. Streams, answers from other threads, downloads and stop(): test_http_streams.cpp.
 #include <doctest/doctest.h>
+#include <poll.h>
 #include <sys/stat.h>
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -258,34 +260,242 @@ TEST_CASE("web server: requests beyond the per-address rate are answered 429 wit
   CHECK(server.sut->counters().rateLimited == 1);
 }
 
-TEST_CASE("web server: connections beyond the per-address limit are closed at once and counted") {
+TEST_CASE(
+    "web server: a new client of an address at its limit closes that address's idle connection, and when every "
+    "connection is busy the 503 names the limit") {
   if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
   TestServer server;
   server.options.maxConnectionsPerAddress = 2;
+  server.options.maxConnections = 3;
+  auto& sut = server.make();
+  std::mutex heldMutex;
+  std::vector<web::Responder> held;
+  sut.route(web::Method::Get, "/api/info",
+            [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
+  sut.route(web::Method::Get, "/api/hold", [&](const web::Request&, web::Responder respond) {
+    const std::lock_guard<std::mutex> lock(heldMutex);
+    held.push_back(std::move(respond));
+  });
+  const auto heldCount = [&] {
+    const std::lock_guard<std::mutex> lock(heldMutex);
+    return held.size();
+  };
+  const auto port = server.start();
+  const int idleOldest = connectTo(port);
+  REQUIRE(idleOldest >= 0);
+  REQUIRE(eventually([&] { return sut.counters().connections == 1; }));
+  const int idleNewer = connectTo(port);
+  REQUIRE(idleNewer >= 0);
+  REQUIRE(eventually([&] { return sut.counters().connections == 2; }));
+
+  // the address is at its limit with two connections that never sent a byte: the one that
+  // waited longest gives way, the new client is answered
+  CHECK(get(port, "/api/info").status == 200);
+  bool oldestClosed = false;
+  CHECK(readFrom(idleOldest, 1s, {}, &oldestClosed).empty());
+  CHECK(oldestClosed);
+  ::close(idleOldest);
+
+  // two requests in progress from 127.0.0.1: nothing of that address can give way
+  sendAll(idleNewer, "GET /api/hold HTTP/1.1\r\nHost: x\r\n\r\n");
+  REQUIRE(eventually([&] { return heldCount() == 1; }));
+  const int busy = connectTo(port);
+  REQUIRE(busy >= 0);
+  sendAll(busy, "GET /api/hold HTTP/1.1\r\nHost: x\r\n\r\n");
+  REQUIRE(eventually([&] { return heldCount() == 2 && sut.counters().connections == 2; }));
+  const Answer perAddress = get(port, "/api/info");
+  CHECK(perAddress.status == 503);
+  CHECK(perAddress.body == "{\"error\": \"too many connections from 127.0.0.1: all 2 are busy with requests\"}\n");
+
+  // another address fills the table with a third request in progress: the 503 names the total
+  const int other = connectFrom(port, "127.0.0.2");
+  REQUIRE(other >= 0);
+  sendAll(other, "GET /api/hold HTTP/1.1\r\nHost: x\r\n\r\n");
+  REQUIRE(eventually([&] { return heldCount() == 3; }));
+  const int refused = connectFrom(port, "127.0.0.3");
+  REQUIRE(refused >= 0);
+  const Answer total = parseAnswer(readFrom(refused, CLIENT_TIMEOUT));
+  ::close(refused);
+  CHECK(total.status == 503);
+  CHECK(total.body == "{\"error\": \"too many connections: all 3 are busy with requests or event streams\"}\n");
+  CHECK(sut.counters().refusedConnections == 2);
+
+  // the held requests are still answered, and their places are free again afterwards
+  {
+    const std::lock_guard<std::mutex> lock(heldMutex);
+    for (auto& respond : held) respond(web::Response::json(200, "{\"held\": true}"));
+  }
+  for (const int fd : {idleNewer, busy, other}) {
+    CHECK(parseAnswer(readFrom(fd, CLIENT_TIMEOUT, [](const std::string& d) {
+            return d.find("true}") != std::string::npos;
+          })).status == 200);
+    ::close(fd);
+  }
+  REQUIRE(eventually([&] { return sut.counters().connections == 0; }));
+  CHECK(get(port, "/api/info").status == 200);
+}
+
+namespace {
+
+/// Connections that send a request header one byte per `interval` and never finish it (a
+/// "slowloris" client); one the server closes is opened again from its address, as an
+/// attacker would. Runs on a thread of its own until destroyed.
+class SlowHeaderSenders {
+ public:
+  SlowHeaderSenders(std::uint16_t port, const std::vector<std::string>& sources, Clock::duration interval)
+      : m_port(port), m_interval(interval) {
+    for (const auto& source : sources) m_clients.push_back({source, -1, 0});
+    for (auto& client : m_clients) step(client);  // every one connected before the thread runs
+    m_thread = std::thread([this] { run(); });
+  }
+  ~SlowHeaderSenders() {
+    {
+      const std::lock_guard<std::mutex> lock(m_mutex);
+      m_stopping = true;
+    }
+    m_wake.notify_all();
+    m_thread.join();
+    for (const auto& client : m_clients) {
+      if (client.fd >= 0) ::close(client.fd);
+    }
+  }
+  SlowHeaderSenders(const SlowHeaderSenders&) = delete;
+  SlowHeaderSenders& operator=(const SlowHeaderSenders&) = delete;
+  [[nodiscard]] std::size_t reconnects() const { return m_reconnects.load(); }
+
+ private:
+  struct Client {
+    std::string source;
+    int fd;
+    std::size_t sent;
+  };
+  static constexpr std::string_view HEADER_START = "GET /api/state HTTP/1.1\r\nHost: x\r\nX-Padding: ";
+
+  void step(Client& client) {
+    if (client.fd >= 0) {
+      pollfd entry{client.fd, POLLIN, 0};
+      if (::poll(&entry, 1, 0) > 0) {  // a 503 or the end: the server let go of it
+        ::close(client.fd);
+        client.fd = -1;
+        ++m_reconnects;
+      }
+    }
+    if (client.fd < 0) {
+      client.fd = connectFrom(m_port, client.source.c_str());
+      client.sent = 0;
+    }
+    if (client.fd < 0) return;
+    const char byte = client.sent < HEADER_START.size() ? HEADER_START[client.sent] : 'a';
+    sendAll(client.fd, std::string_view(&byte, 1));
+    ++client.sent;
+  }
+  void run() {
+    std::unique_lock<std::mutex> lock(m_mutex);
+    while (!m_wake.wait_for(lock, m_interval, [this] { return m_stopping; })) {
+      for (auto& client : m_clients) step(client);
+    }
+  }
+
+  std::uint16_t m_port;
+  Clock::duration m_interval;
+  std::vector<Client> m_clients;
+  std::atomic<std::size_t> m_reconnects{0};
+  std::mutex m_mutex;
+  std::condition_variable m_wake;
+  bool m_stopping{false};
+  std::thread m_thread;
+};
+
+}  // namespace
+
+TEST_CASE(
+    "web server: 64 connections sending a header byte a second keep no client of their addresses from its answers") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  TestServer server;
+  server.options.readTimeout = 15s;  // the service's defaults: the attack outlives the test
+  server.options.maxConnections = 64;
+  server.options.maxConnectionsPerAddress = 16;
+  auto& sut = server.make();
+  sut.route(web::Method::Get, "/api/state", [](const web::Request&, web::Responder respond) {
+    respond(web::Response::json(200, "{\"state\": \"Running\"}"));
+  });
+  sut.route(web::Method::Post, "/api/login", [](const web::Request& request, web::Responder respond) {
+    respond(web::Response::json(200, request.body));
+  });
+  const auto port = server.start();
+  // 16 from the client's own address (all users behind a reverse proxy share one) and 48 from
+  // three others: the connection table and the client's address are both full
+  std::vector<std::string> sources;
+  for (const char* source : {"127.0.0.1", "127.0.0.2", "127.0.0.3", "127.0.0.4"}) {
+    for (int i = 0; i < 16; ++i) sources.emplace_back(source);
+  }
+  const SlowHeaderSenders attack(port, sources, 1s);
+  REQUIRE(eventually([&] { return sut.counters().connections == 64; }));
+
+  constexpr auto ANSWER_BOUND = 1s;
+  for (int round = 0; round < 3; ++round) {
+    CAPTURE(round);
+    auto asked = Clock::now();
+    const Answer state = get(port, "/api/state");
+    CHECK(state.status == 200);
+    CHECK(state.body == "{\"state\": \"Running\"}");
+    CHECK(Clock::now() - asked < ANSWER_BOUND);
+    asked = Clock::now();
+    const Answer login =
+        request(port, "POST", "/api/login", "{\"user\": \"alice\"}", "Content-Type: application/json\r\n");
+    CHECK(login.status == 200);
+    CHECK(Clock::now() - asked < ANSWER_BOUND);
+    std::this_thread::sleep_for(700ms);  // the attack goes on between the rounds
+  }
+  CHECK(sut.counters().refusedConnections == 0);
+  CHECK(sut.counters().evictedConnections >= 1);  // slow connections gave way, none was refused
+  CHECK(sut.counters().connections <= 64);
+  CHECK(attack.reconnects() > 0);
+}
+
+TEST_CASE("web server: the request deadline runs from its first byte: an idle connection may wait before it") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  TestServer server;
+  server.options.readTimeout = 1s;
   auto& sut = server.make();
   sut.route(web::Method::Get, "/api/info",
             [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
   const auto port = server.start();
-  const int first = connectTo(port);
-  const int second = connectTo(port);
-  REQUIRE(first >= 0);
-  REQUIRE(second >= 0);
-  REQUIRE(eventually([&] { return sut.counters().connections == 2; }));
-  const int third = connectTo(port);
-  REQUIRE(third >= 0);
-  const std::string refused = readFrom(third, CLIENT_TIMEOUT);  // ends at the server's close
-  ::close(third);
-  CHECK((refused.empty() || refused.rfind("HTTP/1.1 503", 0) == 0));
-  CHECK(sut.counters().refusedConnections == 1);
-  // a connection that is let in still works, and a closed one frees its place
-  sendAll(first, "GET /api/info HTTP/1.1\r\nHost: x\r\n\r\n");
-  CHECK(parseAnswer(readFrom(first, CLIENT_TIMEOUT, [](const std::string& d) {
-          return d.find("{}") != std::string::npos;
-        })).status == 200);
-  ::close(first);
-  ::close(second);
-  REQUIRE(eventually([&] { return sut.counters().connections == 0; }));
-  CHECK(get(port, "/api/info").status == 200);
+  const int fd = connectTo(port);
+  REQUIRE(fd >= 0);
+  std::this_thread::sleep_for(600ms);  // idle, within readTimeout
+  // then a header that takes 0.6 s to arrive: done 1.2 s after the connection (past readTimeout)
+  const std::string text = "GET /api/info HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
+  const std::size_t piece = text.size() / 10 + 1;
+  for (std::size_t at = 0; at < text.size(); at += piece) {
+    sendAll(fd, std::string_view(text).substr(at, piece));
+    std::this_thread::sleep_for(60ms);
+  }
+  const Answer answer = parseAnswer(readFrom(fd, CLIENT_TIMEOUT));
+  ::close(fd);
+  CHECK(answer.status == 200);
+}
+
+TEST_CASE("web server: a header that keeps trickling in is closed requestTimeout after its first byte") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  TestServer server;
+  server.options.requestTimeout = 1s;
+  const auto port = server.start();
+  const int fd = connectTo(port);
+  REQUIRE(fd >= 0);
+  const auto firstByte = Clock::now();
+  bool closed = false;
+  for (std::size_t sent = 0; !closed && Clock::now() - firstByte < CLIENT_TIMEOUT; ++sent) {
+    const std::string_view start = "GET / HTTP/1.1\r\nX-Padding: ";
+    const char byte = sent < start.size() ? start[sent] : 'a';
+    sendAll(fd, std::string_view(&byte, 1));
+    readFrom(fd, 100ms, {}, &closed);  // a byte every 100 ms until the server lets go
+  }
+  const auto heldFor = Clock::now() - firstByte;
+  ::close(fd);
+  CHECK(closed);
+  CHECK(heldFor >= 900ms);
+  CHECK(heldFor < 1600ms);
 }
 
 TEST_CASE("web server: a request naming another host is answered 421 when the hosts are limited") {
@@ -293,9 +503,8 @@ TEST_CASE("web server: a request naming another host is answered 421 when the ho
   TestServer server;
   server.options.allowedHosts = {"localhost", "127.0.0.1"};
   auto& sut = server.make();
-  sut.route(web::Method::Get, "/api/info", [](const web::Request&, web::Responder respond) {
-    respond(web::Response::json(200, "{}"));
-  });
+  sut.route(web::Method::Get, "/api/info",
+            [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
   const auto port = server.start();
   const auto ask = [port](const std::string& host) {
     const int fd = connectTo(port);

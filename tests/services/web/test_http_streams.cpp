@@ -113,6 +113,102 @@ TEST_CASE("web server: a stream client that stops reading holds up no other clie
   ::close(stalled);
 }
 
+namespace {
+
+/// Opens an event stream on a new connection from `source`: the socket once its 200 header has
+/// arrived, else -1 (and the answer in `refusal` when given).
+int openStream(std::uint16_t port, const char* source, Answer* refusal = nullptr) {
+  const int fd = connectFrom(port, source);
+  if (fd < 0) return -1;
+  sendAll(fd, "GET /api/live HTTP/1.1\r\nHost: x\r\n\r\n");
+  const std::string head = readFrom(fd, CLIENT_TIMEOUT, [](const std::string& d) {
+    return d.find("\r\n\r\n") != std::string::npos &&
+           (d.rfind("HTTP/1.1 200", 0) == 0 || d.find("}") != std::string::npos);
+  });
+  const Answer answer = parseAnswer(head);
+  if (answer.status == 200) return fd;
+  if (refusal != nullptr) *refusal = answer;
+  ::close(fd);
+  return -1;
+}
+
+/// true when the server ends the stream on `fd` within `timeout` (events before the end are read and dropped).
+bool streamEnds(int fd, Clock::duration timeout = 2s) {
+  bool closed = false;
+  readFrom(fd, timeout, {}, &closed);
+  return closed;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "web server: more than 16 event streams from one address are served, and at maxStreams a new stream of that "
+    "address replaces its oldest") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  TestServer server;
+  server.options.maxConnectionsPerAddress = 16;  // the service's defaults
+  server.options.maxStreams = 20;
+  auto& sut = server.make();
+  auto shared = std::make_shared<CountingSource::Shared>();
+  sut.stream("/api/live", [&](const web::Request&) -> openvcu::Result<std::unique_ptr<web::EventSource>> {
+    return std::unique_ptr<web::EventSource>(std::make_unique<CountingSource>(shared, 10));
+  });
+  sut.route(web::Method::Get, "/api/info",
+            [](const web::Request&, web::Responder respond) { respond(web::Response::json(200, "{}")); });
+  const auto port = server.start();
+  // 20 pages behind one reverse proxy: one client address for all
+  std::vector<int> streams;
+  for (int i = 0; i < 20; ++i) {
+    CAPTURE(i);
+    const int fd = openStream(port, "127.0.0.1");
+    CHECK(fd >= 0);
+    if (fd >= 0) streams.push_back(fd);
+  }
+  REQUIRE(streams.size() == 20);
+  CHECK(get(port, "/api/info").status == 200);  // requests of the address still get through
+
+  // one more page of the same address: served, the address's oldest stream ends
+  const int newest = openStream(port, "127.0.0.1");
+  CHECK(newest >= 0);
+  CHECK(streamEnds(streams[0]));
+  // a page of another address: served, the oldest stream of the address holding the most ends
+  const int otherUser = openStream(port, "127.0.0.2");
+  CHECK(otherUser >= 0);
+  CHECK(streamEnds(streams[1]));
+  CHECK(sut.counters().streams == 20);
+  for (const int fd : streams) ::close(fd);
+  if (newest >= 0) ::close(newest);
+  if (otherUser >= 0) ::close(otherUser);
+}
+
+TEST_CASE("web server: when maxStreams are open one per address a new address's stream is refused with the reason") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  TestServer server;
+  server.options.maxStreams = 2;
+  auto& sut = server.make();
+  auto shared = std::make_shared<CountingSource::Shared>();
+  sut.stream("/api/live", [&](const web::Request&) -> openvcu::Result<std::unique_ptr<web::EventSource>> {
+    return std::unique_ptr<web::EventSource>(std::make_unique<CountingSource>(shared, 10));
+  });
+  const auto port = server.start();
+  const int first = openStream(port, "127.0.0.2");
+  const int second = openStream(port, "127.0.0.3");
+  REQUIRE(first >= 0);
+  REQUIRE(second >= 0);
+  Answer refusal;
+  CHECK(openStream(port, "127.0.0.4", &refusal) < 0);
+  CHECK(refusal.status == 503);
+  CHECK(refusal.body == "{\"error\": \"too many event streams: all 2 are open, at most 1 per address\"}");
+  // a second page of an address that has one replaces that address's own stream
+  const int again = openStream(port, "127.0.0.2");
+  CHECK(again >= 0);
+  CHECK(streamEnds(first));
+  CHECK_FALSE(streamEnds(second, 300ms));
+  ::close(first);
+  ::close(second);
+  if (again >= 0) ::close(again);
+}
+
 TEST_CASE("web server: a Responder called from another thread answers the request") {
   if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
   TestServer server;
