@@ -21,6 +21,7 @@
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/service/timer.hpp"
 #include "recordings.hpp"
+#include "same_origin.hpp"
 #include "web_reports.hpp"
 
 #ifndef OPENVCU_VERSION
@@ -55,15 +56,16 @@ fs::path wwwRoot(const std::string& overridden) {
 }
 
 std::string sessionCookie(const std::string& token, std::int64_t maxAgeS) {
-  return std::string(SESSION_COOKIE) + "=" + token + "; Path=/; HttpOnly; SameSite=Strict; Max-Age=" +
-         std::to_string(maxAgeS);
+  return std::string(SESSION_COOKIE) + "=" + token +
+         "; Path=/; HttpOnly; SameSite=Strict; Max-Age=" + std::to_string(maxAgeS);
 }
 
-/// A JSON body of a POST: 415 for another content type, 400 for malformed JSON.
+/// The media type of the page's uploads (www/api.js postFile): a raw body, never a form.
+constexpr std::string_view UPLOAD_MEDIA_TYPE = "application/octet-stream";
+
+/// A JSON body of a POST: 415 for another media type, 400 for malformed JSON.
 std::optional<Response> refuseBody(const Request& request, Json& out) {
-  if (request.header("content-type").find("application/json") == std::string::npos) {
-    return Response::error(415, "the body must be application/json");
-  }
+  if (auto refused = refuseMediaType(request, "application/json")) return refused;
   out = Json::parse(request.body, nullptr, false);
   if (out.is_discarded()) return Response::error(400, "/: not JSON");
   if (!out.is_object()) return Response::error(400, "/: expected an object");
@@ -75,7 +77,9 @@ Json entriesJson(const std::vector<RecordingEntry>& entries) {
   for (const RecordingEntry& entry : entries) {
     Json files = Json::array();
     for (const RecordedFile& file : entry.files) files.push_back({{"name", file.name}, {"bytes", file.bytes}});
-    list.push_back({{"name", entry.name}, {"bytes", entry.bytes}, {"modifiedUnixMs", entry.modifiedUnixMs},
+    list.push_back({{"name", entry.name},
+                    {"bytes", entry.bytes},
+                    {"modifiedUnixMs", entry.modifiedUnixMs},
                     {"files", std::move(files)}});
   }
   return list;
@@ -97,6 +101,7 @@ struct WebAppImpl {
   DataFolder data;
   LiveState live;
   HttpServer server;
+  RequestGuard guard;
   Sessions sessions;
   std::mutex sessionsMutex;
   TraceReports reports;
@@ -119,6 +124,7 @@ struct WebAppImpl {
         data(settings.dataFolder),
         live(service.catalog(), service.table(), std::move(liveSetup)),
         server(std::move(options)),
+        guard(settings.trustedOrigins),
         sessions(std::chrono::minutes(settings.sessionMinutes)),
         reports(service.config().path) {}
 
@@ -140,12 +146,35 @@ struct WebAppImpl {
 
   void audit(const std::string& user, const std::string& client, const std::string& what, bool accepted,
              const std::string& answer) {
-    const Json line = {{"unixMs", clock::realtimeNs() / 1'000'000}, {"user", user}, {"client", client},
-                       {"command", what}, {"accepted", accepted}, {"answer", answer}};
+    const Json line = {{"unixMs", clock::realtimeNs() / 1'000'000},
+                       {"user", user},
+                       {"client", client},
+                       {"command", what},
+                       {"accepted", accepted},
+                       {"answer", answer}};
     const std::string text = line.dump() + "\n";
     if (auditFd >= 0 && ::write(auditFd, text.data(), text.size()) < 0) {
       runtime.log().warning("command log " + (data.root() / "web-commands.log").string() + ": write failed");
     }
+  }
+
+  /// A route that changes something: taken only from vcu-web's own pages (same origin).
+  void postRoute(std::string path, Handler handler) {
+    server.route(Method::Post, std::move(path),
+                 [this, handler = std::move(handler)](const Request& request, const Responder& respond) {
+                   if (auto refused = guard.refuseCrossOrigin(request)) {
+                     runtime.log().warning("refused " + request.path + " from " + request.clientAddress + ": " +
+                                           refusalText(*refused));
+                     return respond(std::move(*refused));
+                   }
+                   handler(request, respond);
+                 });
+  }
+
+  static std::string refusalText(const Response& refusal) {
+    const Json body = Json::parse(refusal.body, nullptr, false);
+    return body.is_object() && body.contains("error") && body["error"].is_string() ? body["error"].get<std::string>()
+                                                                                   : refusal.body;
   }
 
   void routes() {
@@ -169,8 +198,8 @@ struct WebAppImpl {
       const auto it = request.query.find("signals");
       return live.openStream(it == request.query.end() ? std::string() : it->second);
     });
-    server.route(Method::Post, "/api/login", [this](const Request& request, const Responder& respond) { login(request, respond); });
-    server.route(Method::Post, "/api/logout", [this](const Request& request, const Responder& respond) {
+    postRoute("/api/login", [this](const Request& request, const Responder& respond) { login(request, respond); });
+    postRoute("/api/logout", [this](const Request& request, const Responder& respond) {
       const std::string token = request.cookie(SESSION_COOKIE);
       if (userOf(request).empty()) return respond(Response::error(401, "not logged in"));
       {
@@ -181,35 +210,43 @@ struct WebAppImpl {
       response.headers.emplace_back("Set-Cookie", sessionCookie("", 0));
       respond(std::move(response));
     });
-    server.route(Method::Post, "/api/command", [this](const Request& request, const Responder& respond) { command(request, respond); });
+    postRoute("/api/command", [this](const Request& request, const Responder& respond) { command(request, respond); });
     server.route(Method::Get, "/api/recordings", [this](const Request&, const Responder& respond) {
-      const Json listing = {{"recordings", entriesJson(data.listRecordings())}, {"uploads", entriesJson(data.listUploads())}};
+      const Json listing = {{"recordings", entriesJson(data.listRecordings())},
+                            {"uploads", entriesJson(data.listUploads())}};
       respond(Response::json(200, listing.dump()));
     });
-    server.route(Method::Get, "/api/recordings/", [this](const Request& request, const Responder& respond) {
-      fileAction(request, respond, true);
-    });
-    server.route(Method::Get, "/api/uploads/", [this](const Request& request, const Responder& respond) {
-      fileAction(request, respond, false);
-    });
-    server.upload("/api/uploads", UploadRoute{
-        .authorize = [this](const Request& request) -> std::optional<Response> {
-          if (userOf(request).empty()) return Response::error(401, "log in to upload");
-          const auto name = request.query.find("name");
-          if (name == request.query.end() || name->second.empty()) return Response::error(400, "?name=FILE is missing");
-          return std::nullopt;
-        },
-        .onComplete = [this](const Request& request, fs::path file, const Responder& respond) {
-          auto accepted = data.acceptUpload(file, request.query.at("name"));
-          if (!accepted) {
-            std::error_code ignored;
-            fs::remove(file, ignored);
-            respond(Response::error(400, accepted.error().message));
-            return;
-          }
-          runtime.log().info("upload '" + *accepted + "' by " + userOf(request) + " from " + request.clientAddress);
-          respond(Response::json(200, Json{{"name", *accepted}}.dump()));
-        }});
+    server.route(Method::Get, "/api/recordings/",
+                 [this](const Request& request, const Responder& respond) { fileAction(request, respond, true); });
+    server.route(Method::Get, "/api/uploads/",
+                 [this](const Request& request, const Responder& respond) { fileAction(request, respond, false); });
+    server.upload("/api/uploads",
+                  UploadRoute{.authorize = [this](const Request& request) -> std::optional<Response> {
+                                if (auto refused = guard.refuseCrossOrigin(request)) {
+                                  runtime.log().warning("refused an upload from " + request.clientAddress + ": " +
+                                                        refusalText(*refused));
+                                  return refused;
+                                }
+                                if (userOf(request).empty()) return Response::error(401, "log in to upload");
+                                if (auto refused = refuseMediaType(request, UPLOAD_MEDIA_TYPE)) return refused;
+                                const auto name = request.query.find("name");
+                                if (name == request.query.end() || name->second.empty())
+                                  return Response::error(400, "?name=FILE is missing");
+                                return std::nullopt;
+                              },
+                              .onComplete =
+                                  [this](const Request& request, fs::path file, const Responder& respond) {
+                                    auto accepted = data.acceptUpload(file, request.query.at("name"));
+                                    if (!accepted) {
+                                      std::error_code ignored;
+                                      fs::remove(file, ignored);
+                                      respond(Response::error(400, accepted.error().message));
+                                      return;
+                                    }
+                                    runtime.log().info("upload '" + *accepted + "' by " + userOf(request) + " from " +
+                                                       request.clientAddress);
+                                    respond(Response::json(200, Json{{"name", *accepted}}.dump()));
+                                  }});
   }
 
   void login(const Request& request, const Responder& respond) {
@@ -218,7 +255,8 @@ struct WebAppImpl {
     const auto user = body.find("user");
     const auto password = body.find("password");
     if (user == body.end() || !user->is_string()) return respond(Response::error(400, "/user: expected a string"));
-    if (password == body.end() || !password->is_string()) return respond(Response::error(400, "/password: expected a string"));
+    if (password == body.end() || !password->is_string())
+      return respond(Response::error(400, "/password: expected a string"));
     const bool queued = commands.submit([this, name = user->get<std::string>(), secret = password->get<std::string>(),
                                          client = request.clientAddress, respond] {
       auto users = UserFile::load(settings.usersFile);
@@ -236,7 +274,8 @@ struct WebAppImpl {
       }
       if (!allowed) {
         runtime.log().warning("login refused for '" + name + "' from " + client + ": too many failed logins");
-        Response response = Response::error(429, "too many failed logins; retry in " + std::to_string(retry.count()) + " s");
+        Response response =
+            Response::error(429, "too many failed logins; retry in " + std::to_string(retry.count()) + " s");
         response.headers.emplace_back("Retry-After", std::to_string(retry.count()));
         respond(std::move(response));
         return;
@@ -264,9 +303,7 @@ struct WebAppImpl {
   void command(const Request& request, const Responder& respond) {
     const std::string user = userOf(request);
     if (user.empty()) return respond(Response::error(401, "log in to command the VCU"));
-    if (request.header("content-type").find("application/json") == std::string::npos) {
-      return respond(Response::error(415, "the body must be application/json"));
-    }
+    if (auto refused = refuseMediaType(request, "application/json")) return respond(std::move(*refused));
     auto parsed = commands::parseCommand(request.body, runtime.catalog(), runtime.config().database);
     if (!parsed) return respond(Response::error(400, parsed.error().message));
     ipc::CommandRequest commandRequest = std::move(*parsed);
@@ -274,7 +311,8 @@ struct WebAppImpl {
     commandRequest.timestampNs = clock::realtimeNs();
     const std::string what = commands::describeCommand(commandRequest);
     const bool queued = commands.submit([this, commandRequest, user, what, client = request.clientAddress, respond] {
-      const commands::CommandOutcome outcome = commands::sendCommand(runtime.instance(), commandRequest, COMMAND_TIMEOUT);
+      const commands::CommandOutcome outcome =
+          commands::sendCommand(runtime.instance(), commandRequest, COMMAND_TIMEOUT);
       const std::string verdict = outcome.verdict();
       audit(user, client, what, outcome.accepted(), verdict);
       switch (outcome.kind) {
@@ -339,12 +377,12 @@ struct WebAppImpl {
     });
     if (!heartbeat) return heartbeat.error();
     subscriptions.push_back(*heartbeat);
-    auto fault = events.onFault([this](const ipc::FaultEvent& event) { server.post([this, event] { live.onFault(event); }); });
+    auto fault =
+        events.onFault([this](const ipc::FaultEvent& event) { server.post([this, event] { live.onFault(event); }); });
     if (!fault) return fault.error();
     subscriptions.push_back(*fault);
-    auto transition = events.onFsmTransition([this](const ipc::FsmTransition& event) {
-      server.post([this, event] { live.onTransition(event); });
-    });
+    auto transition = events.onFsmTransition(
+        [this](const ipc::FsmTransition& event) { server.post([this, event] { live.onTransition(event); }); });
     if (!transition) return transition.error();
     subscriptions.push_back(*transition);
     return {};

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "openvcu/config/json.hpp"
@@ -30,6 +31,23 @@ void boundedInteger(JsonChecker& check, const Json& root, std::string_view key, 
     return;
   }
   target = static_cast<T>(*value);
+}
+
+/// Why `origin` is not an origin as a browser sends it ("https://vcu.example:8443"), if it is not.
+std::optional<std::string> originProblem(const std::string& origin) {
+  const std::string form = "'" + origin +
+                           "': expected an origin as a browser sends it, \"http(s)://host[:port]\" in lower case, "
+                           "without a path";
+  const auto schemeEnd = origin.find("://");
+  if (schemeEnd == std::string::npos) return form;
+  const std::string scheme = origin.substr(0, schemeEnd);
+  const std::string rest = origin.substr(schemeEnd + 3);
+  if (scheme != "http" && scheme != "https") return form;
+  if (rest.empty() || rest.find_first_of("/?#@ \\") != std::string::npos) return form;
+  for (const char c : rest) {
+    if (c >= 'A' && c <= 'Z') return form;
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -63,7 +81,7 @@ Result<WebConfig> parseWebConfig(std::string_view text, const std::string& sourc
   WebConfig result;
   if (!check.isObject(root, "")) return check.firstError();
   check.onlyKeys(root, "", {"listen", "dataFolder", "usersFile", "maxUpdatesPerSecond", "maxClients", "maxConnections",
-                            "maxUploadMB", "sessionMinutes", "comment"});
+                            "maxUploadMB", "sessionMinutes", "trustedOrigins", "comment"});
   if (const auto listen = check.string(root, "", "listen", false)) {
     auto parsed = parseListenAddress(*listen);
     if (!parsed) {
@@ -95,6 +113,18 @@ Result<WebConfig> parseWebConfig(std::string_view text, const std::string& sourc
   boundedInteger(check, root, "maxUploadMB", 1, 4096, uploadMb);
   result.maxUploadBytes = uploadMb << 20;
   boundedInteger(check, root, "sessionMinutes", 1, 1440, result.sessionMinutes);
+  if (const Json* origins = check.array(root, "", "trustedOrigins", false)) {
+    for (std::size_t i = 0; i < origins->size(); ++i) {
+      const std::string path = JsonChecker::join("/trustedOrigins", i);
+      const Json& origin = (*origins)[i];
+      if (!origin.is_string()) {
+        check.error(path, "expected a string such as \"https://vcu.example\"");
+        continue;
+      }
+      if (auto problem = originProblem(origin.get<std::string>())) check.error(path, *problem);
+      else result.trustedOrigins.push_back(origin.get<std::string>());
+    }
+  }
   if (!check.ok()) return check.firstError();
   if (warnings) {
     for (const Error& diagnostic : check.diagnostics()) {

@@ -338,6 +338,47 @@ def check_commands(host, port, c, anonymous):
     status = announce_body(c, '/api/command', 'application/json', 70 * 1024)
     check(status == 413, f'a 70 KiB command body: HTTP {status}, expected 413')
     log('command: JSON array -> 400 with a path, text/plain -> 415, 70 KiB -> 413')
+    check_same_origin(host, port, c)
+
+
+def check_same_origin(host, port, c):
+    """A POST is taken only from vcu-web's own origin: what another origin's page makes a browser
+    send is refused naming the header, before anything reaches the stack."""
+    command = json.dumps({'kind': 'operator', 'key': START_KEY, 'value': 'Start'})
+    own = f'http://{host}:{port}'
+    as_json = {'Content-Type': 'application/json'}
+    refused = [
+        ({**as_json, 'Origin': f'http://{host}:{port + 1}'}, 403, 'Origin', 'another port of the same host'),
+        ({**as_json, 'Origin': 'null'}, 403, 'Origin', 'Origin null'),
+        ({**as_json, 'Origin': f'https://{host}:{port}'}, 403, 'Origin', 'another scheme'),
+        ({**as_json, 'Origin': own, 'Sec-Fetch-Site': 'same-site'}, 403, 'Sec-Fetch-Site', 'Sec-Fetch-Site same-site'),
+        ({**as_json, 'Sec-Fetch-Site': 'cross-site'}, 403, 'Sec-Fetch-Site', 'Sec-Fetch-Site cross-site'),
+        ({'Content-Type': 'text/plain; x=application/json', 'Origin': own}, 415, 'Content-Type', 'text/plain; x=application/json'),
+        ({'Content-Type': 'multipart/form-data; boundary=application/json'}, 415, 'Content-Type', 'multipart, boundary=application/json'),
+        ({'Content-Type': 'application/x-www-form-urlencoded; x=application/json'}, 415, 'Content-Type', 'urlencoded; x=application/json'),
+    ]
+    for headers, status, header, what in refused:
+        answer = c.request('POST', '/api/command', body=command, headers=headers)
+        expect_status(answer, status, f'a command with {what}')
+        check(answer.error().startswith(header), f'a command with {what}: the {status} does not name {header}: {answer.error()!r}')
+        log(f'command with {what} -> {status} "{answer.error()}"')
+    for path in ('/api/login', '/api/logout'):
+        answer = c.request('POST', path, body='{}', headers={**as_json, 'Origin': f'http://{host}:{port + 1}'})
+        expect_status(answer, 403, f'{path} from another origin')
+    answer = c.request('POST', '/api/uploads?name=cross.log', body=b'x',
+                       headers={'Content-Type': 'application/octet-stream', 'Origin': f'http://{host}:{port + 1}'})
+    expect_status(answer, 403, 'an upload from another origin')
+    answer = c.request('POST', '/api/uploads?name=form.log', body=b'x', headers={'Content-Type': 'text/plain', 'Origin': own})
+    expect_status(answer, 415, 'an upload as text/plain')
+    check(not any(u['name'].startswith(('cross', 'form')) for u in c.get('/api/recordings').json()['uploads']),
+          'a refused upload was kept')
+    log('login, logout and uploads from another origin -> 403; an upload as text/plain -> 415, nothing kept')
+    # the own origin (as the page sends it) still commands; the FSM stays the judge
+    answer = c.request('POST', '/api/command', body=json.dumps({'kind': 'set', 'key': FSM_KEY, 'value': 1}),
+                       headers={**as_json, 'Origin': own, 'Sec-Fetch-Site': 'same-origin'})
+    expect_status(answer, 200, 'a command from the own origin')
+    check(answer.json().get('responder') == 'vcu-fsm', f'a command from the own origin: {answer.json()}')
+    log(f'command from the own origin {own} -> 200, decided by vcu-fsm')
 
 
 def check_fault_reset(c):

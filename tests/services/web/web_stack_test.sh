@@ -5,6 +5,9 @@
 #   web_stack_test.sh browser   the page in headless chromium, then vcu-web SIGKILLed and
 #                               started again while the page is open, then a battery fault
 #                               injected into the simulated vehicle (web_browser_test.py)
+#   web_stack_test.sh cross-origin  a page of a second origin (another port of 127.0.0.1) tries
+#                               to command the VCU through the logged-in browser; vcu-web's own
+#                               page still commands (web_cross_origin_test.py)
 # Starts the HHEA stack under supervisord (tests/demo/supervised_stack.sh; the HMI stays off),
 # makes a users file with `vcu-web passwd`, a data folder with one 3 s `vcu record` and a
 # symlink out of it (recordings/escape -> /etc: must never be served), starts vcu-web on
@@ -14,13 +17,13 @@
 # when the browser part lacks chromium, chromium-driver or python3-selenium.
 set -uo pipefail
 mode=${1:-}
-case "$mode" in api|browser) ;; *) echo "usage: web_stack_test.sh api|browser" >&2; exit 2 ;; esac
+case "$mode" in api|browser|cross-origin) ;; *) echo "usage: web_stack_test.sh api|browser|cross-origin" >&2; exit 2 ;; esac
 NAME=web_stack_test
 here=$(cd "$(dirname "$0")" && pwd)
 python=/usr/bin/python3
 export PYTHONDONTWRITEBYTECODE=1  # nothing written into the source tree
 [ -x "$python" ] || { echo "$NAME: FAIL: no $python"; exit 1; }
-if [ "$mode" = browser ]; then
+if [ "$mode" != api ]; then
   "$python" "$here/web_browser_test.py" --check-only
   status=$?
   [ $status -eq 0 ] || exit $status  # 77: skipped, said why
@@ -59,10 +62,12 @@ users=$run/web-users.json
 out=$(printf '%s\n' "$password" | "$bin/vcu-web" passwd --users "$users" "$user" 2>&1) || fail "vcu-web passwd: $out"
 data=$run/data
 mkdir -p "$data/recordings"
-out=$("$vcu" record "$data/recordings/drive1" --for 3 --config "$config" 2>&1) || fail "vcu record: $out"
-[ -s "$data/recordings/drive1/vehicle.log" ] || fail "vcu record wrote no vehicle.log: $out"
-ln -s /etc "$data/recordings/escape"
-echo "$NAME: recording drive1: $(ls -l "$data/recordings/drive1" | tail -n +2 | awk '{print $9, $5}' | tr '\n' ' ')"
+[ "$mode" = cross-origin ] || out=$("$vcu" record "$data/recordings/drive1" --for 3 --config "$config" 2>&1) || fail "vcu record: $out"
+if [ "$mode" != cross-origin ]; then  # the cross-origin test needs no recording
+  [ -s "$data/recordings/drive1/vehicle.log" ] || fail "vcu record wrote no vehicle.log: $out"
+  ln -s /etc "$data/recordings/escape"
+  echo "$NAME: recording drive1: $(ls -l "$data/recordings/drive1" | tail -n +2 | awk '{print $9, $5}' | tr '\n' ' ')"
+fi
 
 port=18080
 url=http://127.0.0.1:$port/
@@ -111,6 +116,13 @@ if [ "$mode" = api ]; then
   WEB_USERS=$run/no-such-users.json "$run/web-start.sh" || fail "the read-only vcu-web did not start"
   "$python" "$here/web_api_test.py" --url "$url" --read-only "$run/no-such-users.json" || fail "web_api_test.py --read-only"
   [ $status -eq 0 ] || fail "web_api_test.py"
+elif [ "$mode" = cross-origin ]; then
+  "$python" "$here/web_cross_origin_test.py" --url "$url" --user "$user" --attacker-port $((port + 1)) \
+    --command-log "$data/web-commands.log" --web-log "$run/web.log" \
+    --screenshots "${OPENVCU_WEB_SCREENSHOTS:-$bin/../tests/web-screenshots}"
+  status=$?
+  [ $status -eq 77 ] && exit 77
+  [ $status -eq 0 ] || fail "web_cross_origin_test.py"
 else
   shots=${OPENVCU_WEB_SCREENSHOTS:-$bin/../tests/web-screenshots}
   mkdir -p "$shots" || fail "cannot create $shots"

@@ -54,3 +54,17 @@ TEST_CASE("a listen address beyond loopback is taken with a warning") {
   REQUIRE(warnings.size() == 1);
   CHECK(warnings[0].toString().find("reachable from its network") != std::string::npos);
 }
+
+TEST_CASE("web.json trustedOrigins takes browser origins and names a malformed one by its index") {
+  auto sut = config::parseWebConfig(R"({"trustedOrigins": ["https://vcu.example", "http://10.0.0.5:8443"]})", "web.json",
+                                    "/etc/openvcu");
+  REQUIRE(sut);
+  CHECK(sut->trustedOrigins == std::vector<std::string>{"https://vcu.example", "http://10.0.0.5:8443"});
+  CHECK(errorOf(R"({"trustedOrigins": ["https://vcu.example/"]})").find("/trustedOrigins/0: 'https://vcu.example/'") !=
+        std::string::npos);
+  CHECK(errorOf(R"({"trustedOrigins": ["ok", 1]})").find("/trustedOrigins/0") != std::string::npos);
+  CHECK(errorOf(R"({"trustedOrigins": ["https://a.b", 1]})").find("/trustedOrigins/1: expected a string") != std::string::npos);
+  CHECK(errorOf(R"({"trustedOrigins": ["ftp://vcu.example"]})").find("/trustedOrigins/0") != std::string::npos);
+  CHECK(errorOf(R"({"trustedOrigins": ["https://VCU.example"]})").find("lower case") != std::string::npos);
+  CHECK(errorOf(R"({"trustedOrigins": "https://vcu.example"})").find("/trustedOrigins") != std::string::npos);
+}

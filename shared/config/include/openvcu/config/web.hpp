@@ -35,6 +35,9 @@ struct WebConfig {
   std::size_t maxConnections{64};  ///< HTTP connections at once, 4..1024
   std::uint64_t maxUploadBytes{256ull << 20};  ///< "maxUploadMB", 1..4096 MB
   std::int64_t sessionMinutes{60};             ///< a login ends this long after its last use, 1..1440
+  /// Origins besides vcu-web's own whose pages may send POSTs: the public address of a TLS
+  /// reverse proxy ("https://vcu.example"); each "http(s)://host[:port]", lower case, no path.
+  std::vector<std::string> trustedOrigins;
 };
 
 /// "127.0.0.1:8080" -> address and port; an error for anything else ("a.b:80", ":80", "1.2.3.4:99999").
