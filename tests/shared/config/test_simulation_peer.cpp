@@ -95,6 +95,6 @@ TEST_CASE("#24 each kind of mistake in j1939Peer is refused with its JSON path")
             .starts_with("/j1939Peer/script/0/request: must be a whole number 0..262143"));
   CHECK(firstError(withPeer(head + R"(, "extra": 1})")).starts_with("/j1939Peer/extra"));
   CHECK(firstError(withPeer(R"({"bus": "vehicle", "address": 249, "name": {"identityNumber": 1, "manufacturerCode": 0,
-      "function": 128, "vehicleSystem": 1, "industryGroup": 3, "arbitraryAddressCapable": true}})")) ==
+      "function": 128, "vehicleSystem": 1, "industryGroup": 3, "arbitraryAddressCapable": false}})")) ==
         "/j1939Peer/name: is the VCU's own NAME on bus 'vehicle'");
 }
