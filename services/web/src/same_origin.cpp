@@ -26,6 +26,14 @@ std::string shownValue(std::string_view value) {
 
 }  // namespace
 
+unsigned Refusal::status() const noexcept {
+  return kind == RefusalKind::WrongMediaType ? 415 : 403;
+}
+
+Response Refusal::response() const {
+  return Response::error(status(), message);
+}
+
 std::string mediaTypeOf(std::string_view contentType) {
   return detail::lowerCase(trimmed(contentType.substr(0, contentType.find(';'))));
 }
@@ -42,22 +50,23 @@ std::string normalizedOrigin(std::string_view origin) {
   return result;
 }
 
-std::optional<Response> refuseMediaType(const Request& request, std::string_view mediaType) {
+std::optional<Refusal> refuseMediaType(const Request& request, std::string_view mediaType) {
   const std::string sent = request.header("content-type");
   if (mediaTypeOf(sent) == mediaType) return std::nullopt;
-  return Response::error(415, "Content-Type " + (sent.empty() ? std::string("missing") : shownValue(sent)) +
-                                  ": the body must be " + std::string(mediaType));
+  return Refusal{RefusalKind::WrongMediaType, "Content-Type " +
+                                                  (sent.empty() ? std::string("missing") : shownValue(sent)) +
+                                                  ": the body must be " + std::string(mediaType)};
 }
 
 RequestGuard::RequestGuard(std::vector<std::string> trustedOrigins) {
   for (const std::string& origin : trustedOrigins) m_trustedOrigins.push_back(normalizedOrigin(origin));
 }
 
-std::optional<Response> RequestGuard::refuseCrossOrigin(const Request& request) const {
+std::optional<Refusal> RequestGuard::refuseCrossOrigin(const Request& request) const {
   const std::string site = detail::lowerCase(trimmed(request.header("sec-fetch-site")));
   if (!site.empty() && site != "same-origin" && site != "none") {
-    return Response::error(
-        403, "Sec-Fetch-Site " + shownValue(site) + ": only vcu-web's own pages may send this request (same-origin)");
+    return Refusal{RefusalKind::CrossSiteFetch, "Sec-Fetch-Site " + shownValue(site) +
+                                                    ": only vcu-web's own pages may send this request (same-origin)"};
   }
   const std::string origin = request.header("origin");
   if (origin.empty()) return std::nullopt;
@@ -65,8 +74,8 @@ std::optional<Response> RequestGuard::refuseCrossOrigin(const Request& request) 
   const std::string own = normalizedOrigin("http://" + request.header("host"));
   const bool trusted = std::find(m_trustedOrigins.begin(), m_trustedOrigins.end(), sent) != m_trustedOrigins.end();
   if (sent != "null" && (sent == own || trusted)) return std::nullopt;
-  return Response::error(403, "Origin " + shownValue(origin) + " is not this server's (" + own +
-                                  "): only vcu-web's own pages may send this request");
+  return Refusal{RefusalKind::ForeignOrigin, "Origin " + shownValue(origin) + " is not this server's (" + own +
+                                                 "): only vcu-web's own pages may send this request"};
 }
 
 }  // namespace openvcu::web

@@ -65,7 +65,7 @@ constexpr std::string_view UPLOAD_MEDIA_TYPE = "application/octet-stream";
 
 /// A JSON body of a POST: 415 for another media type, 400 for malformed JSON.
 std::optional<Response> refuseBody(const Request& request, Json& out) {
-  if (auto refused = refuseMediaType(request, "application/json")) return refused;
+  if (auto refused = refuseMediaType(request, "application/json")) return refused->response();
   out = Json::parse(request.body, nullptr, false);
   if (out.is_discarded()) return Response::error(400, "/: not JSON");
   if (!out.is_object()) return Response::error(400, "/: expected an object");
@@ -164,17 +164,11 @@ struct WebAppImpl {
                  [this, handler = std::move(handler)](const Request& request, const Responder& respond) {
                    if (auto refused = guard.refuseCrossOrigin(request)) {
                      runtime.log().warning("refused " + request.path + " from " + request.clientAddress + ": " +
-                                           refusalText(*refused));
-                     return respond(std::move(*refused));
+                                           refused->message);
+                     return respond(refused->response());
                    }
                    handler(request, respond);
                  });
-  }
-
-  static std::string refusalText(const Response& refusal) {
-    const Json body = Json::parse(refusal.body, nullptr, false);
-    return body.is_object() && body.contains("error") && body["error"].is_string() ? body["error"].get<std::string>()
-                                                                                   : refusal.body;
   }
 
   void routes() {
@@ -224,11 +218,12 @@ struct WebAppImpl {
                   UploadRoute{.authorize = [this](const Request& request) -> std::optional<Response> {
                                 if (auto refused = guard.refuseCrossOrigin(request)) {
                                   runtime.log().warning("refused an upload from " + request.clientAddress + ": " +
-                                                        refusalText(*refused));
-                                  return refused;
+                                                        refused->message);
+                                  return refused->response();
                                 }
                                 if (userOf(request).empty()) return Response::error(401, "log in to upload");
-                                if (auto refused = refuseMediaType(request, UPLOAD_MEDIA_TYPE)) return refused;
+                                if (auto refused = refuseMediaType(request, UPLOAD_MEDIA_TYPE))
+                                  return refused->response();
                                 const auto name = request.query.find("name");
                                 if (name == request.query.end() || name->second.empty())
                                   return Response::error(400, "?name=FILE is missing");
@@ -303,7 +298,7 @@ struct WebAppImpl {
   void command(const Request& request, const Responder& respond) {
     const std::string user = userOf(request);
     if (user.empty()) return respond(Response::error(401, "log in to command the VCU"));
-    if (auto refused = refuseMediaType(request, "application/json")) return respond(std::move(*refused));
+    if (auto refused = refuseMediaType(request, "application/json")) return respond(refused->response());
     auto parsed = commands::parseCommand(request.body, runtime.catalog(), runtime.config().database);
     if (!parsed) return respond(Response::error(400, parsed.error().message));
     ipc::CommandRequest commandRequest = std::move(*parsed);

@@ -24,9 +24,12 @@ web::Request post(std::map<std::string, std::string> headers) {
   return request;
 }
 
-std::string errorOf(const std::optional<web::Response>& refusal) {
+/// The refusal's message as a client reads it from the response body.
+std::string errorOf(const std::optional<web::Refusal>& refusal) {
   REQUIRE(refusal);
-  return nlohmann::json::parse(refusal->body).at("error").get<std::string>();
+  const web::Response response = refusal->response();
+  CHECK(response.status == refusal->status());
+  return nlohmann::json::parse(response.body).at("error").get<std::string>();
 }
 
 }  // namespace
@@ -44,7 +47,8 @@ TEST_CASE("a JSON body is refused 415 naming Content-Type when the media type on
                            "multipart/form-data; boundary=application/json", "application/jsonp", ""}) {
     const auto sut = web::refuseMediaType(post({{"content-type", type}}), "application/json");
     REQUIRE(sut);
-    CHECK(sut->status == 415);
+    CHECK(sut->kind == web::RefusalKind::WrongMediaType);
+    CHECK(sut->status() == 415);
     CHECK(errorOf(sut).starts_with("Content-Type "));
   }
   CHECK_FALSE(web::refuseMediaType(post({{"content-type", "application/json; charset=utf-8"}}), "application/json"));
@@ -73,7 +77,8 @@ TEST_CASE("a page on another port of the same host is refused 403 naming the Ori
   const web::RequestGuard sut;
   const auto refused = sut.refuseCrossOrigin(post({{"origin", "http://127.0.0.1:9000"}}));
   REQUIRE(refused);
-  CHECK(refused->status == 403);
+  CHECK(refused->kind == web::RefusalKind::ForeignOrigin);
+  CHECK(refused->status() == 403);
   CHECK(
       errorOf(refused) ==
       "Origin 'http://127.0.0.1:9000' is not this server's (http://127.0.0.1:18080): only vcu-web's own pages may send "
@@ -85,7 +90,8 @@ TEST_CASE("Sec-Fetch-Site same-site or cross-site is refused 403 naming the head
   for (const char* site : {"same-site", "cross-site"}) {
     const auto refused = sut.refuseCrossOrigin(post({{"origin", OWN_ORIGIN}, {"sec-fetch-site", site}}));
     REQUIRE(refused);
-    CHECK(refused->status == 403);
+    CHECK(refused->kind == web::RefusalKind::CrossSiteFetch);
+    CHECK(refused->status() == 403);
     CHECK(errorOf(refused).starts_with("Sec-Fetch-Site '" + std::string(site) + "'"));
   }
   CHECK_FALSE(sut.refuseCrossOrigin(post({{"sec-fetch-site", "none"}})));
