@@ -405,11 +405,17 @@ class Loader {
   void lcm(const Json& root) {
     const auto url = m_check.string(root, "", "lcm", false);
     if (!url) return;
-    static constexpr std::string_view SCHEMES[] = {"udpm://", "memq://", "file://", "tcpq://"};
+    if (url->rfind("tcpq://", 0) == 0) {
+      m_check.error("/lcm",
+                    "tcpq:// is refused: its hub relays events from any client that reaches its port, "
+                    "so events could come from another host; use udpm://...?ttl=0");
+      return;
+    }
+    static constexpr std::string_view SCHEMES[] = {"udpm://", "memq://", "file://"};
     const bool known = std::any_of(std::begin(SCHEMES), std::end(SCHEMES),
                                    [&](std::string_view scheme) { return url->rfind(scheme, 0) == 0; });
     if (!known) {
-      m_check.error("/lcm", "LCM URL must start with udpm://, memq://, file:// or tcpq://");
+      m_check.error("/lcm", "LCM URL must start with udpm://, memq:// or file://");
       return;
     }
     if (url->rfind("udpm://", 0) == 0 && url->find("ttl=0") == std::string::npos) {

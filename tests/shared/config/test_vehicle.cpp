@@ -65,7 +65,10 @@ TEST_CASE("configuration errors name the file, the JSON path and the reason") {
   CHECK(firstError(withBus(R"({"name": "vehicle", "link": "sim:v", "bitrate": 12.5, "messages": "all"})")) ==
         "vehicle.json: /buses/0/bitrate: must be a whole number of bit/s between 10000 and 8000000");
   CHECK(firstError(withBus(GOOD_BUS, R"(, "lcm": "http://x")")) ==
-        "vehicle.json: /lcm: LCM URL must start with udpm://, memq://, file:// or tcpq://");
+        "vehicle.json: /lcm: LCM URL must start with udpm://, memq:// or file://");
+  CHECK(firstError(withBus(GOOD_BUS, R"(, "lcm": "tcpq://127.0.0.1:7700")")) ==
+        "vehicle.json: /lcm: tcpq:// is refused: its hub relays events from any client that reaches its port, "
+        "so events could come from another host; use udpm://...?ttl=0");
   CHECK(firstError(withBus(GOOD_BUS, R"(, "fsm": "missing.json")")).find("/fsm: file '") != std::string::npos);
   CHECK(firstError(withBus(R"({"name": "vehicle", "link": "replay:nope.log", "messages": "all"})"))
             .find("/buses/0/link: replay file") != std::string::npos);
