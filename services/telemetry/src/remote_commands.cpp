@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <nlohmann/json.hpp>
+#include <variant>
 
 #include "openvcu/commands/command_check.hpp"
+#include "openvcu/config/json.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/fleet/topics.hpp"
 
@@ -29,18 +31,70 @@ std::string keyList(const std::vector<std::string>& keys) {
   return out.empty() ? "none" : out;
 }
 
+/// A payload that passed the first checks: its object without deadlineUnixMs, and that deadline.
+struct Envelope {
+  Json body;
+  std::int64_t deadlineUnixMs{};
+};
+
+/// The payload read as the configuration files are (config::parseJson: a key given twice at any
+/// level, or a number beyond a double, is refused with its JSON path), then its deadline
+/// checked; or the refusal reason.
+std::variant<Envelope, std::string> readEnvelope(const std::string& payload, const ClockPair& now) {
+  if (payload.size() > MAX_COMMAND_PAYLOAD) {
+    return "the command has " + std::to_string(payload.size()) + " bytes, at most " +
+           std::to_string(MAX_COMMAND_PAYLOAD);
+  }
+  auto parsed = config::parseJson(payload, "");
+  if (!parsed) {
+    const Error& error = parsed.error();
+    const std::string at = ", at " + std::to_string(error.location.line) + ":" + std::to_string(error.location.column);
+    if (!error.location.jsonPath.empty()) return error.location.jsonPath + ": " + error.message + at;
+    return "/: not JSON (" + error.message + at + ")";
+  }
+  Envelope envelope{.body = std::move(*parsed), .deadlineUnixMs = 0};
+  Json& body = envelope.body;
+  if (!body.is_object()) return std::string("/: expected an object {\"kind\", \"key\", \"value\", \"deadlineUnixMs\"}");
+  const auto deadlineIt = body.find("deadlineUnixMs");
+  if (deadlineIt == body.end() || !deadlineIt->is_number_integer()) {
+    return std::string("/deadlineUnixMs: missing (Unix ms, at most 10 s ahead)");
+  }
+  envelope.deadlineUnixMs = deadlineIt->get<std::int64_t>();
+  if (envelope.deadlineUnixMs <= now.unixMs) {
+    return "/deadlineUnixMs: " + std::to_string(now.unixMs - envelope.deadlineUnixMs) + " ms in the past";
+  }
+  if (envelope.deadlineUnixMs - now.unixMs > MAX_DEADLINE_AHEAD_MS) {
+    return "/deadlineUnixMs: " + std::to_string(envelope.deadlineUnixMs - now.unixMs) + " ms ahead, at most " +
+           std::to_string(MAX_DEADLINE_AHEAD_MS);
+  }
+  body.erase("deadlineUnixMs");
+  return envelope;
+}
+
+/// The key a command names, before the full check: kind faultReset names the FSM's reset switch.
+std::string commandKey(const Json& body) {
+  if (const auto kind = body.find("kind"); kind != body.end() && *kind == "faultReset") {
+    return std::string(commands::FAULT_RESET_KEY);
+  }
+  if (const auto named = body.find("key"); named != body.end() && named->is_string()) return named->get<std::string>();
+  return {};
+}
+
 }  // namespace
 
-RemoteCommands::RemoteCommands(RemoteCommandsOptions options)
-    : m_options(std::move(options)), m_topicPrefix(fleet::commandTopicPrefix(m_options.vehicleId)) {}
+RemoteCommands::RemoteCommands(RemoteCommandsOptions options, ReplayGuard guard)
+    : m_options(std::move(options)),
+      m_topicPrefix(fleet::commandTopicPrefix(m_options.vehicleId)),
+      m_guard(std::move(guard)) {}
 
 RemoteCommands::~RemoteCommands() {
   m_worker.reset();
 }
 
-Result<std::unique_ptr<RemoteCommands>> RemoteCommands::create(RemoteCommandsOptions options) {
-  if (options.catalog == nullptr || options.database == nullptr || !options.send) {
-    return Error{"remote commands need the catalog, the DBC database and a send function"};
+Result<std::unique_ptr<RemoteCommands>> RemoteCommands::create(RemoteCommandsOptions options,
+                                                               std::vector<Error>* warnings) {
+  if (options.catalog == nullptr || options.database == nullptr || !options.send || options.stateFolder.empty()) {
+    return Error{"remote commands need the catalog, the DBC database, a send function and a state folder"};
   }
   for (std::size_t i = 0; i < options.keys.size(); ++i) {
     const std::string& key = options.keys[i];
@@ -50,7 +104,9 @@ Result<std::unique_ptr<RemoteCommands>> RemoteCommands::create(RemoteCommandsOpt
                    "' is neither a signal of this vehicle nor a DBC message"};
     }
   }
-  std::unique_ptr<RemoteCommands> handler(new RemoteCommands(std::move(options)));
+  auto guard = ReplayGuard::open(options.stateFolder, warnings);
+  if (!guard) return Error{"remote commands' memory of received cmdIds: " + guard.error().toString()};
+  std::unique_ptr<RemoteCommands> handler(new RemoteCommands(std::move(options), std::move(*guard)));
   handler->m_worker = std::make_unique<commands::Worker>("telemetry-cmd", MAX_WAITING_COMMANDS);
   return handler;
 }
@@ -61,55 +117,16 @@ void RemoteCommands::refuse(const std::string& cmdId, std::string reason) {
                 .reason = std::move(reason),
                 .responder = std::string(LOCAL_RESPONDER),
                 .what = {}};
-  if (const auto it = m_seen.find(cmdId); it != m_seen.end()) it->second = answer;
   m_ready.push_back(std::move(answer));
 }
 
-void RemoteCommands::remember(const std::string& cmdId) {
-  m_seen.emplace(cmdId, std::nullopt);
-  m_seenOrder.push_back(cmdId);
-  while (m_seenOrder.size() > REMEMBERED_COMMANDS) {
-    // one still waiting for its owner stays until its answer came (at most MAX_WAITING_COMMANDS + 1)
-    const auto oldest = m_seen.find(m_seenOrder.front());
-    if (oldest != m_seen.end() && !oldest->second) break;
-    if (oldest != m_seen.end()) m_seen.erase(oldest);
-    m_seenOrder.pop_front();
-  }
-}
-
-std::optional<std::string> RemoteCommands::check(const std::string& payload, const ClockPair& now,
+std::optional<std::string> RemoteCommands::check(const std::string& key, const std::string& commandJson,
+                                                 std::int64_t deadlineUnixMs, const ClockPair& now,
                                                  ipc::CommandRequest& request) const {
-  if (payload.size() > MAX_COMMAND_PAYLOAD) {
-    return "the command has " + std::to_string(payload.size()) + " bytes, at most " +
-           std::to_string(MAX_COMMAND_PAYLOAD);
-  }
-  Json body = Json::parse(payload, nullptr, false);
-  if (body.is_discarded()) return std::string("/: not JSON");
-  if (!body.is_object()) return std::string("/: expected an object {\"kind\", \"key\", \"value\", \"deadlineUnixMs\"}");
-  const auto deadlineIt = body.find("deadlineUnixMs");
-  if (deadlineIt == body.end() || !deadlineIt->is_number_integer()) {
-    return std::string("/deadlineUnixMs: missing (Unix ms, at most 10 s ahead)");
-  }
-  const std::int64_t deadlineUnixMs = deadlineIt->get<std::int64_t>();
-  if (deadlineUnixMs <= now.unixMs) {
-    return "/deadlineUnixMs: " + std::to_string(now.unixMs - deadlineUnixMs) + " ms in the past";
-  }
-  if (deadlineUnixMs - now.unixMs > MAX_DEADLINE_AHEAD_MS) {
-    return "/deadlineUnixMs: " + std::to_string(deadlineUnixMs - now.unixMs) + " ms ahead, at most " +
-           std::to_string(MAX_DEADLINE_AHEAD_MS);
-  }
-  body.erase("deadlineUnixMs");
-  // the key the command names, before the full check: an unlisted key is refused whatever else it says
-  std::string key;
-  if (const auto kind = body.find("kind"); kind != body.end() && *kind == "faultReset") {
-    key = std::string(commands::FAULT_RESET_KEY);
-  } else if (const auto named = body.find("key"); named != body.end() && named->is_string()) {
-    key = named->get<std::string>();
-  }
   if (std::find(m_options.keys.begin(), m_options.keys.end(), key) == m_options.keys.end()) {
     return "/key: '" + key + "' is not among telemetry.json's remoteCommands keys (" + keyList(m_options.keys) + ")";
   }
-  auto parsed = commands::parseCommand(body.dump(), *m_options.catalog, *m_options.database);
+  auto parsed = commands::parseCommand(commandJson, *m_options.catalog, *m_options.database);
   if (!parsed) return parsed.error().message;
   request = std::move(*parsed);
   request.issuer = std::string(REMOTE_ISSUER);
@@ -139,19 +156,17 @@ void RemoteCommands::onMessage(const InboundMessage& message, const ClockPair& n
            "at every reconnect)");
     return;
   }
-  if (const auto seen = m_seen.find(cmdId); seen != m_seen.end()) {
-    if (seen->second) {
-      Answer again = *seen->second;
-      again.what = "repeated cmdId, answered again, not sent again";
-      m_ready.push_back(std::move(again));
-    } else if (m_options.logInfo) {
-      m_options.logInfo("remote command " + cmdId + " repeated while waiting for its owner; its answer follows");
-    }
-    return;
+  auto envelope = readEnvelope(message.payload, now);
+  if (auto* refusal = std::get_if<std::string>(&envelope)) return refuse(cmdId, std::move(*refusal));
+  const Envelope& command = std::get<Envelope>(envelope);
+  // remembered (on disk) before anything else can refuse it or send it: whatever its answer, it runs once at most
+  if (auto replay = m_guard.admit(cmdId, command.deadlineUnixMs, now.unixMs)) {
+    return refuse(cmdId, std::move(replay->reason));
   }
-  remember(cmdId);
   ipc::CommandRequest request;
-  if (auto refusal = check(message.payload, now, request)) return refuse(cmdId, std::move(*refusal));
+  if (auto refusal = check(commandKey(command.body), command.body.dump(), command.deadlineUnixMs, now, request)) {
+    return refuse(cmdId, std::move(*refusal));
+  }
   const std::string what = commands::describeCommand(request);
   const auto timeout = std::chrono::nanoseconds(request.deadlineNs - now.monoNs);
   const bool queued = m_worker->submit([this, request, timeout, cmdId, what] {
@@ -180,7 +195,6 @@ std::vector<std::string> RemoteCommands::takeRecords(std::uint64_t firstSequence
                   .reason = answered ? outcome.ack.reason : outcome.verdict(),
                   .responder = answered ? outcome.ack.responder : std::string(LOCAL_RESPONDER),
                   .what = done.what};
-    if (const auto it = m_seen.find(done.cmdId); it != m_seen.end()) it->second = answer;
     m_ready.push_back(std::move(answer));
   }
   std::vector<std::string> records;

@@ -8,10 +8,12 @@
 //
 // Checks, in order, each refusal answered and logged:
 //   - a retained message is refused (it would run again at every reconnect);
-//   - a cmdId among the last 64 gets its first answer again, nothing is sent twice (QoS 1
-//     redelivery); one still waiting for its owner gets that answer when it comes;
-//   - a payload that is not a JSON object with an integer deadlineUnixMs, a deadline in the past
-//     or more than 10 s ahead;
+//   - a payload that is not a JSON object (read by config::parseJson, the configuration
+//     files' reader: a key given twice at any level is refused with its JSON path) with an
+//     integer deadlineUnixMs, a deadline in the past or more than 10 s ahead;
+//   - a cmdId received before within its deadline, also before a restart (ReplayGuard: the
+//     cmdIds with their deadlines in the queue folder, synced before anything is sent), is
+//     refused "replayed" and never sent again;
 //   - the key (kind faultReset: internal.operator.FaultReset; schedule kinds: the message name)
 //     not in telemetry.json's remoteCommands keys;
 //   - commands::parseCommand's refusal (kind, key, value);
@@ -24,9 +26,7 @@
 
 #include <chrono>
 #include <cstdint>
-#include <deque>
 #include <functional>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -41,16 +41,13 @@
 #include "openvcu/dbc/model.hpp"
 #include "openvcu/ipc/events.hpp"
 #include "openvcu/signals/catalog.hpp"
+#include "replay_guard.hpp"
 #include "sender.hpp"
 
 namespace openvcu::telemetry {
 
-/// A deadlineUnixMs further ahead than this is refused.
-inline constexpr std::int64_t MAX_DEADLINE_AHEAD_MS = 10'000;
 /// The request's own deadline is at most this far ahead (and never after deadlineUnixMs).
 inline constexpr std::int64_t MAX_REQUEST_WAIT_MS = 2'000;
-/// How many cmdIds are remembered for answering a redelivery again.
-inline constexpr std::size_t REMEMBERED_COMMANDS = 64;
 /// Commands waiting for the worker beyond the one it sends; more are refused "busy".
 inline constexpr std::size_t MAX_WAITING_COMMANDS = 8;
 /// A larger payload is refused unread.
@@ -67,6 +64,7 @@ using CommandSend = std::function<commands::CommandOutcome(const ipc::CommandReq
 struct RemoteCommandsOptions {
   std::string vehicleId;          ///< the topics are openvcu/<vehicleId>/cmd/<cmdId>
   std::vector<std::string> keys;  ///< telemetry.json's remoteCommands keys
+  std::string stateFolder;        ///< where the received cmdIds are remembered (the queue folder)
   const signals::Catalog* catalog{nullptr};
   const dbc::Database* database{nullptr};
   CommandSend send;
@@ -79,15 +77,18 @@ struct RemoteCommandsOptions {
 ///       only hands the outcome back. The destructor waits for a request being sent.
 class RemoteCommands {
  public:
-  /// Error: a key that is neither a signal of this vehicle nor a DBC message, or no catalog,
-  /// database or send function.
-  static Result<std::unique_ptr<RemoteCommands>> create(RemoteCommandsOptions options);
+  /// Error: a key that is neither a signal of this vehicle nor a DBC message, no catalog,
+  /// database, send function or state folder, or a memory of received cmdIds that cannot be
+  /// read or written (ReplayGuard::open); its damage is a warning in `warnings`.
+  static Result<std::unique_ptr<RemoteCommands>> create(RemoteCommandsOptions options,
+                                                        std::vector<Error>* warnings = nullptr);
   ~RemoteCommands();
   RemoteCommands(const RemoteCommands&) = delete;
   RemoteCommands& operator=(const RemoteCommands&) = delete;
 
   /// Checks one message from the broker (topic openvcu/<id>/cmd/<cmdId>); a refusal is
-  /// answered at once, a command that passes goes to the worker. Never blocks.
+  /// answered at once, a command that passes goes to the worker. Never waits for an owner; a
+  /// command that passes the deadline checks costs one write and fdatasync of the memory.
   void onMessage(const InboundMessage& message, const ClockPair& now);
 
   /// The answers ready since the last call as queue records "cmd/<cmdId>/answer\n{...}",
@@ -110,19 +111,18 @@ class RemoteCommands {
     std::string what;
     commands::CommandOutcome outcome;
   };
-  explicit RemoteCommands(RemoteCommandsOptions options);
+  RemoteCommands(RemoteCommandsOptions options, ReplayGuard guard);
   void refuse(const std::string& cmdId, std::string reason);
-  void remember(const std::string& cmdId);
-  /// The refusal reason, or nothing with `request` filled in.
-  std::optional<std::string> check(const std::string& payload, const ClockPair& now,
-                                   ipc::CommandRequest& request) const;
+  /// The refusal reason of a command (its JSON without deadlineUnixMs, naming `key`), or
+  /// nothing with `request` filled in.
+  std::optional<std::string> check(const std::string& key, const std::string& commandJson, std::int64_t deadlineUnixMs,
+                                   const ClockPair& now, ipc::CommandRequest& request) const;
 
   RemoteCommandsOptions m_options;
   std::string m_topicPrefix;  ///< "openvcu/<id>/cmd/"
   // the owner's thread only
   std::vector<Answer> m_ready;
-  std::deque<std::string> m_seenOrder;                  ///< the last REMEMBERED_COMMANDS cmdIds
-  std::map<std::string, std::optional<Answer>> m_seen;  ///< cmdId -> its first answer (empty: waiting)
+  ReplayGuard m_guard;  ///< the cmdIds received within their deadlines, on disk
   std::size_t m_inFlight{0};
   // written by the worker
   std::mutex m_mutex;

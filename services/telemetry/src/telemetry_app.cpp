@@ -285,16 +285,20 @@ Result<std::unique_ptr<TelemetryApp>> TelemetryApp::create(service::Service& run
 
   std::unique_ptr<RemoteCommands> remoteCommands;
   if (settings.remoteCommandsEnabled) {
+    std::vector<Error> memoryWarnings;
     auto created = RemoteCommands::create(
         {.vehicleId = settings.vehicleId,
          .keys = settings.remoteCommandKeys,
+         .stateFolder = settings.queueFolder,
          .catalog = &runtime.catalog(),
          .database = &vehicle.database,
          .send = [instance = runtime.instance()](const ipc::CommandRequest& request, std::chrono::nanoseconds timeout) {
            return commands::sendCommand(instance, request, timeout);
          },
          .logInfo = [&runtime](const std::string& text) { runtime.log().info(text); },
-         .logWarning = [&runtime](const std::string& text) { runtime.log().warning(text); }});
+         .logWarning = [&runtime](const std::string& text) { runtime.log().warning(text); }},
+        &memoryWarnings);
+    for (const Error& warning : memoryWarnings) runtime.log().warning("remote commands: " + warning.toString());
     if (!created) return Error{vehicle.telemetryFile + ": " + created.error().message};
     remoteCommands = std::move(*created);
   }

@@ -1,7 +1,8 @@
 // vcu-telemetry's remote commands (issue 25, docs/design/telemetry.md "Remote commands").
 // The handler (services/telemetry/src/remote_commands.*) on the HHEA catalog with a recording
 // send function: what passes goes out once with the remote issuer and a bounded deadline, each
-// refusal is answered without sending, a repeated cmdId is answered again without a second send.
+// refusal is answered without sending, a repeated cmdId is refused as a replay without a second
+// send (also by a handler created again on the same folder).
 // Then, inside tests/harness/run_isolated.sh (loopback only), a real mosquitto with test
 // passwords and the ACL shipped in services/telemetry/examples/acl, the real vcu-fsm on a copy
 // of the HHEA configuration (the authority) and the real vcu-telemetry with remote commands on
@@ -10,16 +11,21 @@
 //     get PUBACK 0x87 "not authorized" from the broker and never reach the FSM (its table is
 //     unchanged; an unknown user is not even let in);
 //   - an accepted command reaches vcu-fsm (the state leaves Standby) and its answer is published;
-//   - a repeated cmdId gets the same answer and is not sent again;
+//   - a repeated cmdId is refused as a replay and not sent again, also after 66 other commands
+//     and after vcu-telemetry was SIGKILLed and restarted on its queue folder;
+//   - a payload with a key given twice (at any level) is refused with the key and its path;
 //   - an unlisted key, an unknown kind, a past deadline and a retained command are refused by
 //     vcu-telemetry, an out-of-range value by vcu-fsm, each with an answer.
 #include <doctest/doctest.h>
+#include <signal.h>
+#include <stdlib.h>
 
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <future>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <utility>
 
@@ -68,20 +74,36 @@ std::string command(const std::string& kind, const std::string& key, const Json&
   return body.dump();
 }
 
+/// A fresh folder under the temporary directory, removed at the end of the case.
+struct TempFolder {
+  std::string path;
+  TempFolder() {
+    std::string pattern = (fs::temp_directory_path() / "openvcu-commands-XXXXXX").string();
+    REQUIRE(::mkdtemp(pattern.data()) != nullptr);
+    path = pattern;
+  }
+  ~TempFolder() { fs::remove_all(path); }
+  TempFolder(const TempFolder&) = delete;
+  TempFolder& operator=(const TempFolder&) = delete;
+};
+
 /// The handler with a send function that records each request and answers as `answer` says.
 struct Recorded {
+  TempFolder folder;  ///< its memory of received cmdIds
   std::mutex mutex;
   std::vector<std::pair<ipc::CommandRequest, std::chrono::nanoseconds>> sent;
   std::unique_ptr<telemetry::RemoteCommands> sut;
   std::vector<std::string> warnings;
   std::shared_future<void> gate;  ///< when valid, each send waits for it (an owner that is slow to answer)
 
+  /// `stateFolder`: the memory of received cmdIds there instead of in `folder`.
   Recorded(const Hhea& hhea, std::vector<std::string> keys, commands::CommandOutcome answer,
-           std::shared_future<void> sendGate = {})
+           std::shared_future<void> sendGate = {}, const std::string& stateFolder = {})
       : gate(std::move(sendGate)) {
     auto created = telemetry::RemoteCommands::create(
         {.vehicleId = VEHICLE,
          .keys = std::move(keys),
+         .stateFolder = stateFolder.empty() ? folder.path : stateFolder,
          .catalog = &hhea.catalog,
          .database = &hhea.vehicle.database,
          .send =
@@ -128,6 +150,25 @@ commands::CommandOutcome acceptedBy(const std::string& responder) {
   return outcome;
 }
 
+/// A copy of config/hhea in work/vehicle with remote commands on for StartStop, its queue in
+/// work/queue, logging in to 127.0.0.1:`port` as the vehicle; the path of its vehicle.json.
+std::string writeVehicle(const fs::path& work, int port) {
+  fs::create_directories(work / "vehicle");
+  for (const auto& entry : fs::directory_iterator(fs::path(OPENVCU_SOURCE_DIR) / "config/hhea")) {
+    if (entry.is_regular_file()) fs::copy_file(entry.path(), work / "vehicle" / entry.path().filename());
+  }
+  writeFile(work / "vehicle/vehicle-password", "vehicle-secret\n");
+  writeFile(work / "vehicle/telemetry.json", Json{{"broker", "mqtt://127.0.0.1:" + std::to_string(port)},
+                                                  {"vehicleId", VEHICLE},
+                                                  {"username", VEHICLE},
+                                                  {"passwordFile", "vehicle-password"},
+                                                  {"queueFolder", (work / "queue").string()},
+                                                  {"maxQueueMB", 1},
+                                                  {"remoteCommands", {{"enabled", true}, {"keys", {START_STOP}}}}}
+                                                 .dump(2));
+  return (work / "vehicle/vehicle.json").string();
+}
+
 telemetry::InboundMessage onTopic(const std::string& cmdId, std::string payload, bool retained = false) {
   return {.topic = std::string("openvcu/") + VEHICLE + "/cmd/" + cmdId,
           .payload = std::move(payload),
@@ -161,9 +202,100 @@ TEST_CASE(
   CHECK(first[0]["cmdId"] == "c-1");
   CHECK(first[0]["accepted"] == true);
   CHECK(first[0]["responder"] == "vcu-fsm");
-  REQUIRE(repeated.size() == 1);  // the same answer again, not a second send
-  CHECK(repeated[0]["accepted"] == true);
-  CHECK(repeated[0]["responder"] == "vcu-fsm");
+  REQUIRE(repeated.size() == 1);  // refused as a replay, not sent a second time
+  CHECK(repeated[0]["accepted"] == false);
+  CHECK(repeated[0]["responder"] == "vcu-telemetry");
+  CHECK(repeated[0]["reason"].get<std::string>().starts_with("replayed: cmdId 'c-1' was received before"));
+}
+
+TEST_CASE("a remote command received before is refused as replayed after 66 other commands and never sent twice") {
+  const Hhea hhea = Hhea::load();
+  Recorded recorded(hhea, {START_STOP}, acceptedBy("vcu-fsm"));
+  constexpr int OTHERS = 66;  // more than any count-bounded memory of recent cmdIds kept
+  const std::string start = command("operator", START_STOP, "Start", NOW_UNIX_MS + 9000);
+
+  recorded.sut->onMessage(onTopic("first", start), NOW);
+  const auto first = recorded.answers();
+  for (int i = 0; i < OTHERS; ++i) {
+    recorded.sut->onMessage(
+        onTopic("other-" + std::to_string(i), command("operator", START_STOP, "Stop", NOW_UNIX_MS + 9000)), NOW);
+    (void)recorded.answers();
+  }
+  recorded.sut->onMessage(onTopic("first", start), NOW);
+  const auto replayed = recorded.answers();
+
+  CHECK(recorded.sentCount() == 1 + OTHERS);
+  REQUIRE(first.size() == 1);
+  CHECK(first[0]["accepted"] == true);
+  REQUIRE(replayed.size() == 1);
+  CHECK(replayed[0]["cmdId"] == "first");
+  CHECK(replayed[0]["accepted"] == false);
+  CHECK(replayed[0]["responder"] == "vcu-telemetry");
+  CHECK_MESSAGE(replayed[0]["reason"].get<std::string>().starts_with("replayed"), replayed[0].dump());
+}
+
+TEST_CASE("a remote command received before is refused as replayed by a handler created again on the same folder") {
+  const Hhea hhea = Hhea::load();
+  TempFolder shared;
+  const std::string start = command("operator", START_STOP, "Start", NOW_UNIX_MS + 9000);
+  {
+    Recorded before(hhea, {START_STOP}, acceptedBy("vcu-fsm"), {}, shared.path);
+    before.sut->onMessage(onTopic("first", start), NOW);
+    REQUIRE(before.answers().size() == 1);
+    REQUIRE(before.sentCount() == 1);
+  }
+  Recorded recorded(hhea, {START_STOP}, acceptedBy("vcu-fsm"), {}, shared.path);
+  constexpr telemetry::ClockPair LATER{.monoNs = NOW_MONO_NS + 1'000'000'000, .unixMs = NOW_UNIX_MS + 1000};
+
+  recorded.sut->onMessage(onTopic("first", start), LATER);
+  const auto answers = recorded.answers();
+
+  CHECK(recorded.sentCount() == 0);
+  REQUIRE(answers.size() == 1);
+  CHECK(answers[0]["accepted"] == false);
+  CHECK(answers[0]["reason"].get<std::string>().starts_with("replayed: cmdId 'first' was received before"));
+}
+
+TEST_CASE("a remote command with a key given twice at any level is refused with the key and its path") {
+  const Hhea hhea = Hhea::load();
+  Recorded recorded(hhea, {START_STOP}, acceptedBy("vcu-fsm"));
+  const std::string deadline = std::to_string(NOW_UNIX_MS + 5000);
+  const std::string past = std::to_string(NOW_UNIX_MS - 60'000);
+  struct Case {
+    const char* cmdId;
+    std::string payload;
+    const char* reason;
+  };
+  const std::vector<Case> cases{
+      {"two-values",
+       R"({"kind":"operator","key":"internal.operator.StartStop","value":"Stop","value":"Start","deadlineUnixMs":)" +
+           deadline + "}",
+       R"(/: key "value" given twice (first at 1:)"},
+      {"two-deadlines",
+       R"({"kind":"operator","key":"internal.operator.StartStop","value":"Start","deadlineUnixMs":)" + past +
+           R"(,"deadlineUnixMs":)" + deadline + "}",
+       R"(/: key "deadlineUnixMs" given twice)"},
+      {"escaped-twin",
+       R"({"kind":"operator","key":"internal.operator.StartStop","value":"Stop","value":"Start","deadlineUnixMs":)" +
+           deadline + "}",
+       R"(/: key "value" given twice)"},
+      {"nested",
+       R"({"kind":"operator","key":"internal.operator.StartStop","value":"Start","deadlineUnixMs":)" + deadline +
+           R"(,"by":{"name":"a","name":"b"}})",
+       R"(/by: key "name" given twice)"},
+  };
+  for (const Case& entry : cases) recorded.sut->onMessage(onTopic(entry.cmdId, entry.payload), NOW);
+
+  const auto answers = recorded.answers();
+  CHECK(recorded.sentCount() == 0);
+  REQUIRE(answers.size() == cases.size());
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    CAPTURE(cases[i].cmdId);
+    CHECK(answers[i]["cmdId"] == cases[i].cmdId);
+    CHECK(answers[i]["accepted"] == false);
+    CHECK(answers[i]["responder"] == "vcu-telemetry");
+    CHECK_MESSAGE(answers[i]["reason"].get<std::string>().starts_with(cases[i].reason), answers[i].dump());
+  }
 }
 
 TEST_CASE("a remote command due sooner than 2 s carries its own deadline") {
@@ -258,6 +390,7 @@ TEST_CASE("a remote command key that is neither a signal nor a DBC message stops
   auto created = telemetry::RemoteCommands::create(
       {.vehicleId = VEHICLE,
        .keys = {START_STOP, "internal.operator.Strat"},
+       .stateFolder = fs::temp_directory_path().string(),
        .catalog = &hhea.catalog,
        .database = &hhea.vehicle.database,
        .send = [](const ipc::CommandRequest&, std::chrono::nanoseconds) { return commands::CommandOutcome{}; },
@@ -280,7 +413,6 @@ TEST_CASE(
   harness::Harness sut;
   const fs::path work = fs::temp_directory_path() / "telemetry-commands";  // the sandbox's own /tmp
   fs::remove_all(work);
-  fs::create_directories(work / "vehicle");
 
   // the broker: test passwords made now, the ACL as shipped
   auto brokerSpec = telemetry_test::brokerSpec(sut, work / "broker",
@@ -292,20 +424,7 @@ TEST_CASE(
   auto broker = sut.start(brokerSpec);
   REQUIRE_STATUS(broker);
 
-  // the vehicle: a copy of config/hhea with remote commands on for StartStop
-  for (const auto& entry : fs::directory_iterator(fs::path(OPENVCU_SOURCE_DIR) / "config/hhea")) {
-    if (entry.is_regular_file()) fs::copy_file(entry.path(), work / "vehicle" / entry.path().filename());
-  }
-  writeFile(work / "vehicle/vehicle-password", "vehicle-secret\n");
-  writeFile(work / "vehicle/telemetry.json", Json{{"broker", "mqtt://127.0.0.1:" + std::to_string(PORT)},
-                                                  {"vehicleId", VEHICLE},
-                                                  {"username", VEHICLE},
-                                                  {"passwordFile", "vehicle-password"},
-                                                  {"queueFolder", (work / "queue").string()},
-                                                  {"maxQueueMB", 1},
-                                                  {"remoteCommands", {{"enabled", true}, {"keys", {START_STOP}}}}}
-                                                 .dump(2));
-  const std::string vehiclePath = (work / "vehicle/vehicle.json").string();
+  const std::string vehiclePath = writeVehicle(work, PORT);
   auto vehicle = config::loadVehicleConfig(vehiclePath);
   REQUIRE_STATUS(vehicle);
   auto catalog = config::buildCatalog(*vehicle);
@@ -380,12 +499,14 @@ TEST_CASE(
   }
   CHECK_MESSAGE(table->readBus(state)->value != standby, "vcu-fsm left Standby on the remote Start");
 
-  // the same cmdId again: the same answer, nothing sent twice
+  // the same cmdId again: refused as a replay, nothing sent twice
   REQUIRE(fleetOperator.publish(cmd + "c1", start) == 0);
   REQUIRE(fleetOperator.waitFor(
       [&](const std::vector<Message>& messages) {
-        return std::count_if(messages.begin(), messages.end(),
-                             [&](const Message& m) { return m.topic == cmd + "c1/answer"; }) == 2;
+        return std::count_if(messages.begin(), messages.end(), [&](const Message& m) {
+                 return m.topic == cmd + "c1/answer" && m.body["accepted"] == false &&
+                        m.body["reason"].get<std::string>().starts_with("replayed");
+               }) == 1;
       },
       10s));
 
@@ -416,4 +537,137 @@ TEST_CASE(
   }
   CHECK_MESSAGE((*bridge)->running(), log);
   (void)fleetOperator.publish(cmd + "c4", "", true);  // the retained command removed from the broker
+}
+
+TEST_CASE(
+    "a remote command published again within its deadline is refused after 66 other commands and after a restart "
+    "of vcu-telemetry on its queue, and a duplicated key is refused, none of them reaching vcu-fsm") {
+  if (!harness::isolated()) OPENVCU_SKIP(harness::NOT_ISOLATED);
+  if (!fs::exists("/usr/sbin/mosquitto") || !fs::exists("/usr/bin/mosquitto_passwd")) {
+    OPENVCU_SKIP("skipped: needs mosquitto (Debian's mosquitto package; scripts/install-deps.sh)");
+  }
+  constexpr int PORT = 1884;
+  constexpr int OTHERS = 66;
+  constexpr int BURST = 16;  // published before waiting for their answers (the sender keeps at most 64 waiting)
+  constexpr std::int64_t AHEAD_MS = 9500;  // the deadline of a replayed command: just inside the 10 s allowed
+  const std::string bin = OPENVCU_BINARY_DIR "/bin";
+  harness::Harness sut;
+  const fs::path work = fs::temp_directory_path() / "telemetry-replay";
+  fs::remove_all(work);
+  auto broker = sut.start(telemetry_test::brokerSpec(
+      sut, work / "broker", {{VEHICLE, "vehicle-secret"}, {"fleet-operator", "operator-secret"}},
+      fs::path(OPENVCU_SOURCE_DIR) / "services/telemetry/examples/acl", PORT));
+  REQUIRE_STATUS(broker);
+  const std::string vehiclePath = writeVehicle(work, PORT);
+  auto vehicle = config::loadVehicleConfig(vehiclePath);
+  REQUIRE_STATUS(vehicle);
+  auto catalog = config::buildCatalog(*vehicle);
+  REQUIRE_STATUS(catalog);
+  auto table = signals::SignalTable::open(*catalog, vehicle->instance);
+  REQUIRE_STATUS(table);
+  const signals::SignalIndex startStop = *catalog->indexOf(START_STOP);
+  const harness::ProcessSpec bridgeSpec{
+      .name = "vcu-telemetry", .argv = {bin + "/vcu-telemetry", "--config", vehiclePath}, .notifyReadiness = true};
+  auto fsm =
+      sut.start({.name = "vcu-fsm", .argv = {bin + "/vcu-fsm", "--config", vehiclePath}, .notifyReadiness = true});
+  REQUIRE_STATUS(fsm);
+  auto bridge = sut.start(bridgeSpec);
+  REQUIRE_STATUS(bridge);
+
+  MqttClient fleetOperator("test-operator", "fleet-operator", "operator-secret");
+  int connack = telemetry_test::NO_ANSWER;
+  for (int attempt = 0; attempt < 50 && (connack = fleetOperator.connect(PORT)) == telemetry_test::NO_ANSWER;
+       ++attempt) {
+    std::this_thread::sleep_for(100ms);  // until mosquitto listens (it sends no readiness)
+  }
+  REQUIRE(connack == 0);
+  REQUIRE(fleetOperator.subscribe(std::string("openvcu/") + VEHICLE + "/#") == 1);
+  const std::string root = std::string("openvcu/") + VEHICLE + "/";
+  const auto birthsIn = [&](const std::vector<Message>& messages) {
+    return std::count_if(messages.begin(), messages.end(), [&](const Message& m) { return m.topic == root + "birth"; });
+  };
+  REQUIRE(fleetOperator.waitFor([&](const std::vector<Message>& messages) { return birthsIn(messages) > 0; }, 10s));
+  const auto answersOf = [&](const std::string& cmdId) {
+    std::vector<Json> out;
+    for (const Message& message : fleetOperator.messages()) {
+      if (message.topic == root + "cmd/" + cmdId + "/answer") out.push_back(message.body);
+    }
+    return out;
+  };
+  /// Waits for an answer on cmdId that `matches`; the first such answer.
+  const auto waitForAnswer = [&](const std::string& cmdId, auto matches) -> std::optional<Json> {
+    std::optional<Json> found;
+    fleetOperator.waitFor(
+        [&](const std::vector<Message>& messages) {
+          for (const Message& message : messages) {
+            if (message.topic == root + "cmd/" + cmdId + "/answer" && matches(message.body)) {
+              found = message.body;
+              return true;
+            }
+          }
+          return false;
+        },
+        10s);
+    return found;
+  };
+  const auto any = [](const Json&) { return true; };
+  const auto refusedHere = [](const Json& body) {
+    return body["accepted"] == false && body["responder"] == "vcu-telemetry";
+  };
+  const auto aheadMs = [](std::int64_t ms) { return clock::realtimeNs() / 1'000'000 + ms; };
+
+  // accepted once, then 66 other commands, then the same message again
+  const std::string start = command("operator", START_STOP, "Start", aheadMs(AHEAD_MS));
+  REQUIRE(fleetOperator.publish(root + "cmd/first", start) == 0);
+  const auto firstAnswer = waitForAnswer("first", any);
+  REQUIRE(firstAnswer);
+  CHECK((*firstAnswer)["accepted"] == true);
+  REQUIRE(table->readCommand(startStop)->updates == 1);
+  for (int i = 0; i < OTHERS; i += BURST) {
+    const int end = std::min(OTHERS, i + BURST);
+    for (int j = i; j < end; ++j) {
+      REQUIRE(fleetOperator.publish(root + "cmd/other-" + std::to_string(j),
+                                    command("operator", CRASH, 1, aheadMs(AHEAD_MS))) == 0);
+    }
+    REQUIRE(waitForAnswer("other-" + std::to_string(end - 1), any));
+  }
+  REQUIRE(fleetOperator.publish(root + "cmd/first", start) == 0);
+  const auto replayed = waitForAnswer("first", refusedHere);
+  CHECK_MESSAGE((replayed && (*replayed)["reason"].get<std::string>().starts_with("replayed")),
+                "answers on cmd/first: " << Json(answersOf("first")).dump());
+
+  // accepted once, vcu-telemetry SIGKILLed and started again on the same queue folder, the same message again
+  const std::string stop = command("operator", START_STOP, "Stop", aheadMs(AHEAD_MS));
+  REQUIRE(fleetOperator.publish(root + "cmd/before-restart", stop) == 0);
+  const auto beforeRestart = waitForAnswer("before-restart", any);
+  REQUIRE(beforeRestart);
+  CHECK((*beforeRestart)["responder"] == "vcu-fsm");
+  const std::uint64_t updatesBeforeRestart = table->readCommand(startStop)->updates;
+  const auto birthsBefore = birthsIn(fleetOperator.messages());
+  REQUIRE((*bridge)->signal(SIGKILL));
+  REQUIRE((*bridge)->waitForExit(5s));
+  auto restarted = sut.start(bridgeSpec);
+  REQUIRE_STATUS(restarted);
+  REQUIRE(fleetOperator.waitFor([&](const std::vector<Message>& messages) { return birthsIn(messages) > birthsBefore; },
+                                10s));
+  REQUIRE(fleetOperator.publish(root + "cmd/before-restart", stop) == 0);
+  const auto afterRestart = waitForAnswer("before-restart", refusedHere);
+  CHECK_MESSAGE((afterRestart && (*afterRestart)["reason"].get<std::string>().starts_with("replayed")),
+                "answers on cmd/before-restart: " << Json(answersOf("before-restart")).dump());
+
+  // a duplicated key: nlohmann alone would keep the last ("Start")
+  REQUIRE(
+      fleetOperator.publish(
+          root + "cmd/two-values",
+          R"({"kind":"operator","key":"internal.operator.StartStop","value":"Stop","value":"Start","deadlineUnixMs":)" +
+              std::to_string(aheadMs(AHEAD_MS)) + "}") == 0);
+  const auto twoValues = waitForAnswer("two-values", any);
+  REQUIRE(twoValues);
+  CHECK_MESSAGE(((*twoValues)["accepted"] == false &&
+                 (*twoValues)["reason"].get<std::string>().starts_with(R"(/: key "value" given twice)")),
+                twoValues->dump());
+
+  // none of the refused ones reached vcu-fsm
+  CHECK(table->readCommand(startStop)->updates == updatesBeforeRestart);
+  CHECK_MESSAGE((*restarted)->running(), (*restarted)->output());
 }
