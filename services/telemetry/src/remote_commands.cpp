@@ -46,12 +46,7 @@ std::variant<Envelope, std::string> readEnvelope(const std::string& payload, con
            std::to_string(MAX_COMMAND_PAYLOAD);
   }
   auto parsed = config::parseJson(payload, "");
-  if (!parsed) {
-    const Error& error = parsed.error();
-    const std::string at = ", at " + std::to_string(error.location.line) + ":" + std::to_string(error.location.column);
-    if (!error.location.jsonPath.empty()) return error.location.jsonPath + ": " + error.message + at;
-    return "/: not JSON (" + error.message + at + ")";
-  }
+  if (!parsed) return config::bodyErrorText(parsed.error());
   Envelope envelope{.body = std::move(*parsed), .deadlineUnixMs = 0};
   Json& body = envelope.body;
   if (!body.is_object()) return std::string("/: expected an object {\"kind\", \"key\", \"value\", \"deadlineUnixMs\"}");

@@ -16,6 +16,7 @@
 #include "openvcu/commands/command_sender.hpp"
 #include "openvcu/commands/worker.hpp"
 #include "openvcu/config/dashboard.hpp"
+#include "openvcu/config/json.hpp"
 #include "openvcu/config/web.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/command_socket.hpp"
@@ -66,8 +67,9 @@ constexpr std::string_view UPLOAD_MEDIA_TYPE = "application/octet-stream";
 /// A JSON body of a POST: 415 for another media type, 400 for malformed JSON.
 std::optional<Response> refuseBody(const Request& request, Json& out) {
   if (auto refused = refuseMediaType(request, "application/json")) return refused->response();
-  out = Json::parse(request.body, nullptr, false);
-  if (out.is_discarded()) return Response::error(400, "/: not JSON");
+  auto parsed = config::parseJson(request.body, "");
+  if (!parsed) return Response::error(400, config::bodyErrorText(parsed.error()));
+  out = std::move(*parsed);
   if (!out.is_object()) return Response::error(400, "/: expected an object");
   return std::nullopt;
 }

@@ -1,5 +1,7 @@
 #include "openvcu/commands/command_check.hpp"
 
+#include "openvcu/config/json.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -37,8 +39,9 @@ Result<double> valueOf(const Json& value, const signals::SignalInfo* signal) {
 
 Result<ipc::CommandRequest> parseCommand(std::string_view body, const signals::Catalog& catalog,
                                             const dbc::Database& database) {
-  const Json root = Json::parse(body, nullptr, false);
-  if (root.is_discarded()) return Error{"/: not JSON"};
+  auto parsed = config::parseJson(body, "");
+  if (!parsed) return Error{config::bodyErrorText(parsed.error())};
+  const Json& root = *parsed;
   if (!root.is_object()) return Error{"/: expected an object {\"kind\", \"key\", \"value\"}"};
   for (const auto& [name, member] : root.items()) {
     if (name != "kind" && name != "key" && name != "value") return Error{"/" + name + ": unknown member"};

@@ -365,6 +365,12 @@ Result<Json> readJsonFile(const std::string& path) {
   return parseJson(*content, path);
 }
 
+std::string bodyErrorText(const Error& error) {
+  const std::string at = ", at " + std::to_string(error.location.line) + ":" + std::to_string(error.location.column);
+  if (!error.location.jsonPath.empty()) return error.location.jsonPath + ": " + error.message + at;
+  return "/: not JSON (" + error.message + at + ")";
+}
+
 std::string formatNumber(double value) {
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";

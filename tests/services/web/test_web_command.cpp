@@ -48,7 +48,10 @@ TEST_CASE("an operator switch by its value text becomes an OperatorSwitch with t
 }
 
 TEST_CASE("a command is refused with the JSON path of what is wrong") {
-  CHECK(errorOf("{not json") == "/: not JSON");
+  CHECK(errorOf("{not json").starts_with("/: not JSON ("));
+  // one JSON policy with the configuration reader: a key given twice is refused, at any level
+  CHECK(errorOf(R"({"kind":"operator","key":"internal.operator.StartStop","value":"Stop","value":"Start"})") ==
+        R"(/: key "value" given twice (first at 1:56), at 1:71)");
   CHECK(errorOf("[1]").starts_with("/: expected an object"));
   CHECK(errorOf(R"({"kind":"reboot","key":"x"})").starts_with("/kind: unknown kind 'reboot'"));
   CHECK(errorOf(R"({"kind":"set","key":"VIC.NoSuch.Signal","value":1})") == "/key: unknown signal 'VIC.NoSuch.Signal'");

@@ -34,6 +34,11 @@ Result<Json> parseJson(std::string_view text, const std::string& fileName);
 /// Reads and parses a JSON file (as parseJson()).
 Result<Json> readJsonFile(const std::string& path);
 
+/// parseJson()'s refusal of a message body (a request, a remote command: no file name), as
+/// the answer states it: "/: key \"value\" given twice (first at 1:20), at 1:37" when the
+/// error has a JSON path, else "/: not JSON (syntax error ..., at 1:2)".
+std::string bodyErrorText(const Error& error);
+
 /// A double for a message, short and exact: whole numbers below 10^15 in full ("3600000"),
 /// others as the shortest text that reads back as the same double ("0.1", "1e+308",
 /// "-2.5e-07"), "nan" / "inf" / "-inf" when not finite. Never the 309 digits
