@@ -26,11 +26,13 @@
 #include <string>
 #include <vector>
 
+#include "lan_datagrams.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/events.hpp"
 
 namespace ipc = openvcu::ipc;
+namespace demo = openvcu::demo;
 
 namespace {
 
@@ -52,49 +54,19 @@ int listen(const std::string& url, const std::string& instance, int seconds) {
   return 0;
 }
 
-std::vector<std::uint8_t> lcmDatagram(const std::string& channel, const std::vector<std::uint8_t>& payload,
-                                      std::uint32_t sequence) {
-  std::vector<std::uint8_t> packet;
-  const std::uint32_t magic = htonl(0x4c433032);  // "LC02": one-fragment LCM message
-  const std::uint32_t seq = htonl(sequence);
-  packet.insert(packet.end(), reinterpret_cast<const std::uint8_t*>(&magic),
-                reinterpret_cast<const std::uint8_t*>(&magic) + 4);
-  packet.insert(packet.end(), reinterpret_cast<const std::uint8_t*>(&seq),
-                reinterpret_cast<const std::uint8_t*>(&seq) + 4);
-  packet.insert(packet.end(), channel.begin(), channel.end());
-  packet.push_back(0);
-  packet.insert(packet.end(), payload.begin(), payload.end());
-  return packet;
-}
-
-int datagram(const std::string& address, const std::string& instance, const std::string& key, double value,
-             int count) {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  const int ttl = 1;
-  ::setsockopt(fd, IPPROTO_IP, IP_MULTICAST_TTL, &ttl, sizeof ttl);
-  sockaddr_in target{};
-  target.sin_family = AF_INET;
-  target.sin_port = htons(7667);
-  if (::inet_pton(AF_INET, address.c_str(), &target.sin_addr) != 1) return 2;
-  int sent = 0;
-  for (int i = 0; i < count; ++i) {
+int datagram(const std::string& address, const std::string& instance, const std::string& key, double value, int count) {
+  const int sent = demo::sendToLcmPort(address, count, [&](int i) {
     const std::int64_t id = 1000 + i;
-    const ipc::CommandRequest request{0,   id, "vcu-hmi", ipc::CommandKind::OperatorSwitch, key,
-                                      value, "",        openvcu::clock::monotonicNs() + 10'000'000'000};
+    const ipc::CommandRequest request{0,   id,    "vcu-hmi", ipc::CommandKind::OperatorSwitch,
+                                      key, value, "",        openvcu::clock::monotonicNs() + 10'000'000'000};
     const ipc::CommandAck ack{0, id, "vcu", "vcu-fsm", true, "", true};
-    for (const auto& packet :
-         {lcmDatagram(ipc::channelName(instance, ipc::EventKind::Command), ipc::encodeCommandRequest(request),
-                      static_cast<std::uint32_t>(2 * i)),
-          lcmDatagram(ipc::channelName(instance, ipc::EventKind::Ack), ipc::encodeCommandAck(ack),
-                      static_cast<std::uint32_t>(2 * i + 1))}) {
-      if (::sendto(fd, packet.data(), packet.size(), 0, reinterpret_cast<const sockaddr*>(&target), sizeof target) ==
-          static_cast<ssize_t>(packet.size())) {
-        ++sent;
-      }
-    }
-    ::usleep(20'000);
-  }
-  ::close(fd);
+    return std::vector<std::vector<std::uint8_t>>{
+        demo::lcmDatagram(ipc::channelName(instance, ipc::EventKind::Command), ipc::encodeCommandRequest(request),
+                          static_cast<std::uint32_t>(2 * i)),
+        demo::lcmDatagram(ipc::channelName(instance, ipc::EventKind::Ack), ipc::encodeCommandAck(ack),
+                          static_cast<std::uint32_t>(2 * i + 1))};
+  });
+  if (sent < 0) return 2;
   std::cout << "SENT " << sent << std::endl;
   return sent > 0 ? 0 : 1;
 }
@@ -121,8 +93,8 @@ int flood(const std::string& instance, const std::string& service, int count, co
       if (::recv(fd, buffer.data(), buffer.size(), MSG_DONTWAIT) > 0) ++answers;
     }
     if ((pfd.revents & POLLOUT) != 0 && sentCount < count) {
-      const ipc::CommandRequest request{0,   sentCount + 1, "flood", ipc::CommandKind::SetSignal, key,
-                                        1.0, "",            openvcu::clock::monotonicNs() + 30'000'000'000};
+      const ipc::CommandRequest request{0,   sentCount + 1, "flood", ipc::CommandKind::SetSignal,
+                                        key, 1.0,           "",      openvcu::clock::monotonicNs() + 30'000'000'000};
       const auto bytes = ipc::encodeCommandRequest(request);
       if (::send(fd, bytes.data(), bytes.size(), MSG_DONTWAIT | MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size())) {
         ++sentCount;

@@ -23,16 +23,15 @@
 #include <string>
 #include <vector>
 
+#include "lan_datagrams.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/ipc/events.hpp"
 
 namespace ipc = openvcu::ipc;
+namespace demo = openvcu::demo;
 
 namespace {
-
-constexpr std::uint16_t LCM_PORT = 7667;
-constexpr std::uint32_t LCM_SHORT_MAGIC = 0x4c433032;  // "LC02": one-fragment LCM message
 
 void onFault(const lcm_recv_buf_t* buffer, const char*, void*) {
   const auto fault = ipc::decodeFaultEvent(buffer->data, buffer->data_size);
@@ -71,40 +70,14 @@ int events(const std::string& instance, int seconds) {
   return 0;
 }
 
-std::vector<std::uint8_t> lcmDatagram(const std::string& channel, const std::vector<std::uint8_t>& payload,
-                                      std::uint32_t sequence) {
-  std::vector<std::uint8_t> packet;
-  for (const std::uint32_t word : {htonl(LCM_SHORT_MAGIC), htonl(sequence)}) {
-    const auto* bytes = reinterpret_cast<const std::uint8_t*>(&word);
-    packet.insert(packet.end(), bytes, bytes + sizeof word);
-  }
-  packet.insert(packet.end(), channel.begin(), channel.end());
-  packet.push_back(0);
-  packet.insert(packet.end(), payload.begin(), payload.end());
-  return packet;
-}
-
 int fault(const std::string& address, const std::string& instance, const std::string& name, int count) {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  const int ttl = 1;
-  ::setsockopt(fd, IPPROTO_IP, IP_MULTICAST_TTL, &ttl, sizeof ttl);
-  sockaddr_in target{};
-  target.sin_family = AF_INET;
-  target.sin_port = htons(LCM_PORT);
-  if (::inet_pton(AF_INET, address.c_str(), &target.sin_addr) != 1) return 2;
   const ipc::FaultEvent forged{0, name, "vcu-fsm", ipc::FaultSeverity::Critical, true, "forged"};
   const std::vector<std::uint8_t> packet =
-      lcmDatagram(ipc::channelName(instance, ipc::EventKind::Fault), ipc::encodeFaultEvent(forged),
-                  static_cast<std::uint32_t>(openvcu::clock::monotonicNs()));
-  int sent = 0;
-  for (int i = 0; i < count; ++i) {
-    if (::sendto(fd, packet.data(), packet.size(), 0, reinterpret_cast<const sockaddr*>(&target), sizeof target) ==
-        static_cast<ssize_t>(packet.size())) {
-      ++sent;
-    }
-    ::usleep(20'000);
-  }
-  ::close(fd);
+      demo::lcmDatagram(ipc::channelName(instance, ipc::EventKind::Fault), ipc::encodeFaultEvent(forged),
+                        static_cast<std::uint32_t>(openvcu::clock::monotonicNs()));
+  const int sent =
+      demo::sendToLcmPort(address, count, [&](int) { return std::vector<std::vector<std::uint8_t>>{packet}; });
+  if (sent < 0) return 2;
   std::cout << "SENT " << sent << std::endl;
   return sent > 0 ? 0 : 1;
 }

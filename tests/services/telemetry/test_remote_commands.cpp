@@ -169,6 +169,17 @@ std::string writeVehicle(const fs::path& work, int port) {
   return (work / "vehicle/vehicle.json").string();
 }
 
+/// Connects `client` to the test broker on 127.0.0.1:`port`, retried for 5 s (mosquitto sends no
+/// readiness), and subscribes it to everything of the vehicle.
+void connectAndSubscribe(MqttClient& client, int port) {
+  int connack = telemetry_test::NO_ANSWER;
+  for (int attempt = 0; attempt < 50 && (connack = client.connect(port)) == telemetry_test::NO_ANSWER; ++attempt) {
+    std::this_thread::sleep_for(100ms);
+  }
+  REQUIRE(connack == 0);
+  REQUIRE(client.subscribe(std::string("openvcu/") + VEHICLE + "/#") == 1);
+}
+
 telemetry::InboundMessage onTopic(const std::string& cmdId, std::string payload, bool retained = false) {
   return {.topic = std::string("openvcu/") + VEHICLE + "/cmd/" + cmdId,
           .payload = std::move(payload),
@@ -443,13 +454,7 @@ TEST_CASE(
   REQUIRE_STATUS(bridge);
 
   MqttClient fleetOperator("test-operator", "fleet-operator", "operator-secret");
-  int connack = telemetry_test::NO_ANSWER;
-  for (int attempt = 0; attempt < 50 && (connack = fleetOperator.connect(PORT)) == telemetry_test::NO_ANSWER;
-       ++attempt) {
-    std::this_thread::sleep_for(100ms);  // until mosquitto listens (it sends no readiness)
-  }
-  REQUIRE(connack == 0);
-  REQUIRE(fleetOperator.subscribe(std::string("openvcu/") + VEHICLE + "/#") == 1);
+  connectAndSubscribe(fleetOperator, PORT);
   // the birth of the connection that subscribed to cmd/+ (subscribed before the birth went out)
   const auto birth = fleetOperator.waitForTopic(std::string("openvcu/") + VEHICLE + "/birth", 10s);
   REQUIRE(birth);
@@ -575,13 +580,7 @@ TEST_CASE(
   REQUIRE_STATUS(bridge);
 
   MqttClient fleetOperator("test-operator", "fleet-operator", "operator-secret");
-  int connack = telemetry_test::NO_ANSWER;
-  for (int attempt = 0; attempt < 50 && (connack = fleetOperator.connect(PORT)) == telemetry_test::NO_ANSWER;
-       ++attempt) {
-    std::this_thread::sleep_for(100ms);  // until mosquitto listens (it sends no readiness)
-  }
-  REQUIRE(connack == 0);
-  REQUIRE(fleetOperator.subscribe(std::string("openvcu/") + VEHICLE + "/#") == 1);
+  connectAndSubscribe(fleetOperator, PORT);
   const std::string root = std::string("openvcu/") + VEHICLE + "/";
   const auto birthsIn = [&](const std::vector<Message>& messages) {
     return std::count_if(messages.begin(), messages.end(), [&](const Message& m) { return m.topic == root + "birth"; });
