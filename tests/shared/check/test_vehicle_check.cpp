@@ -382,7 +382,7 @@ TEST_CASE("a signal a DTC of diagnostics.json reads is not 'read by no file' (#2
   CHECK_MESSAGE(withDtc.empty(), all(withDtc));
 }
 
-TEST_CASE("a diagnostics.json that accepts DTC clears from any node is a warning at its JSON path (#39)") {
+TEST_CASE("a diagnostics.json that accepts DTC clears from any node is a warning at its JSON path") {
   VehicleFolder sut;
   sut.diagnostics = R"({"dm3": "refuse", "dm11": "accept"})";
   const auto diagnostics = sut.check();
@@ -393,7 +393,7 @@ TEST_CASE("a diagnostics.json that accepts DTC clears from any node is a warning
   CHECK(contains(diagnostics.front().message, "DM11 (clear active DTCs) is accepted from any node on the bus"));
 }
 
-TEST_CASE("a simulation wake signal the catalog does not have is an error naming the signal and path (#39)") {
+TEST_CASE("a simulation wake signal the catalog does not have is an error naming the signal and path") {
   VehicleFolder sut;
   SUBCASE("a misspelt operator switch") {
     sut.simulation = R"({"model": "hhea", "wakeSignal": "internal.operator.Strat"})";

@@ -166,7 +166,7 @@ TEST_CASE("diagnostics errors name the file and JSON path") {
   CHECK(fixture.errorOf(R"({"dtc": []})").find(file + ": /dtc: unknown key") == 0);
 }
 
-TEST_CASE("DM3 or DM11 accepted from any node loads with a warning naming the file and JSON path (#39)") {
+TEST_CASE("DM3 or DM11 accepted from any node loads with a warning naming the file and JSON path") {
   DiagnosticsFixture fixture;
   fixture.load("{}");  // writes the file; the defaults refuse: no warning
   std::vector<Error> diagnostics;
@@ -186,7 +186,7 @@ TEST_CASE("DM3 or DM11 accepted from any node loads with a warning naming the fi
   CHECK(diagnostics[1].toString().find(file + ": /dm11: warning: DM11 (clear active DTCs) is accepted") == 0);
 }
 
-TEST_CASE("the shipped HHEA diagnostics refuse DM3 and DM11 (#39)") {
+TEST_CASE("the shipped HHEA diagnostics refuse DM3 and DM11") {
   auto vehicle = config::loadVehicleConfig(std::string(OPENVCU_SOURCE_DIR) + "/config/hhea/vehicle.json");
   REQUIRE_MESSAGE(vehicle, (vehicle ? "" : vehicle.error().toString()));
   auto catalog = config::buildCatalog(*vehicle);

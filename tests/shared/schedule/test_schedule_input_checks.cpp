@@ -72,7 +72,7 @@ TEST_CASE("#19 a fractional or too short cycle in the schedule file is refused")
   CHECK(whole->messages[*pdu].cycleNs == 20 * NS_PER_MS);
 }
 
-TEST_CASE("#39 cycleMs 0 in the schedule file is refused with the allowed range, not taken as 'never cyclic'") {
+TEST_CASE("cycleMs 0 in the schedule file is refused with the allowed range, not taken as 'never cyclic'") {
   Fixture f;
   const std::string sut = f.error(R"({"messages": {"HC1_Demands": {"cycleMs": 0}}})");
   CHECK_MESSAGE(sut.ends_with("schedule.json: /messages/HC1_Demands/cycleMs: the cycle must be a whole number of ms "
@@ -81,7 +81,7 @@ TEST_CASE("#39 cycleMs 0 in the schedule file is refused with the allowed range,
                 sut);
 }
 
-TEST_CASE("#39 a schedule naming another node's message is refused: the VCU would send as that node") {
+TEST_CASE("a schedule naming another node's message is refused: the VCU would send as that node") {
   Fixture f;
   SUBCASE("under /messages") {
     const std::string sut = f.error(R"({"messages": {"HVESSS1_PGN61590": {}}})");

@@ -215,7 +215,7 @@ std::string hheaCopyEdited(const std::string& name, const std::string& file, con
   return vehicle;
 }
 
-TEST_CASE("vcu check refuses cycleMs 0, another node's message and an unknown wake signal, at their paths (#39)") {
+TEST_CASE("vcu check refuses cycleMs 0, another node's message and an unknown wake signal, at their paths") {
   SUBCASE("cycleMs 0 in the schedule") {
     const std::string vehicle =
         hheaCopyEdited("check_cycle0", "schedule.json", "\"PDU_Rx_1\": {", "\"PDU_Rx_1\": {\"cycleMs\": 0, ");

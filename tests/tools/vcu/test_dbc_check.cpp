@@ -63,7 +63,7 @@ TEST_CASE("check of /dev/zero is refused at once naming the file, not an interna
   CHECK(result.err == "/dev/zero: error: not a regular file (character device)\n");
 }
 
-TEST_CASE("check refuses an empty or VERSION-only DBC: a database without messages is an error (#39)") {
+TEST_CASE("check refuses an empty or VERSION-only DBC: a database without messages is an error") {
   const std::string empty = writeScratchFile("empty.dbc", "");
   const std::string versionOnly = writeScratchFile("version_only.dbc", "VERSION \"1.0\"\n");
 
@@ -76,7 +76,7 @@ TEST_CASE("check refuses an empty or VERSION-only DBC: a database without messag
   }
 }
 
-TEST_CASE("check of several files warns about one without messages and passes when the merge has some (#39)") {
+TEST_CASE("check of several files warns about one without messages and passes when the merge has some") {
   const std::string nodesOnly = writeScratchFile("nodes_only.dbc", "VERSION \"\"\n\nBU_: Tool\n");
 
   const RunResult result = runVcu({"dbc", "check", dataPath("vehicle.dbc"), nodesOnly});
