@@ -20,10 +20,10 @@
 #include "openvcu/service/app_impl.hpp"
 #include "openvcu/service/bus_ports.hpp"
 #include "openvcu/service/timer.hpp"
+#include "openvcu/signals/writer_watch.hpp"
 #include "schedule_commands.hpp"
 #include "scheduler.hpp"
 #include "tx_thread.hpp"
-#include "writer_watch.hpp"
 
 namespace openvcu::cantx {
 namespace {
@@ -31,6 +31,8 @@ namespace {
 constexpr std::chrono::milliseconds WATCH_PERIOD{100};
 constexpr std::int64_t NS_PER_MS = 1'000'000;
 
+using signals::WriterChange;
+using signals::WriterWatch;
 using text::number;
 
 }  // namespace

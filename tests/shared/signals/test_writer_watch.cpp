@@ -1,4 +1,4 @@
-// cantx::WriterWatch with a set clock: when a watched writer (vcu-fsm) counts as lost, and
+// signals::WriterWatch with a set clock: when a watched writer (vcu-fsm) counts as lost, and
 // that a signal table that lost its values (issue 18: the heartbeat slot reads as never
 // written until the writer's next beat) is not taken for a lost writer.
 
@@ -6,10 +6,10 @@
 
 #include <optional>
 
-#include "writer_watch.hpp"
+#include "openvcu/signals/writer_watch.hpp"
 
 using namespace openvcu;
-using cantx::WriterChange;
+using signals::WriterChange;
 
 namespace {
 
@@ -31,8 +31,9 @@ std::optional<signals::BusValue> neverWritten() {
 }  // namespace
 
 TEST_CASE("a writer is lost when no heartbeat came for longer than the timeout and back with the next one") {
-  cantx::WriterWatch sut(TIMEOUT, START);
+  signals::WriterWatch sut(TIMEOUT, START);
   CHECK(sut.update(beatAt(START + 500 * MS, 1), NO_DAMAGE, START + 500 * MS) == WriterChange::None);
+  CHECK(sut.lostAtNs() == START + 3'500 * MS + 1);  // a watcher may sleep until then
   CHECK(sut.update(beatAt(START + 500 * MS, 1), NO_DAMAGE, START + 3'500 * MS) == WriterChange::None);
   CHECK(sut.update(beatAt(START + 500 * MS, 1), NO_DAMAGE, START + 3'501 * MS) == WriterChange::Lost);
   CHECK(sut.lost());
@@ -40,14 +41,14 @@ TEST_CASE("a writer is lost when no heartbeat came for longer than the timeout a
   CHECK_FALSE(sut.lost());
 }
 
-TEST_CASE("a writer that never beat counts from can-tx's start") {
-  cantx::WriterWatch sut(TIMEOUT, START);
+TEST_CASE("a writer that never beat counts from the watcher's start") {
+  signals::WriterWatch sut(TIMEOUT, START);
   CHECK(sut.update(neverWritten(), NO_DAMAGE, START + TIMEOUT) == WriterChange::None);
   CHECK(sut.update(neverWritten(), NO_DAMAGE, START + TIMEOUT + MS) == WriterChange::Lost);
 }
 
 TEST_CASE("a heartbeat wiped with the table is no lost writer: it gets its timeout from the damage to come again") {
-  cantx::WriterWatch sut(TIMEOUT, START);
+  signals::WriterWatch sut(TIMEOUT, START);
   const std::int64_t lastBeat = START + 10'000 * MS;
   CHECK(sut.update(beatAt(lastBeat, 10), NO_DAMAGE, lastBeat) == WriterChange::None);
   const std::int64_t damageNs = lastBeat + 2'900 * MS;  // seen late, e.g. the beat was late too
@@ -60,7 +61,7 @@ TEST_CASE("a heartbeat wiped with the table is no lost writer: it gets its timeo
 
 TEST_CASE("a heartbeat read as never written keeps the last beat's time even before the damage count moved") {
   // The slot can be read wiped before this process learns of the damage.
-  cantx::WriterWatch sut(TIMEOUT, START);
+  signals::WriterWatch sut(TIMEOUT, START);
   const std::int64_t lastBeat = START + 10'000 * MS;
   CHECK(sut.update(beatAt(lastBeat, 10), NO_DAMAGE, lastBeat) == WriterChange::None);
   CHECK(sut.update(neverWritten(), NO_DAMAGE, lastBeat + 900 * MS) == WriterChange::None);
@@ -69,7 +70,7 @@ TEST_CASE("a heartbeat read as never written keeps the last beat's time even bef
 }
 
 TEST_CASE("damage does not bring back a writer that was lost before it") {
-  cantx::WriterWatch sut(TIMEOUT, START);
+  signals::WriterWatch sut(TIMEOUT, START);
   CHECK(sut.update(neverWritten(), NO_DAMAGE, START + TIMEOUT + MS) == WriterChange::Lost);
   CHECK(sut.update(neverWritten(), DAMAGED, START + TIMEOUT + 100 * MS) == WriterChange::None);
   CHECK(sut.lost());

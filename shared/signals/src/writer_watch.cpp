@@ -1,12 +1,12 @@
-#include "writer_watch.hpp"
+#include "openvcu/signals/writer_watch.hpp"
 
 #include <algorithm>
 
-namespace openvcu::cantx {
+namespace openvcu::signals {
 
-WriterChange WriterWatch::update(const std::optional<signals::BusValue>& beat, std::uint64_t damageCount,
+WriterChange WriterWatch::update(const std::optional<BusValue>& beat, std::uint64_t damageCount,
                                  std::int64_t nowNs) noexcept {
-  if (beat && beat->updates > 0 && beat->quality != signals::Quality::NeverReceived) {
+  if (beat && beat->updates > 0 && beat->quality != Quality::NeverReceived) {
     m_sinceNs = std::max(m_sinceNs, beat->timestampNs);
   }
   if (damageCount != m_damage) {
@@ -21,4 +21,4 @@ WriterChange WriterWatch::update(const std::optional<signals::BusValue>& beat, s
   return lost ? WriterChange::Lost : WriterChange::Back;
 }
 
-}  // namespace openvcu::cantx
+}  // namespace openvcu::signals
