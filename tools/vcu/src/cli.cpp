@@ -12,6 +12,7 @@
 #include "fsm_commands.hpp"
 #include "gpio_commands.hpp"
 #include "init_command.hpp"
+#include "inject_commands.hpp"
 #include "j1939_commands.hpp"
 #include "record_commands.hpp"
 #include "sim_commands.hpp"
@@ -84,6 +85,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerFsmCommands(app, context);
     registerGpioCommands(app, context);
     registerSimCommands(app, context);
+    registerInjectCommands(app, context);
     registerRecordCommands(app, context);
     registerTopCommands(app, context);
     registerCheckCommands(app, context);
