@@ -114,7 +114,7 @@ class Loader {
   void run(const Json& root) {
     if (!m_check.isObject(root, "")) return;
     m_check.onlyKeys(root, "", {"instance", "node", "dbc", "buses", "fsm", "schedule", "gpio", "simulation",
-                                "receive", "diagnostics", "web", "telemetry", "internalSignals", "lcm", "commandGroup", "comment"});
+                                "receive", "diagnostics", "web", "telemetry", "safety", "internalSignals", "lcm", "commandGroup", "comment"});
     instance(root);
     dbcFiles(root);
     node(root);
@@ -321,7 +321,8 @@ class Loader {
                                                                  {"receive", &m_config.receiveFile},
                                                                  {"diagnostics", &m_config.diagnosticsFile},
                                                                  {"web", &m_config.webFile},
-                                                                 {"telemetry", &m_config.telemetryFile}};
+                                                                 {"telemetry", &m_config.telemetryFile},
+                                                                 {"safety", &m_config.safetyFile}};
     for (const auto& [key, target] : entries) {
       const auto file = m_check.string(root, "", key, false);
       if (!file) continue;

@@ -19,8 +19,8 @@ using config::Json;
 using config::JsonChecker;
 
 /// Every kind name, in enum order (detectionKindName / injectKindName index these).
-constexpr std::array<std::string_view, 7> DETECTION_KINDS = {"receiveTimeout", "j1939_76",        "dm1",        "dtc",
-                                                             "gpioInput",      "serviceWatchdog", "addressLoss"};
+constexpr std::array<std::string_view, 8> DETECTION_KINDS = {
+    "receiveTimeout", "j1939_76", "dm1", "dtc", "gpioInput", "serviceWatchdog", "addressLoss", "statusSignal"};
 constexpr std::array<std::string_view, 13> INJECT_KINDS = {"silence", "delay",     "corrupt", "freezeCounter", "replay",
                                                            "babble",  "spoof",     "busOff",  "addressClaim",  "kill",
                                                            "stop",    "gpioStuck", "signal"};
@@ -38,9 +38,11 @@ bool validId(std::string_view id) {
   return true;
 }
 
-/// "PL a".."PL e" (ISO 13849), "ASIL QM", "ASIL A".."ASIL D" (ISO 26262), "SIL 1".."SIL 4" (IEC 61508).
+/// "PL a".."PL e" (ISO 13849), "AgPL a".."AgPL e" (ISO 25119), "ASIL QM", "ASIL A".."ASIL D" (ISO 26262), "SIL 1".."SIL
+/// 4" (IEC 61508).
 bool validSeverity(std::string_view tag) {
   if (tag.size() == 4 && tag.substr(0, 3) == "PL ") return tag[3] >= 'a' && tag[3] <= 'e';
+  if (tag.size() == 6 && tag.substr(0, 5) == "AgPL ") return tag[5] >= 'a' && tag[5] <= 'e';
   if (tag == "ASIL QM") return true;
   if (tag.size() == 6 && tag.substr(0, 5) == "ASIL ") return tag[5] >= 'A' && tag[5] <= 'D';
   if (tag.size() == 5 && tag.substr(0, 4) == "SIL ") return tag[4] >= '1' && tag[4] <= '4';
@@ -171,9 +173,9 @@ class Parser {
   Hazard hazard(const Json& item, const std::string& path) {
     Hazard result;
     if (!m_check.isObject(item, path)) return result;
-    m_check.onlyKeys(
-        item, path,
-        {"id", "description", "severity", "safetyGoal", "safeState", "detection", "fttiMs", "faults", "comment"});
+    m_check.onlyKeys(item, path,
+                     {"id", "description", "severity", "safetyGoal", "during", "safeState", "detection", "fttiMs",
+                      "faults", "comment"});
     result.id = text(item, path, "id");
     if (!result.id.empty() && !validId(result.id)) {
       m_check.error(path + "/id", "'" + result.id + "' must be 1-64 letters, digits, '-' or '_'");
@@ -181,12 +183,14 @@ class Parser {
     result.description = text(item, path, "description");
     result.severity = text(item, path, "severity");
     if (!result.severity.empty() && !validSeverity(result.severity)) {
-      m_check.error(path + "/severity", "'" + result.severity +
-                                            "' is not a severity tag; expected \"PL a\"..\"PL e\", \"ASIL QM\", "
-                                            "\"ASIL A\"..\"ASIL D\" or \"SIL 1\"..\"SIL 4\"");
+      m_check.error(path + "/severity",
+                    "'" + result.severity +
+                        "' is not a severity tag; expected \"PL a\"..\"PL e\", \"AgPL a\"..\"AgPL e\", \"ASIL QM\", "
+                        "\"ASIL A\"..\"ASIL D\" or \"SIL 1\"..\"SIL 4\"");
     }
     result.safetyGoal = text(item, path, "safetyGoal");
     result.comment = m_check.string(item, path, "comment", false).value_or("");
+    result.during = stateNames(item, path, "during");
     if (const Json* state = m_check.member(item, path, "safeState", true)) {
       result.safeState = safeState(*state, path + "/safeState");
     }
@@ -197,6 +201,14 @@ class Parser {
       }
     }
     if (const auto ftti = milliseconds(item, path, "fttiMs", true)) result.fttiMs = *ftti;
+    for (std::size_t i = 0; i < result.detection.size(); ++i) {
+      const auto within = result.detection[i].withinMs;
+      if (within && result.fttiMs > 0 && *within > result.fttiMs) {
+        m_check.error(JsonChecker::join(path + "/detection", i) + "/withinMs",
+                      "detecting in " + std::to_string(*within) + " ms leaves the hazard's FTTI of " +
+                          std::to_string(result.fttiMs) + " ms behind");
+      }
+    }
     if (const Json* list = m_check.array(item, path, "faults", false)) {
       for (std::size_t i = 0; i < list->size(); ++i) {
         result.faults.push_back(injection((*list)[i], JsonChecker::join(path + "/faults", i)));
@@ -205,20 +217,27 @@ class Parser {
     return result;
   }
 
+  /// A list of FSM state names (checked against the FSM by checkSafety()).
+  std::vector<std::string> stateNames(const Json& item, const std::string& path, std::string_view key) {
+    std::vector<std::string> names;
+    const Json* list = m_check.array(item, path, key, false);
+    if (!list) return names;
+    for (std::size_t i = 0; i < list->size(); ++i) {
+      const std::string where = JsonChecker::join(JsonChecker::join(path, key), i);
+      if (!(*list)[i].is_string() || (*list)[i].get<std::string>().empty()) {
+        m_check.error(where, "must be an FSM state name");
+        continue;
+      }
+      names.push_back((*list)[i].get<std::string>());
+    }
+    return names;
+  }
+
   SafeState safeState(const Json& item, const std::string& path) {
     SafeState state;
     if (!m_check.isObject(item, path)) return state;
-    m_check.onlyKeys(item, path, {"fsmStates", "gpio", "bus", "comment"});
-    if (const Json* list = m_check.array(item, path, "fsmStates", false)) {
-      for (std::size_t i = 0; i < list->size(); ++i) {
-        const std::string where = JsonChecker::join(path + "/fsmStates", i);
-        if (!(*list)[i].is_string() || (*list)[i].get<std::string>().empty()) {
-          m_check.error(where, "must be an FSM state name");
-          continue;
-        }
-        state.fsmStates.push_back((*list)[i].get<std::string>());
-      }
-    }
+    m_check.onlyKeys(item, path, {"fsmStates", "gpio", "bus", "restarted", "comment"});
+    state.fsmStates = stateNames(item, path, "fsmStates");
     if (const Json* list = m_check.array(item, path, "gpio", false)) {
       for (std::size_t i = 0; i < list->size(); ++i) {
         const std::string where = JsonChecker::join(path + "/gpio", i);
@@ -243,8 +262,19 @@ class Parser {
         state.bus.push_back(std::move(command));
       }
     }
-    if (state.fsmStates.empty() && state.gpio.empty() && state.bus.empty()) {
-      m_check.error(path, "names no FSM state, GPIO level or bus command: a safe state needs at least one");
+    if (const Json* list = m_check.array(item, path, "restarted", false)) {
+      for (std::size_t i = 0; i < list->size(); ++i) {
+        const std::string where = JsonChecker::join(path + "/restarted", i);
+        const Json& name = (*list)[i];
+        if (!name.is_string() || config::findService(name.get<std::string>()) == nullptr) {
+          m_check.error(where, "must be a service name (" + serviceNames() + ")");
+          continue;
+        }
+        state.restarted.push_back(name.get<std::string>());
+      }
+    }
+    if (state.fsmStates.empty() && state.gpio.empty() && state.bus.empty() && state.restarted.empty()) {
+      m_check.error(path, "names no FSM state, GPIO level, bus command or restarted service: a safe state needs one");
     }
     return state;
   }
@@ -280,7 +310,8 @@ class Parser {
   Detection detection(const Json& item, const std::string& path) {
     Detection result;
     if (!m_check.isObject(item, path)) return result;
-    m_check.onlyKeys(item, path, {"kind", "message", "signal", "node", "fault", "line", "service", "bus", "comment"});
+    m_check.onlyKeys(item, path,
+                     {"kind", "message", "signal", "node", "fault", "line", "service", "bus", "withinMs", "comment"});
     const auto kind = m_check.string(item, path, "kind");
     if (!kind) return result;
     const auto index = indexOfName(DETECTION_KINDS, *kind);
@@ -315,10 +346,14 @@ class Parser {
       case DetectionKind::AddressLoss:
         target(item, path, *kind, {"bus"}, members);
         break;
+      case DetectionKind::StatusSignal:
+        target(item, path, *kind, {"signal"}, members);
+        break;
     }
     if (!result.service.empty() && config::findService(result.service) == nullptr) {
       m_check.error(path + "/service", "unknown service '" + result.service + "'; the services are " + serviceNames());
     }
+    result.withinMs = milliseconds(item, path, "withinMs", false);
     return result;
   }
 

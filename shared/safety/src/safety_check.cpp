@@ -20,6 +20,9 @@ class Checker {
     for (std::size_t h = 0; h < m_case.hazards.size(); ++h) {
       const Hazard& hazard = m_case.hazards[h];
       const std::string path = JsonChecker::join("/hazards", h);
+      for (std::size_t i = 0; i < hazard.during.size(); ++i) {
+        fsmState(hazard.during[i], JsonChecker::join(path + "/during", i));
+      }
       safeState(hazard.safeState, path + "/safeState");
       for (std::size_t i = 0; i < hazard.detection.size(); ++i) {
         detection(hazard, hazard.detection[i], JsonChecker::join(path + "/detection", i));
@@ -115,6 +118,19 @@ class Checker {
     }
     for (std::size_t i = 0; i < state.bus.size(); ++i) {
       signal(state.bus[i].signal, JsonChecker::join(path + "/bus", i) + "/signal");
+    }
+    for (std::size_t i = 0; i < state.restarted.size(); ++i) {
+      const std::string where = JsonChecker::join(path + "/restarted", i);
+      if (!m_case.watchdog) {
+        error(where, "a restarted service needs the \"watchdog\" section that restarts it");
+        continue;
+      }
+      const auto& watched = m_case.watchdog->services;
+      if (std::find(watched.begin(), watched.end(), state.restarted[i]) == watched.end()) {
+        error(where, "service '" + state.restarted[i] + "' is not in /watchdog/services: nothing restarts it");
+      } else if (!m_case.watchdog->restart) {
+        error(where, "/watchdog/restart is false: the watchdog restarts no service");
+      }
     }
   }
 

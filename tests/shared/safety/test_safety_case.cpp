@@ -128,7 +128,8 @@ TEST_CASE("every detection kind and fault kind reads with the target it takes") 
                  R"("detection": [{"kind": "receiveTimeout", "signal": "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts"},
                        {"kind": "j1939_76", "message": "HVESSS1_PGN61590"}, {"kind": "dm1", "node": "VIC"},
                        {"kind": "dtc", "fault": "hv_lost"}, {"kind": "gpioInput", "line": "ContactorFault"},
-                       {"kind": "serviceWatchdog", "service": "fsm"}, {"kind": "addressLoss", "bus": "vehicle"}])");
+                       {"kind": "serviceWatchdog", "service": "fsm"}, {"kind": "addressLoss", "bus": "vehicle"},
+                       {"kind": "statusSignal", "signal": "PDU.PDU_Tx_1.byPDU_Status"}])");
   std::string text = hazard;
   const std::string faults = R"("faults": [{"inject": "silence", "node": "VIC"},
       {"inject": "delay", "message": "HVESSS1_PGN61590", "delayMs": 200},
@@ -144,7 +145,7 @@ TEST_CASE("every detection kind and fault kind reads with the target it takes") 
   auto sut = safety::parseSafety(text, std::string(FILE_NAME));
   REQUIRE_MESSAGE(sut, (sut ? "" : sut.error().toString()));
   const safety::Hazard& parsed = sut->hazards[0];
-  REQUIRE(parsed.detection.size() == 7);
+  REQUIRE(parsed.detection.size() == 8);
   CHECK(parsed.detection[0].signal == "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts");
   CHECK(parsed.detection[1].kind == safety::DetectionKind::J1939_76);
   CHECK(parsed.detection[2].node == "VIC");
@@ -152,6 +153,7 @@ TEST_CASE("every detection kind and fault kind reads with the target it takes") 
   CHECK(parsed.detection[4].line == "ContactorFault");
   CHECK(parsed.detection[5].service == "fsm");
   CHECK(parsed.detection[6].bus == "vehicle");
+  CHECK(parsed.detection[7].signal == "PDU.PDU_Tx_1.byPDU_Status");
   for (std::size_t i = 0; i < parsed.detection.size(); ++i) {
     CHECK(parsed.detection[i].kind == static_cast<safety::DetectionKind>(i));
   }
@@ -221,7 +223,8 @@ TEST_CASE("a safe state that names nothing is refused") {
       R"({"fsmStates": ["Battery Timeout"], "gpio": [{"line": "Cl15", "level": 0}],
                 "bus": [{"signal": "Vehicle_Control_Unit.PDU_Rx_1.Close_GroupA_Contactors", "value": 0}]})",
       "{}");
-  CHECK(contains(errorOf(empty), "/hazards/0/safeState: names no FSM state, GPIO level or bus command"));
+  CHECK(contains(errorOf(empty),
+                 "/hazards/0/safeState: names no FSM state, GPIO level, bus command or restarted service"));
 }
 
 TEST_CASE("two hazards with one id are refused at the second") {

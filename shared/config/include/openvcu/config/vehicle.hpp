@@ -8,7 +8,7 @@
 //     "dbc": ["hhea.dbc"],
 //     "buses": [{"name": "vehicle", "link": "sim:vehicle", "bitrate": 500000, "messages": "all"}],
 //     "fsm": "fsm.json", "schedule": "schedule.json", "gpio": "gpio.json", "simulation": "simulation.json",
-//     "receive": "receive.json", "diagnostics": "diagnostics.json",
+//     "receive": "receive.json", "diagnostics": "diagnostics.json", "safety": "safety.json",
 //     "internalSignals": [{"name": "operator.Start", "min": 0, "max": 1, "values": {"0": "Stop", "1": "Start"}}],
 //     "lcm": "udpm://239.255.76.67:7667?ttl=0"
 //   }
@@ -95,6 +95,7 @@ struct VehicleConfig {
   std::string diagnosticsFile; ///< the VCU's own DTCs and identification (diagnostics.json); empty: none
   std::string webFile;         ///< vcu-web's settings (web.json); empty: its defaults
   std::string telemetryFile;   ///< vcu-telemetry's settings (telemetry.json); empty: no telemetry
+  std::string safetyFile;      ///< the safety case (safety.json, openvcu::safety); empty: none
   std::vector<InternalSignal> internalSignals;
   GpioMap gpio;                ///< loaded from gpioFile; empty when not configured
   std::string lcmUrl{DEFAULT_LCM_URL};

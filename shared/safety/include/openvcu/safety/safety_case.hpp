@@ -67,6 +67,7 @@ struct SafeState {
   std::vector<std::string> fsmStates;  ///< any of these FSM states is safe
   std::vector<SafeLevel> gpio;
   std::vector<SafeCommand> bus;
+  std::vector<std::string> restarted;  ///< services running and beating again (config::SERVICES names)
 };
 
 enum class DetectionKind : std::uint8_t {
@@ -77,9 +78,11 @@ enum class DetectionKind : std::uint8_t {
   GpioInput,        ///< a hard-wired input line ("line")
   ServiceWatchdog,  ///< a VCU service that stops beating ("service")
   AddressLoss,      ///< the VCU's J1939 address lost on a bus ("bus")
+  StatusSignal,     ///< a fault another node reports in a status signal it sends ("signal")
 };
 
-/// "receiveTimeout", "j1939_76", "dm1", "dtc", "gpioInput", "serviceWatchdog", "addressLoss".
+/// "receiveTimeout", "j1939_76", "dm1", "dtc", "gpioInput", "serviceWatchdog", "addressLoss",
+/// "statusSignal".
 [[nodiscard]] std::string_view detectionKindName(DetectionKind kind) noexcept;
 
 /// A detection mechanism and exactly what it watches: one of the target members is set,
@@ -93,6 +96,9 @@ struct Detection {
   std::string line;     ///< gpio.json line name
   std::string service;  ///< config::SERVICES short name
   std::string bus;      ///< vehicle.json bus name
+  /// The mechanism reports within this many ms of the fault (its own bound, inside the
+  /// FTTI); empty: only the FTTI bounds it.
+  std::optional<std::int64_t> withinMs;
 };
 
 enum class InjectKind : std::uint8_t {
@@ -136,8 +142,13 @@ struct Injection {
 struct Hazard {
   std::string id;           ///< unique: letters, digits, '-', '_' ("H-BAT-TIMEOUT")
   std::string description;  ///< what goes wrong and why it is dangerous
-  std::string severity;     ///< "PL a".."PL e", "ASIL QM", "ASIL A".."ASIL D", "SIL 1".."SIL 4"
+  /// "PL a".."PL e" (ISO 13849), "AgPL a".."AgPL e" (ISO 25119), "ASIL QM", "ASIL A".."ASIL D"
+  /// (ISO 26262), "SIL 1".."SIL 4" (IEC 61508)
+  std::string severity;
   std::string safetyGoal;
+  /// FSM states the vehicle is brought to before a campaign injects the faults ("Driving");
+  /// empty: any state.
+  std::vector<std::string> during;
   SafeState safeState;
   std::vector<Detection> detection;  ///< at least one
   std::int64_t fttiMs{};             ///< fault tolerant time interval, ms, > 0
