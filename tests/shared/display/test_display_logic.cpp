@@ -154,6 +154,64 @@ TEST_CASE(
   CHECK(sut.services().size() == 2);
 }
 
+TEST_CASE("a service that beat and then fell silent is silent, a fault service_silent.<name>, until it beats again") {
+  HealthTracker sut({"vcu-fsm", "vcu-gpio"}, STALE_AFTER_NS);
+  const ipc::Heartbeat beat{
+      .service = "vcu-fsm", .instance = {}, .pid = 100, .uptimeMs = 10, .counters = {}, .status = "ready"};
+  sut.onHeartbeat(beat, 10 * SECOND_NS);
+  const ServiceHealth* fsm = sut.find("vcu-fsm");
+  const ServiceHealth* gpio = sut.find("vcu-gpio");
+  REQUIRE(fsm);
+  REQUIRE(gpio);
+  CHECK(sut.livenessOf(*fsm, 11 * SECOND_NS) == Liveness::Beating);
+  CHECK_FALSE(sut.silentFor(*fsm, 11 * SECOND_NS));
+  CHECK(sut.silentFaults(11 * SECOND_NS, 1000 * SECOND_NS).empty());
+  CHECK(sut.livenessOf(*gpio, 11 * SECOND_NS) == Liveness::NotHeard);  // never beat: not silent, no fault
+
+  constexpr std::int64_t LATER = 14 * SECOND_NS;
+  CHECK(sut.livenessOf(*fsm, LATER) == Liveness::Silent);
+  REQUIRE(sut.silentFor(*fsm, LATER));
+  CHECK(*sut.silentFor(*fsm, LATER) == 4 * SECOND_NS);
+  const auto faults = sut.silentFaults(LATER, 1000 * SECOND_NS);
+  REQUIRE(faults.size() == 1);
+  CHECK(faults[0].name == "service_silent.fsm");
+  CHECK(faults[0].source == SILENT_FAULT_SOURCE);
+  CHECK(faults[0].severity == ipc::FaultSeverity::Critical);
+  CHECK(faults[0].timestampNs == 996 * SECOND_NS);  // the last beat, on the real-time clock
+  CHECK(faults[0].text.find("vcu-fsm stopped beating") != std::string::npos);
+  CHECK(namesFault(faults, "service_silent.fsm"));
+  CHECK(sut.services().size() == 2);  // the silent row stays listed
+
+  sut.onHeartbeat(beat, 15 * SECOND_NS);
+  CHECK(sut.livenessOf(*sut.find("vcu-fsm"), 15 * SECOND_NS) == Liveness::Beating);
+  CHECK(sut.silentFaults(15 * SECOND_NS, 1000 * SECOND_NS).empty());
+}
+
+TEST_CASE("a service whose last heartbeat said stopping is stopped, not silent, and still a fault") {
+  HealthTracker sut({}, STALE_AFTER_NS);
+  sut.onHeartbeat(
+      {.service = "vcu-gpio", .instance = {}, .pid = 7, .uptimeMs = 1, .counters = {}, .status = "stopping (SIGTERM)"},
+      SECOND_NS);
+  const ServiceHealth* gpio = sut.find("vcu-gpio");
+  REQUIRE(gpio);
+  CHECK(sut.livenessOf(*gpio, 5 * SECOND_NS) == Liveness::Stopped);
+  const auto faults = sut.silentFaults(5 * SECOND_NS, 5 * SECOND_NS);
+  REQUIRE(faults.size() == 1);
+  CHECK(faults[0].name == "service_silent.gpio");
+}
+
+TEST_CASE("a beat in the table's heartbeat slot keeps a service beating and lists one LCM never told of") {
+  HealthTracker sut({"vcu-fsm"}, STALE_AFTER_NS);
+  CHECK_FALSE(sut.onSlotBeat("vcu-fsm", 10 * SECOND_NS));
+  CHECK(sut.onSlotBeat("vcu-can-rx", 2 * SECOND_NS));  // a new row: beat once, silent since
+  CHECK(sut.livenessOf(*sut.find("vcu-fsm"), 11 * SECOND_NS) == Liveness::Beating);
+  CHECK(sut.livenessOf(*sut.find("vcu-can-rx"), 11 * SECOND_NS) == Liveness::Silent);
+  sut.onSlotBeat("vcu-fsm", 5 * SECOND_NS);  // an older slot time never moves the last beat back
+  CHECK(sut.find("vcu-fsm")->lastBeatMonoNs == 10 * SECOND_NS);
+  CHECK(silentFaultName("vcu-can-rx") == "service_silent.can-rx");
+  CHECK(silentFaultName("fixture") == "service_silent.fixture");
+}
+
 TEST_CASE("a command is answered by its own ack only, refused with the reason, or times out") {
   CommandTracker sut("vcu-hmi", 41, 2 * SECOND_NS);
   ipc::CommandRequest first;

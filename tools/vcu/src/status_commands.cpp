@@ -19,7 +19,9 @@
 
 #include "diagnostics.hpp"
 #include "openvcu/core/clock.hpp"
+#include "openvcu/display/health.hpp"
 #include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/signals/table.hpp"
 #include "text_table.hpp"
 
 extern char** environ;
@@ -33,6 +35,13 @@ constexpr const char* STATUS_FOOTER =
     "seconds (default 1.5; services beat once a second) and prints one line per service\n"
     "process heard: program, pid, uptime, age of its last heartbeat, its status line\n"
     "('starting', 'ready', 'stopping (SIGTERM)', or its own) and its counters.\n"
+    "Services not heard are listed too, never dropped, in a section NOT HEARD below\n"
+    "(indented, so that lines starting with 'vcu-' are the services heard): the stack's\n"
+    "own (vcu-can-rx, vcu-can-tx, vcu-fsm, vcu-gpio, vcu-ecu-sim) and every service\n"
+    "whose heartbeat slot (internal.service.<name>.heartbeat) in the signal table was\n"
+    "ever written. One that beat before and not for 2.5 s is 'silent for N s' (hung,\n"
+    "stopped or dead; 'stopped N s ago' when its last heartbeat said stopping); one that\n"
+    "never beat is 'not heard'.\n"
     "--stats adds each process's per-bus and per-message statistics (channel\n"
     "OPENVCU_<INSTANCE>_STATS: 'vehicle.frames_rx', 'rx.EEC1.period_us', 'tx.CCVS1.missed').\n"
     "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
@@ -40,8 +49,9 @@ constexpr const char* STATUS_FOOTER =
     "Example:\n"
     "  vcu status --config config/hhea/vehicle.json --wait 3\n"
     "  vcu status --stats | tr ' ' '\\n' | grep '^tx\\.'\n"
-    "Exit: 0 at least one service heard, 1 none heard or configuration error, 2 usage\n"
-    "error.\n";
+    "Exit: 0 services heard and none of the stack's own silent, 1 one of the stack's own\n"
+    "services (or one heard while listening) is silent or stopped, none heard, or a\n"
+    "configuration error, 2 usage error.\n";
 
 constexpr const char* SPY_DESCRIPTION = "Start lcm-spy with the project's event types";
 constexpr const char* SPY_FOOTER =
@@ -135,10 +145,14 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
     return ExitCode::Failure;
   }
   ipc::EventBus& events = *eventsResult;
-  std::map<std::pair<std::string, std::int32_t>, ipc::Heartbeat> latest;  // by (program, pid)
+  std::map<std::pair<std::string, std::int32_t>, ipc::Heartbeat> latest;        // by (program, pid)
+  std::map<std::pair<std::string, std::int32_t>, std::int64_t> receivedMonoNs;  // when `latest` arrived
   auto subscribed = events.onHeartbeat([&](const ipc::Heartbeat& heartbeat) {
     auto& slot = latest[{heartbeat.service, heartbeat.pid}];
-    if (heartbeat.timestampNs >= slot.timestampNs) slot = heartbeat;
+    if (heartbeat.timestampNs >= slot.timestampNs) {
+      slot = heartbeat;
+      receivedMonoNs[{heartbeat.service, heartbeat.pid}] = clock::monotonicNs();
+    }
   });
   if (!subscribed) {
     reportError(streams.err, subscribed.error().message);
@@ -163,26 +177,94 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
     if (left.count() <= 0) break;
     if (events.handle(left) == ipc::HandleResult::Failed) break;
   }
-  if (latest.empty()) {
+
+  // Liveness from both planes: the heartbeats heard, then the table's heartbeat slots (which
+  // also know the services that stopped beating before `vcu status` started).
+  const std::vector<std::string> expected = display::expectedServices();
+  display::HealthTracker health(expected, display::HEARTBEAT_STALE_NS);
+  for (const auto& [key, heartbeat] : latest) health.onHeartbeat(heartbeat, receivedMonoNs[key]);
+  if (auto table =
+          signals::SignalTable::open(maybeStack->catalog, maybeStack->config.instance, signals::OpenMode::AttachOnly)) {
+    display::HeartbeatSlots(maybeStack->catalog).feed(health, *table);
+  }
+  const bool anyBeat = std::any_of(health.services().begin(), health.services().end(),
+                                   [](const display::ServiceHealth& service) { return service.lastBeatMonoNs >= 0; });
+  if (!anyBeat) {
     reportError(streams.err, "no heartbeat on " + events.channel(ipc::EventKind::Heartbeat) + " within " +
                                  formatNumber(options.waitSeconds) +
                                  " s (is the stack running? events: " + maybeStack->config.lcmUrl + ")");
     return ExitCode::Failure;
   }
   const std::int64_t now = clock::realtimeNs();
-  TextTable table({"SERVICE", "PID", "UPTIME", "LAST BEAT", "STATUS", "COUNTERS"});
+  const std::int64_t nowMono = clock::monotonicNs();
+  std::vector<std::string> silent;  // "vcu-fsm silent for 4.12 s": these make the exit code 1
+  const auto livenessText = [&](const display::ServiceHealth& service) -> std::string {
+    const auto silentNs = health.silentFor(service, nowMono);
+    switch (health.livenessOf(service, nowMono)) {
+      case display::Liveness::Silent:
+        return "silent for " + formatDuration(*silentNs);
+      case display::Liveness::Stopped:
+        return "stopped " + formatDuration(*silentNs) + " ago";
+      case display::Liveness::NotHeard:
+        return "not heard";
+      default:
+        return {};
+    }
+  };
+  std::vector<std::vector<std::string>> rows;
   for (const auto& [key, heartbeat] : latest) {
     std::vector<ipc::Counter> counters = heartbeat.counters;
     if (const auto found = stats.find(key); found != stats.end()) {
       for (const auto& [name, value] : found->second) counters.push_back(ipc::Counter{name, value});
     }
-    table.addRow({heartbeat.service, std::to_string(heartbeat.pid), formatDuration(heartbeat.uptimeMs * 1'000'000),
-                  formatDuration(std::max<std::int64_t>(0, now - heartbeat.timestampNs)) + " ago",
-                  heartbeat.status.empty() ? "-" : heartbeat.status, counterText(counters)});
+    std::string statusText = heartbeat.status.empty() ? "-" : heartbeat.status;
+    const display::ServiceHealth* service = health.find(heartbeat.service);
+    if (service != nullptr && service->pid == heartbeat.pid && health.silentFor(*service, nowMono)) {
+      statusText = livenessText(*service) + " (last: " + statusText + ")";
+      silent.push_back(heartbeat.service + " " + livenessText(*service));
+    }
+    rows.push_back({heartbeat.service, std::to_string(heartbeat.pid), formatDuration(heartbeat.uptimeMs * 1'000'000),
+                    formatDuration(std::max<std::int64_t>(0, now - heartbeat.timestampNs)) + " ago", statusText,
+                    counterText(counters)});
   }
+  // The services not heard while listening (silent, stopped, or never heard) in a section of
+  // their own, indented: a line starting with "vcu-" is a service heard beating, as scripts
+  // that count the beating services read it.
+  TextTable notHeard({"  NOT HEARD", "LAST BEAT", "STATUS"});
+  for (const display::ServiceHealth& service : health.services()) {
+    const bool heard =
+        std::any_of(latest.begin(), latest.end(), [&](const auto& entry) { return entry.first.first == service.name; });
+    if (heard) continue;
+    std::string statusText = livenessText(service);
+    if (statusText.empty()) statusText = "beating (its table slot counts; no LCM heartbeat heard)";
+    const bool own = std::find(expected.begin(), expected.end(), service.name) != expected.end();
+    if (own && health.silentFor(service, nowMono)) silent.push_back(service.name + " " + statusText);
+    notHeard.addRow({"  " + service.name,
+                     service.lastBeatMonoNs >= 0
+                         ? formatDuration(std::max<std::int64_t>(0, nowMono - service.lastBeatMonoNs)) + " ago"
+                         : "never",
+                     statusText});
+  }
+  std::sort(rows.begin(), rows.end());
   std::string out;
-  table.appendTo(out);
+  if (rows.empty()) {
+    out += "(no heartbeat heard within " + formatNumber(options.waitSeconds) + " s)\n";
+  } else {
+    TextTable table({"SERVICE", "PID", "UPTIME", "LAST BEAT", "STATUS", "COUNTERS"});
+    for (std::vector<std::string>& row : rows) table.addRow(std::move(row));
+    table.appendTo(out);
+  }
+  if (!notHeard.empty()) {
+    out += "\n";
+    notHeard.appendTo(out);
+  }
   streams.out.write(out);
+  if (!silent.empty()) {
+    std::string message;
+    for (const std::string& line : silent) message += (message.empty() ? "" : ", ") + line;
+    reportError(streams.err, message + " (no heartbeat on LCM or in the signal table)");
+    return ExitCode::Failure;
+  }
   return ExitCode::Ok;
 }
 

@@ -6,6 +6,9 @@
 //   SERVICE              PID   UPTIME    LAST BEAT   STATUS  COUNTERS
 //   vcu-fsm              4242  12.04 s   0.31 s ago  ready   transitions=3 commands_accepted=1 ...
 //
+//     NOT HEARD  LAST BEAT   STATUS
+//     vcu-gpio   4.10 s ago  silent for 4.10 s          (exit code 1)
+//
 //   vcu spy                    # java lcm.spy.Spy via shared/ipc/lcm-spy.sh, argv only (no shell)
 
 #include <string>

@@ -4,8 +4,6 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-
-#include "cli_checks.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -15,12 +13,14 @@
 #include <optional>
 #include <sstream>
 
+#include "cli_checks.hpp"
 #include "diagnostics.hpp"
-#include "openvcu/core/clock.hpp"
 #include "openvcu/config/dashboard.hpp"
 #include "openvcu/config/json.hpp"
-#include "openvcu/service/process_stats.hpp"
+#include "openvcu/core/clock.hpp"
+#include "openvcu/display/health.hpp"
 #include "openvcu/ipc/event_bus.hpp"
+#include "openvcu/service/process_stats.hpp"
 #include "openvcu/signals/table.hpp"
 #include "stop_signal.hpp"
 #include "text_table.hpp"
@@ -45,10 +45,16 @@ constexpr const char* TOP_FOOTER =
     "Refreshes once a second until Ctrl-C (or --for SECONDS): the services heard on the\n"
     "heartbeat channel (pid, uptime, restarts seen while top runs, heartbeat age, CPU %\n"
     "since the last table (\"-\" until two samples of it lie 0.2 s apart) and RSS of local\n"
-    "processes, status), the FSM state and how long it has held, the\n"
+    "processes, status; the stack's own services and every service whose heartbeat slot in\n"
+    "the signal table was written are listed even when not heard: 'silent for N s' once\n"
+    "they beat before and not for 2.5 s, 'not heard' when they never did), the FSM state\n"
+    "and how long it has held (while vcu-fsm is silent: the last state, marked as not\n"
+    "current: 'Driving — vcu-fsm silent 4.02 s'), the\n"
     "vehicle's key signals from its dashboard.json (BATTERY: SOC, voltage, current,\n"
     "charger; STATUS: the HMI's status keys), the GPIO lines, each bus's load, can-tx's\n"
-    "worst period error p99 and the active faults (LCM fault events since top started).\n"
+    "worst period error p99 and the active faults (LCM fault events since top started,\n"
+    "and service_silent.<name> (source heartbeats) for every silent service no event\n"
+    "names).\n"
     "--once prints one snapshot\n"
     "after 1.5 s without clearing the screen.\n"
     "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
@@ -78,7 +84,11 @@ std::string fixed(double value, int decimals) {
 
 class Top {
  public:
-  Top(const Stack& stack, Streams streams) : m_stack(stack), m_streams(streams) {
+  Top(const Stack& stack, Streams streams)
+      : m_stack(stack),
+        m_streams(streams),
+        m_health(display::expectedServices(), display::HEARTBEAT_STALE_NS),
+        m_slots(stack.catalog) {
     loadStateNames();
     loadDashboard();
   }
@@ -118,14 +128,20 @@ class Top {
     }
   }
 
-  [[nodiscard]] bool heardAny() const { return !m_services.empty(); }
+  /// A heartbeat heard, or a beat in a heartbeat slot of the table.
+  [[nodiscard]] bool heardAny() const {
+    return std::any_of(m_health.services().begin(), m_health.services().end(),
+                       [](const display::ServiceHealth& service) { return service.lastBeatMonoNs >= 0; });
+  }
 
   std::string render() {
     if (!m_table) {
       auto table = signals::SignalTable::open(m_stack.catalog, m_stack.config.instance, signals::OpenMode::AttachOnly);
       if (table) m_table.emplace(std::move(*table));
     }
-    std::string out = "openvcu top: instance " + m_stack.config.instance + ", " + formatUtc(clock::realtimeNs()) + "\n\n";
+    if (m_table) m_slots.feed(m_health, *m_table);
+    std::string out =
+        "openvcu top: instance " + m_stack.config.instance + ", " + formatUtc(clock::realtimeNs()) + "\n\n";
     services(out);
     out += "\n";
     vehicle(out);
@@ -135,6 +151,7 @@ class Top {
 
  private:
   void onHeartbeat(const ipc::Heartbeat& beat) {
+    m_health.onHeartbeat(beat, clock::monotonicNs());
     ServiceView& view = m_services[beat.service];
     if (view.firstPid == 0) view.firstPid = beat.pid;
     if (view.last.pid != 0 && view.last.pid != beat.pid) ++view.restarts;
@@ -148,13 +165,40 @@ class Top {
     view.last = beat;
   }
 
+  /// "silent for 4.02 s", "stopped 4.02 s ago", "not heard"; empty while the service beats.
+  [[nodiscard]] std::string livenessText(const display::ServiceHealth& service, std::int64_t nowMono) const {
+    const auto silentNs = m_health.silentFor(service, nowMono);
+    switch (m_health.livenessOf(service, nowMono)) {
+      case display::Liveness::Silent:
+        return "silent for " + formatDuration(*silentNs);
+      case display::Liveness::Stopped:
+        return "stopped " + formatDuration(*silentNs) + " ago";
+      case display::Liveness::NotHeard:
+        return "not heard";
+      default:
+        return {};
+    }
+  }
+
   void services(std::string& out) {
-    const std::int64_t now = clock::realtimeNs();
+    const std::int64_t nowMono = clock::monotonicNs();
     const auto clock = std::chrono::steady_clock::now();
     const double ticksPerSecond = service::clockTicksPerSecond();
     TextTable table({"SERVICE", "PID", "UPTIME", "RESTARTS", "BEAT", "CPU %", "RSS MB", "STATUS"});
-    for (auto& [name, view] : m_services) {
-      const std::int64_t ticks = service::processCpuTicks(view.last.pid);
+    for (const display::ServiceHealth& health : m_health.services()) {
+      const std::string liveness = livenessText(health, nowMono);
+      const std::string beat = health.lastBeatMonoNs >= 0
+                                   ? formatDuration(std::max<std::int64_t>(0, nowMono - health.lastBeatMonoNs)) +
+                                         (liveness.empty() ? "" : " SILENT")
+                                   : "never";
+      const auto found = m_services.find(health.name);
+      if (found == m_services.end()) {  // known from the table or the configuration only
+        table.addRow(
+            {health.name, "-", "-", "-", beat, "-", "-", liveness.empty() ? "beating (table slot only)" : liveness});
+        continue;
+      }
+      ServiceView& view = found->second;
+      const std::int64_t ticks = liveness.empty() ? service::processCpuTicks(view.last.pid) : -1;
       if (ticks >= 0 && view.cpuTicks >= 0) {
         const double seconds = std::chrono::duration<double>(clock - view.cpuAt).count();
         if (seconds > 0.2) {
@@ -168,15 +212,12 @@ class Top {
         view.cpuAt = clock;
       }
       const double rss = service::processRssMb(view.last.pid);
-      const std::int64_t age = std::max<std::int64_t>(0, now - view.last.timestampNs);
-      table.addRow({name, std::to_string(view.last.pid), formatDuration(view.last.uptimeMs * 1'000'000),
-                    std::to_string(view.restarts), formatDuration(age) + (age > 3'000'000'000 ? " LATE" : ""),
+      std::string status = view.last.status.empty() ? "-" : view.last.status;
+      if (!liveness.empty()) status = liveness + " (last: " + status + ")";
+      table.addRow({health.name, std::to_string(view.last.pid), formatDuration(view.last.uptimeMs * 1'000'000),
+                    std::to_string(view.restarts), beat,
                     ticks >= 0 && view.cpuMeasured ? fixed(view.cpuPercent, 1) : "-", rss >= 0 ? fixed(rss, 1) : "-",
-                    view.last.status.empty() ? "-" : view.last.status});
-    }
-    if (table.empty()) {
-      out += "(no heartbeat heard yet)\n";
-      return;
+                    status});
     }
     table.appendTo(out);
   }
@@ -189,10 +230,12 @@ class Top {
     if (!slot) return "-";
     // two decimals are enough on a status screen (650.35 V, not 650.3500000000001 V)
     const auto shown = [](double value) { return std::round(value * 100) / 100; };
-    if (const auto command = signals::effectiveCommand(*slot)) return formatValue(m_stack.catalog[*index], shown(command->value));
+    if (const auto command = signals::effectiveCommand(*slot))
+      return formatValue(m_stack.catalog[*index], shown(command->value));
     if (slot->bus.updates == 0) return "never";
     std::string text = formatValue(m_stack.catalog[*index], shown(slot->bus.value));
-    if (slot->bus.quality != signals::Quality::Valid) text += " (" + std::string(signals::qualityName(slot->bus.quality)) + ")";
+    if (slot->bus.quality != signals::Quality::Valid)
+      text += " (" + std::string(signals::qualityName(slot->bus.quality)) + ")";
     return text;
   }
 
@@ -206,7 +249,13 @@ class Top {
       if (const auto bus = m_table->readBus(*index); bus && bus->updates > 0) {
         const auto number = static_cast<std::size_t>(bus->value);
         state = number < m_stateNames.size() ? m_stateNames[number] : std::to_string(number);
-        state += " (for " + formatDuration(clock::monotonicNs() - bus->timestampNs) + ")";
+        const display::ServiceHealth* fsm = m_health.find("vcu-fsm");
+        const std::string liveness = fsm != nullptr ? livenessText(*fsm, clock::monotonicNs()) : "not heard";
+        if (liveness.empty()) {
+          state += " (for " + formatDuration(clock::monotonicNs() - bus->timestampNs) + ")";
+        } else {  // the last state of a writer that does not beat: not the current one
+          state += " — vcu-fsm " + liveness + " (last state written, not current)";
+        }
       }
     }
     out += "FSM         " + state + "\n";
@@ -246,8 +295,9 @@ class Top {
     }
     if (!m_dashboard) return;
     std::string battery;
-    for (const auto& [name, key] : {std::pair{"SOC", &m_dashboard->socKey}, std::pair{"U", &m_dashboard->voltageKey},
-                                    std::pair{"I", &m_dashboard->currentKey}, std::pair{"charger", &m_dashboard->chargerKey}}) {
+    for (const auto& [name, key] :
+         {std::pair{"SOC", &m_dashboard->socKey}, std::pair{"U", &m_dashboard->voltageKey},
+          std::pair{"I", &m_dashboard->currentKey}, std::pair{"charger", &m_dashboard->chargerKey}}) {
       if (!key->empty()) battery += std::string(name) + " " + value(*key) + "   ";
     }
     if (!battery.empty()) out += "BATTERY     " + battery + "\n";
@@ -285,15 +335,24 @@ class Top {
     m_dashboard.emplace(std::move(*dashboard));
   }
 
+  /// The fault events heard, then service_silent.<name> of every silent service no event
+  /// names (vcu-watchdog raises the same name when it runs).
   void faults(std::string& out) {
     out += "\nFAULTS      ";
-    if (m_faults.empty()) {
+    std::vector<ipc::FaultEvent> shown;
+    for (const auto& [name, fault] : m_faults) shown.push_back(fault);
+    for (ipc::FaultEvent& silent : m_health.silentFaults(clock::monotonicNs(), clock::realtimeNs())) {
+      if (!display::namesFault(shown, silent.name)) shown.push_back(std::move(silent));
+    }
+    if (shown.empty()) {
       out += "none active\n";
       return;
     }
     out += "\n";
-    for (const auto& [name, fault] : m_faults) {
-      out += "  " + name + " (" + fault.source + "): " + fault.text + "\n";
+    for (const ipc::FaultEvent& fault : shown) {
+      out += "  " + fault.name + " (" + fault.source + ", " + std::string(display::faultSeverityName(fault.severity)) +
+             ", since " + formatDuration(std::max<std::int64_t>(0, clock::realtimeNs() - fault.timestampNs)) +
+             "): " + fault.text + "\n";
     }
   }
 
@@ -313,6 +372,8 @@ class Top {
   std::optional<ipc::EventBus> m_events;
   std::optional<signals::SignalTable> m_table;
   std::map<std::string, ServiceView> m_services;
+  display::HealthTracker m_health;  ///< every service's liveness, from heartbeats and the table's slots
+  display::HeartbeatSlots m_slots;
   std::map<std::string, std::int64_t> m_txStats;  ///< vcu-can-tx's latest statistics by name
   std::int32_t m_txStatsPid{};
   std::map<std::string, ipc::FaultEvent> m_faults;
@@ -339,14 +400,14 @@ ExitCode runTop(const TopOptions& options, Streams streams) {
     top.listen(std::chrono::milliseconds(750));
     streams.out.write(top.render());
     if (!top.heardAny()) {
-      reportError(streams.err, "no heartbeat within 1.5 s (is the stack running? events: " +
-                                   maybeStack->config.lcmUrl + ")");
+      reportError(streams.err,
+                  "no heartbeat within 1.5 s (is the stack running? events: " + maybeStack->config.lcmUrl + ")");
       return ExitCode::Failure;
     }
     return ExitCode::Ok;
   }
-  const auto end = std::chrono::steady_clock::now() +
-                   std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(options.forSeconds));
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                          std::chrono::duration<double>(options.forSeconds));
   while (!stopRequested() && (options.forSeconds <= 0 || std::chrono::steady_clock::now() < end)) {
     top.listen(std::chrono::milliseconds(1000));
     streams.out.write("\x1b[H\x1b[2J" + top.render() + "\n(Ctrl-C to stop)\n");
