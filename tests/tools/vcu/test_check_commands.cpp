@@ -132,12 +132,12 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
   CHECK_MESSAGE(result.exitCode == EXIT_OK, result.err);
   for (const char* file : {"vehicle.json: 0 errors", "hhea.dbc: 0 errors", "gpio.json: 0 errors", "fsm.json: 0 errors",
                            "schedule.json: 0 errors", "simulation.json: 0 errors", "dashboard.json: 0 errors",
-                           "telemetry.json: 0 errors"}) {
+                           "telemetry.json: 0 errors", "safety.json: 0 errors"}) {
     CHECK_MESSAGE(contains(result.out, file), file);
   }
   // the whole-vehicle checks' two warnings (#22): received messages nothing reads, and the
   // DC-DC command the VCU sends with the charger's source address 0xE5 (as the original did)
-  CHECK(contains(result.out, "vehicle 'hhea': 10 files, 0 errors, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 11 files, 0 errors, 2 warnings\n"));
   CHECK(contains(result.err, "vehicle.json: /buses/0/messages: warning: bus 'vehicle': "));
   CHECK(contains(result.err, "hhea.dbc:166: warning: bus 'vehicle': J1939 source address 0xE5 (229)"));
   CHECK_FALSE(contains(result.err, "error:"));
@@ -158,7 +158,7 @@ TEST_CASE("vcu check reports a broken simulation, dashboard and schedule togethe
   CHECK_FALSE(contains(result.err, "fsm.json: /"));
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));
-  CHECK(contains(result.out, "10 files, 3 errors"));
+  CHECK(contains(result.out, "11 files, 3 errors"));
   CHECK(result.out.find("error:") == std::string::npos);  // diagnostics on stderr only
 }
 
@@ -259,7 +259,7 @@ TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
   CHECK_MESSAGE(contains(result.err, "check_simulation/simulation.json: /battery/initialSoc: error: "), result.err);
   CHECK(contains(result.out, "simulation.json: 1 error"));
-  CHECK(contains(result.out, "10 files, 1 error"));
+  CHECK(contains(result.out, "11 files, 1 error"));
 }
 
 TEST_CASE(
@@ -273,7 +273,7 @@ TEST_CASE(
   CHECK_MESSAGE(contains(result.err, "check_receive/receive.json: /messages/HVESSS1_PGN6159: error: "), result.err);
   CHECK(contains(result.err, "HVESSS1_PGN61590"));  // the suggestion
   CHECK(contains(result.out, "receive.json: 1 error"));
-  CHECK(contains(result.out, "11 files, 1 error"));
+  CHECK(contains(result.out, "12 files, 1 error"));
 }
 
 TEST_CASE("vcu check passes a receive file its loader accepts and counts it") {
@@ -283,7 +283,7 @@ TEST_CASE("vcu check passes a receive file its loader accepts and counts it") {
 
   CHECK_MESSAGE(result.exitCode == EXIT_OK, result.err);
   CHECK(contains(result.out, "receive.json: 0 errors, 0 warnings"));
-  CHECK(contains(result.out, "vehicle 'hhea': 11 files, 0 errors, 2 warnings\n"));  // the whole-vehicle ones (#22)
+  CHECK(contains(result.out, "vehicle 'hhea': 12 files, 0 errors, 2 warnings\n"));  // the whole-vehicle ones (#22)
 }
 
 TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two nodes with one address (#22)") {
@@ -306,7 +306,7 @@ TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two no
       result.err);
   CHECK(contains(result.err, "OBC (NmStationAddress)"));
   CHECK(contains(result.out, "hhea.dbc: 1 error, 1 warning"));
-  CHECK(contains(result.out, "vehicle 'hhea': 10 files, 1 error, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 11 files, 1 error, 2 warnings\n"));
 }
 
 TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
@@ -325,7 +325,7 @@ TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the
   CHECK_MESSAGE(contains(result.err, "check_schedule/schedule.json: /messages/HVESSC1_PGN691"), result.err);
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));  // its send groups still come from the schedule
-  CHECK(contains(result.out, "10 files, 1 error"));
+  CHECK(contains(result.out, "11 files, 1 error"));
 }
 
 TEST_CASE(
@@ -341,7 +341,7 @@ TEST_CASE(
       contains(result.err, "check_dashboard/dashboard.json: /items/1/key: error: unknown signal 'internal.relay.Cl16'"),
       result.err);
   CHECK(contains(result.out, "dashboard.json: 1 error"));
-  CHECK(contains(result.out, "10 files, 1 error"));
+  CHECK(contains(result.out, "11 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a telemetry.json naming a signal the catalog lacks, and one its loader refuses (#25)") {
@@ -360,7 +360,7 @@ TEST_CASE("vcu check refuses a telemetry.json naming a signal the catalog lacks,
   const RunResult refusedResult = runVcu({"check", "--config", refused});
   CHECK(refusedResult.exitCode == EXIT_INPUT_ERROR);
   CHECK_MESSAGE(contains(refusedResult.err, "check_telemetry_bad/telemetry.json: /broker: error: "), refusedResult.err);
-  CHECK(contains(refusedResult.out, "10 files, 1 error"));
+  CHECK(contains(refusedResult.out, "11 files, 1 error"));
 }
 
 TEST_CASE("vcu check still checks the other files when vehicle.json itself has an error") {

@@ -20,6 +20,7 @@
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/config/web.hpp"
 #include "openvcu/fsm/machine.hpp"
+#include "openvcu/safety/safety_case.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
 
 namespace openvcu::cli {
@@ -30,8 +31,10 @@ namespace fs = std::filesystem;
 constexpr const char* DESCRIPTION = "Check every file of a vehicle configuration, as the services load them";
 constexpr const char* FOOTER =
     "Checks vehicle.json and through it the DBC files, the GPIO map, the FSM file, the\n"
-    "schedule, simulation, receive, diagnostics and web files and the HMI dashboard (dashboard.json beside\n"
-    "vehicle.json, if present) with the loaders the services use when they start.\n"
+    "schedule, simulation, receive, diagnostics, web, telemetry and safety files and the HMI dashboard\n"
+    "(dashboard.json beside vehicle.json, if present) with the loaders the services use when they start;\n"
+    "the safety case (safety.json) also against the FSM's states, the GPIO map, the signals and the\n"
+    "services (docs/safety.md).\n"
     "While vehicle.json itself does not load, the files it names get the JSON syntax check\n"
     "only (a note says so). Then the whole-vehicle checks, which the services also run at\n"
     "start: unused received signals, FSM conditions on signals nobody writes, the expected\n"
@@ -151,7 +154,7 @@ std::vector<std::string> namedFiles(const std::string& vehiclePath) {
   auto json = config::readJsonFile(vehiclePath);
   if (!json || !json->is_object()) return files;
   const fs::path directory = fs::path(vehiclePath).parent_path();
-  for (const char* key : {"fsm", "schedule", "simulation", "receive", "diagnostics", "web", "telemetry"}) {
+  for (const char* key : {"fsm", "schedule", "simulation", "receive", "diagnostics", "web", "telemetry", "safety"}) {
     const auto it = json->find(key);
     if (it == json->end() || !it->is_string()) continue;
     const fs::path file(it->get<std::string>());
@@ -164,6 +167,34 @@ bool isSendGroupDiagnostic(const Error& diagnostic) {
   constexpr std::string_view SUFFIX = "/sendGroup";
   const std::string& path = diagnostic.location.jsonPath;
   return path.size() >= SUFFIX.size() && path.compare(path.size() - SUFFIX.size(), SUFFIX.size(), SUFFIX) == 0;
+}
+
+/// safety.json: its loader's first error, else every cross-check against the vehicle
+/// (the FSM's states only when fsm.json loads; its own errors are fsm.json's).
+void checkSafetyFile(const Stack& stack, FileTally& tally, bool quiet, Sink& err) {
+  const config::VehicleConfig& vehicle = stack.config;
+  if (const auto error = jsonObjectError(vehicle.safetyFile)) {
+    tally.report(*error, quiet, err);
+    return;
+  }
+  auto safetyCase = safety::loadSafety(vehicle.safetyFile);
+  if (!safetyCase) {
+    tally.report(safetyCase.error(), quiet, err);
+    return;
+  }
+  std::optional<std::vector<std::string>> states;
+  if (!vehicle.fsmFile.empty()) {
+    if (auto machine = fsm::loadMachine(vehicle.fsmFile, vehicle, stack.catalog)) {
+      states.emplace();
+      for (const fsm::State& state : machine->states) states->push_back(state.name);
+    }
+  } else {
+    states.emplace();  // no FSM: every state a hazard names is unknown
+  }
+  for (const Error& diagnostic :
+       safety::checkSafety(*safetyCase, vehicle, stack.catalog, states ? &*states : nullptr)) {
+    tally.report(diagnostic, quiet, err);
+  }
 }
 
 }  // namespace
@@ -287,6 +318,10 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
           }
         }
       }
+    }
+    if (!vehicle.safetyFile.empty()) {
+      tally.add(vehicle.safetyFile);
+      checkSafetyFile(*stack, tally, options.quiet, streams.err);
     }
     // diagnostics.json is loaded by the whole-vehicle check (it needs the FSM's states)
     if (!vehicle.diagnosticsFile.empty()) tally.add(vehicle.diagnosticsFile);
