@@ -15,6 +15,7 @@
 #include "inject_commands.hpp"
 #include "j1939_commands.hpp"
 #include "record_commands.hpp"
+#include "safety_commands.hpp"
 #include "sim_commands.hpp"
 #include "top_commands.hpp"
 #include "trace_commands.hpp"
@@ -86,6 +87,7 @@ int run(int argc, const char* const* argv, Streams streams) noexcept {
     registerGpioCommands(app, context);
     registerSimCommands(app, context);
     registerInjectCommands(app, context);
+    registerSafetyCommands(app, context);
     registerRecordCommands(app, context);
     registerTopCommands(app, context);
     registerCheckCommands(app, context);
