@@ -8,6 +8,7 @@ SilenceChange SilenceWatch::update(const std::optional<signals::BusValue>& beat,
   const bool written = beat && beat->updates > 0 && beat->quality != signals::Quality::NeverReceived;
   if (written && beat->updates != m_updates) {
     m_updates = beat->updates;
+    m_stampNs = beat->timestampNs;
     m_lastBeatNs = std::clamp(beat->timestampNs, m_lastBeatNs, std::max(nowNs, m_lastBeatNs));
     if (m_silent) {
       m_silent = false;
@@ -28,7 +29,7 @@ bool SilenceWatch::killDue(std::int64_t nowNs) const noexcept {
 }
 
 bool SilenceWatch::mayKill(std::int64_t processStartNs, std::int64_t nowNs) const noexcept {
-  if (processStartNs <= m_lastBeatNs) return true;
+  if (m_stampNs && *m_stampNs >= processStartNs) return true;
   return nowNs - processStartNs > START_GRACE_NS;
 }
 

@@ -58,15 +58,17 @@ class SilenceWatch {
   void killAttempted(std::int64_t nowNs) noexcept { m_killAttemptNs = nowNs; }
 
   /// Whether the process that started at `processStartNs` (CLOCK_MONOTONIC) may be killed
-  /// for this silence: it was running at the newest beat (the silence is its own), or it
-  /// started after it and never beat in START_GRACE_NS. A copy a supervisor just started
-  /// is therefore never killed for its predecessor's silence.
+  /// for this silence: it wrote the newest beat (stamped after its start: the silence is its
+  /// own), or it is older than START_GRACE_NS without a beat of its own. A copy a supervisor
+  /// just started, or a service still starting when the watchdog starts, is therefore never
+  /// killed for a silence that is not its own.
   [[nodiscard]] bool mayKill(std::int64_t processStartNs, std::int64_t nowNs) const noexcept;
 
  private:
   std::int64_t m_silentAfterNs;
   std::int64_t m_lastBeatNs;
   std::optional<std::uint64_t> m_updates;  ///< the slot's update count at the newest beat
+  std::optional<std::int64_t> m_stampNs;   ///< the newest beat's own time stamp, as written
   std::optional<std::int64_t> m_killAttemptNs;
   bool m_silent{};
 };

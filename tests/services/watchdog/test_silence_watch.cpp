@@ -114,16 +114,31 @@ TEST_CASE("a kill is due once per silence, again only silentAfter after the last
 
 TEST_CASE("the hung process may be killed, the copy its supervisor just started may not") {
   SilenceWatch sut(SILENT_AFTER, T0);
+  const std::int64_t hungStart = T0 - 60'000 * MS;
   const std::int64_t lastBeat = T0 + 500 * MS;
   REQUIRE(sut.update(beat(2, lastBeat), lastBeat) == SilenceChange::None);
   const std::int64_t now = lastBeat + 2 * SILENT_AFTER;
   REQUIRE(sut.update(beat(2, lastBeat), now) == SilenceChange::Silent);
-  // running when it last beat: the silence is its own
-  CHECK(sut.mayKill(T0 - 60'000 * MS, now));
+  // it wrote the newest beat: the silence is its own
+  CHECK(sut.mayKill(hungStart, now));
   CHECK(sut.mayKill(lastBeat, now));
   // started after the newest beat and not beaten yet: its start-up has START_GRACE_NS
   const std::int64_t restarted = now - 1000 * MS;
   CHECK_FALSE(sut.mayKill(restarted, now));
   CHECK_FALSE(sut.mayKill(restarted, restarted + watchdog::START_GRACE_NS));
   CHECK(sut.mayKill(restarted, restarted + watchdog::START_GRACE_NS + 1));
+}
+
+TEST_CASE("a service still starting when the watchdog starts gets the start-up grace, not silentAfter") {
+  SilenceWatch sut(SILENT_AFTER, T0);
+  const std::int64_t started = T0 - 200 * MS;  // started just before the watchdog, no beat yet
+  const std::optional<signals::BusValue> never = signals::BusValue{};
+  REQUIRE(sut.update(never, T0 + SILENT_AFTER + 1) == SilenceChange::Silent);  // reported
+  CHECK_FALSE(sut.mayKill(started, T0 + SILENT_AFTER + 1));                    // not killed yet
+  CHECK(sut.mayKill(started, started + watchdog::START_GRACE_NS + 1));
+  // the slot still holds a beat of a predecessor, stamped before this process started
+  SilenceWatch other(SILENT_AFTER, T0);
+  REQUIRE(other.update(beat(40, T0 - 5000 * MS), T0) == SilenceChange::None);
+  REQUIRE(other.update(beat(40, T0 - 5000 * MS), T0 + SILENT_AFTER + 1) == SilenceChange::Silent);
+  CHECK_FALSE(other.mayKill(started, T0 + SILENT_AFTER + 1));
 }
