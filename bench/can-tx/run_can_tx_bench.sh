@@ -137,7 +137,7 @@ if [[ -n "$rtPriority" ]]; then
   jq --arg dir "$configDir" --arg schedule "$work/schedule.json" '
     def absolute: if startswith("/") then . else $dir + "/" + . end;
     .dbc |= map(absolute) | .schedule = $schedule |
-    with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive", "dashboard", "diagnostics", "web", "telemetry")) then .value |= absolute else . end)' \
+    with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive", "dashboard", "diagnostics", "web", "telemetry", "safety")) then .value |= absolute else . end)' \
     "$config" >"$work/vehicle.json"
   config="$work/vehicle.json"
   echo "RT_PRIORITY=$rtPriority${SDM_SPIN_US:+ SDM_SPIN_US=$SDM_SPIN_US}: configuration copied to $config" \

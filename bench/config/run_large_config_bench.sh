@@ -15,7 +15,7 @@ import json, sys
 root, work, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
 base = root + "/config/hhea/"
 v = json.load(open(base + "vehicle.json"))
-for key in ("dbc", "fsm", "schedule", "gpio", "simulation", "receive", "dashboard", "diagnostics", "web", "telemetry"):
+for key in ("dbc", "fsm", "schedule", "gpio", "simulation", "receive", "dashboard", "diagnostics", "web", "telemetry", "safety"):
     if key in v:
         fix = lambda p: p if p.startswith("/") else base + p
         v[key] = [fix(p) for p in v[key]] if isinstance(v[key], list) else fix(v[key])

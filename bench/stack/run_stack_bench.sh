@@ -29,7 +29,7 @@ if [ -n "${SDM_SPIN_US:-}" ]; then
   jq --arg dir "$dir" --arg schedule "$run/schedule.json" '
     def absolute: if startswith("/") then . else $dir + "/" + . end;
     .dbc |= map(absolute) | .schedule = $schedule |
-    with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive", "dashboard", "diagnostics", "web", "telemetry")) then .value |= absolute else . end)' \
+    with_entries(if (.key | IN("fsm", "gpio", "simulation", "receive", "dashboard", "diagnostics", "web", "telemetry", "safety")) then .value |= absolute else . end)' \
     "$config" > "$run/vehicle.json"
   config=$run/vehicle.json
   echo "SDM_SPIN_US=$SDM_SPIN_US: configuration copied to $config"

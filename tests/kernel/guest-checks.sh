@@ -73,7 +73,7 @@ base_path, over_path, out_path = (os.path.abspath(p) for p in sys.argv[1:])
 def absolute(folder, value):
     return [absolute(folder, v) for v in value] if isinstance(value, list) else os.path.join(folder, value)
 config = json.load(open(base_path))
-for key in ("dbc", "schedule", "fsm", "gpio", "simulation", "receive", "diagnostics", "web", "telemetry"):
+for key in ("dbc", "schedule", "fsm", "gpio", "simulation", "receive", "diagnostics", "web", "telemetry", "safety"):
     if key in config:
         config[key] = absolute(os.path.dirname(base_path), config[key])
 base_buses = {bus["name"]: bus for bus in config.get("buses", [])}

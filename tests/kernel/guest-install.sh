@@ -169,7 +169,7 @@ if [[ ${#hmi[@]} == 1 ]]; then expect_exec /usr/bin/vcu-hmi; expect_file /lib/sy
 named=$($PY - "$CFG" <<'PYEOF' 2>&1
 import json, os, sys
 config = json.load(open(sys.argv[1]))
-names = list(config.get("dbc", [])) + [config[k] for k in ("schedule", "fsm", "gpio", "simulation", "diagnostics", "web", "telemetry", "receive") if isinstance(config.get(k), str)]
+names = list(config.get("dbc", [])) + [config[k] for k in ("schedule", "fsm", "gpio", "simulation", "diagnostics", "web", "telemetry", "receive", "safety") if isinstance(config.get(k), str)]
 print(" ".join(os.path.join(os.path.dirname(sys.argv[1]), n) for n in names + ["dashboard.json"]))
 link = [b["link"] for b in config["buses"] if b["name"] == "vehicle"]
 print("LINK", link[0] if link else "none")
