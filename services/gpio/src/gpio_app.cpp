@@ -1,7 +1,5 @@
 #include "gpio_app.hpp"
 
-#include "openvcu/service/app_impl.hpp"
-
 #include <poll.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
@@ -15,6 +13,8 @@
 
 #include "controller.hpp"
 #include "openvcu/core/clock.hpp"
+#include "openvcu/schedule/schedule_config.hpp"
+#include "openvcu/service/app_impl.hpp"
 
 namespace openvcu::gpio {
 namespace {
@@ -29,7 +29,8 @@ service::CommandPolicy gpioCommandPolicy(const signals::Catalog& catalog, const 
   service::CommandPolicy policy = service::CommandPolicy::byOwner(catalog, GPIO_WRITER);
   policy.veto = [&map](const ipc::CommandRequest& request,
                        const signals::SignalInfo& info) -> std::optional<std::string> {
-    const bool setting = request.kind == ipc::CommandKind::SetSignal || request.kind == ipc::CommandKind::OperatorSwitch;
+    const bool setting =
+        request.kind == ipc::CommandKind::SetSignal || request.kind == ipc::CommandKind::OperatorSwitch;
     if (const config::GpioLine* line = map.inputBoundTo(info.key)) {
       if (setting) {
         return "'" + info.key + "' is read from input line " + line->name + "; force it with an override";
@@ -53,6 +54,7 @@ struct GpioAppImpl {
   service::Service& runtime;
   std::unique_ptr<Chip> chip;
   std::unique_ptr<Controller> controller;
+  std::vector<schedule::WatchedWriter> writers;
   std::thread outputThread;
   std::thread inputThread;
   std::atomic<bool> stopping{false};
@@ -83,24 +85,47 @@ struct GpioAppImpl {
     auto chipResult = openChip(map, runtime.table(), runtime.catalog());
     if (!chipResult) return chipResult.error();
     chip = std::move(*chipResult);
-    auto controllerResult = Controller::create(map, runtime.catalog(), runtime.table(), *chip,
-                                               [this](bool error, const std::string& line) {
-                                                 if (error) {
-                                                   runtime.log().error(line);
-                                                 } else {
-                                                   runtime.log().info(line);
-                                                 }
-                                               });
+    // The writers whose heartbeats the outputs depend on, with their timeouts: the list
+    // vcu-can-tx watches (schedule.json "writers"), one definition for both dead-man switches.
+    auto scheduleResult = schedule::loadSchedule(runtime.config(), runtime.catalog());
+    if (!scheduleResult) return scheduleResult.error();
+    writers = scheduleResult->writers;
+    if (writers.empty()) {
+      runtime.log().warning(
+          "no writers to watch (schedule \"writers\"): the outputs follow their commands even "
+          "when their writer stops");
+    }
+    auto controllerResult = Controller::create(
+        map, runtime.catalog(), runtime.table(), *chip,
+        [this](bool error, const std::string& line) {
+          if (error) {
+            runtime.log().error(line);
+          } else {
+            runtime.log().info(line);
+          }
+        },
+        writers, [this](const schedule::WatchedWriter& writer, bool lost) { writerChanged(writer, lost); });
     if (!controllerResult) return controllerResult.error();
     controller = std::move(*controllerResult);
     if (Status started = controller->start(clock::monotonicNs()); !started) return started;
     controller->updateOutputs(clock::monotonicNs());
-    if (Status answering = runtime.answerCommands(gpioCommandPolicy(runtime.catalog(), map)); !answering) return answering.error();
+    if (Status answering = runtime.answerCommands(gpioCommandPolicy(runtime.catalog(), map)); !answering)
+      return answering.error();
     registerCounters(map);
     runtime.setStatus(std::to_string(map.lines.size()) + " lines on the " + std::string(chip->kind()) + " back end");
     outputThread = std::thread([this] { runOutputs(); });
     inputThread = std::thread([this] { runInputs(); });
     return {};
+  }
+
+  /// Output thread: the fault event (EventBus::publish is thread-safe), as vcu-can-tx names it.
+  void writerChanged(const schedule::WatchedWriter& writer, bool lost) {
+    const std::string text = lost ? "no heartbeat from " + writer.service + " for " +
+                                        std::to_string(writer.timeoutNs / 1'000'000) +
+                                        " ms: every GPIO output at its safe level"
+                                  : writer.service + " is back; the GPIO outputs follow its commands again";
+    runtime.events().publish(ipc::FaultEvent{0, "writer_lost." + writer.service, runtime.program(),
+                                             ipc::FaultSeverity::Critical, lost, text});
   }
 
   void registerCounters(const config::GpioMap& map) {
@@ -113,8 +138,11 @@ struct GpioAppImpl {
     add("input_edges", counters.inputEdges);
     add("input_bounces", counters.inputBounces);
     add("set_failures", counters.setFailures);
+    runtime.heartbeat().addCounterSource("writers_lost", [this] { return controller->writersLost(); });
+    runtime.heartbeat().addStatSource("following_commands", [this] { return controller->followingCommands() ? 1 : 0; });
     for (std::size_t i = 0; i < map.lines.size(); ++i) {
-      runtime.heartbeat().addStatSource("line." + map.lines[i].name, [this, i] { return controller->level(i) ? 1 : 0; });
+      runtime.heartbeat().addStatSource("line." + map.lines[i].name,
+                                        [this, i] { return controller->level(i) ? 1 : 0; });
     }
   }
 
@@ -128,8 +156,11 @@ struct GpioAppImpl {
         if (const auto index = runtime.catalog().indexOf(key)) indexes.push_back(*index);
       }
     }
+    // A lost writer's next beat wakes the thread at once; a live one's loss is a deadline.
+    for (const schedule::WatchedWriter& writer : writers) indexes.push_back(writer.heartbeat);
     signals::SignalWatch watch = runtime.table().watch(indexes);
-    if (!watch.dedicated()) runtime.log().warning("no free watch entry in the signal table: woken by every table write");
+    if (!watch.dedicated())
+      runtime.log().warning("no free watch entry in the signal table: woken by every table write");
     std::uint64_t seenDamage = runtime.table().damageCount();
     while (!stopping.load(std::memory_order_relaxed)) {
       // The table lost its values: the watch bits are gone, and the statuses must be written
@@ -163,7 +194,8 @@ struct GpioAppImpl {
       controller->updateInputs(now);
       const std::int64_t deadline = controller->nextInputDeadlineNs();
       int timeoutMs = -1;
-      if (deadline != NO_DEADLINE) timeoutMs = static_cast<int>(std::max<std::int64_t>((deadline - now + 999'999) / 1'000'000, 0));
+      if (deadline != NO_DEADLINE)
+        timeoutMs = static_cast<int>(std::max<std::int64_t>((deadline - now + 999'999) / 1'000'000, 0));
       const int ready = ::poll(watched.data(), watched.size(), timeoutMs);
       if (ready < 0 && errno != EINTR) {
         runtime.log().error(std::string("poll on the line events: ") + std::strerror(errno));

@@ -3,8 +3,6 @@
 // simulated chip, for the vcu-gpio unit tests.
 
 #include <doctest/doctest.h>
-
-#include "vehicle_fixture.hpp"
 #include <unistd.h>
 
 #include <atomic>
@@ -16,6 +14,7 @@
 #include "chip.hpp"
 #include "controller.hpp"
 #include "openvcu/config/catalog.hpp"
+#include "vehicle_fixture.hpp"
 
 namespace gpiotest {
 
@@ -30,6 +29,10 @@ struct Fixture : openvcu::testing::VehicleTable {
   std::unique_ptr<gpio::Chip> chip;
   std::unique_ptr<gpio::Controller> sut;
   std::vector<std::string> log;
+  /// Writers the controller watches (empty: none, as a vehicle without schedule "writers").
+  std::vector<schedule::WatchedWriter> writers;
+  /// What the controller reported about them: "lost fsm", "back fsm".
+  std::vector<std::string> writerChanges;
 
   Fixture() : VehicleTable(HHEA, uniqueInstance()) {}
   static std::string uniqueInstance() {
@@ -61,15 +64,20 @@ struct Fixture : openvcu::testing::VehicleTable {
       REQUIRE_MESSAGE(chipResult, (chipResult ? "" : chipResult.error().toString()));
       chip = std::move(*chipResult);
     }
-    auto created = gpio::Controller::create(vehicle.gpio, catalog, *table, *chip,
-                                            [this](bool, const std::string& text) { log.push_back(text); });
+    auto created = gpio::Controller::create(
+        vehicle.gpio, catalog, *table, *chip, [this](bool, const std::string& text) { log.push_back(text); }, writers,
+        [this](const schedule::WatchedWriter& writer, bool lost) {
+          writerChanges.push_back((lost ? "lost " : "back ") + writer.service);
+        });
     REQUIRE_MESSAGE(created, (created ? "" : created.error().toString()));
     sut = std::move(*created);
     const Status started = sut->start(now);
     REQUIRE_MESSAGE(started, (started ? "" : started.error().toString()));
   }
 
-  void command(const std::string& name, double value, std::int64_t at) { table->writeCommand(key(name), value, at, FSM); }
+  void command(const std::string& name, double value, std::int64_t at) {
+    table->writeCommand(key(name), value, at, FSM);
+  }
   double bus(const std::string& name) const {
     const auto value = table->readBus(key(name));
     REQUIRE(value);
