@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <ctime>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
 
+#include "frame_faults.hpp"
 #include "generic_model.hpp"
 #include "j1939_peer.hpp"
 #include "openvcu/can_links/open_link.hpp"
@@ -18,15 +22,19 @@
 namespace openvcu::ecusim {
 namespace {
 
-constexpr std::string_view SILENT_PREFIX = "silent.";
+/// How long a fault request waits for the simulation thread to apply it.
+constexpr std::chrono::seconds APPLY_TIMEOUT{1};
 
-void sleepUntil(std::int64_t monotonicNs) noexcept {
-  timespec until{};
-  until.tv_sec = static_cast<time_t>(monotonicNs / 1'000'000'000);
-  until.tv_nsec = static_cast<long>(monotonicNs % 1'000'000'000);
-  while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
-  }
-}
+/// A fault request on its way from the command handler (loop thread) to the simulation
+/// thread, and its outcome back.
+struct PendingFault {
+  std::string name;  ///< the key as asked
+  bool on{};
+  std::optional<FrameFaultRequest> frame;  ///< a frame fault; else a model fault
+  std::vector<FrameTarget> targets;
+  bool done{};
+  std::optional<std::string> refusal;
+};
 
 }  // namespace
 
@@ -34,16 +42,22 @@ struct EcuSimAppImpl {
   service::Service& runtime;
   config::SimConfig config;
   std::optional<VirtualBus> bus;
-  std::optional<VehicleModel> model;      ///< "model": "hhea"
-  std::optional<GenericModel> generic;    ///< "model": "generic"
-  std::optional<J1939Peer> peer;          ///< "j1939Peer"
+  std::optional<VehicleModel> model;    ///< "model": "hhea"
+  std::optional<GenericModel> generic;  ///< "model": "generic"
+  std::optional<J1939Peer> peer;        ///< "j1939Peer"
+  std::optional<FrameFaults> faults;    ///< `vcu inject` frame faults on what the nodes send
   std::vector<std::unique_ptr<can::Link>> links;
   std::optional<signals::SignalIndex> wakeIndex;
   std::thread thread;
   std::atomic<bool> stopping{false};
-  // fault requests from the command handler (loop thread) to the simulation thread
+  // fault requests from the command handler (loop thread) to the simulation thread; the
+  // simulation thread sleeps on `simWake` (CLOCK_MONOTONIC deadlines) so a request is applied
+  // at once, and reports on `applied`
   std::mutex requestsMutex;
-  std::vector<std::pair<std::string, bool>> requests;
+  std::condition_variable simWake;
+  std::condition_variable applied;
+  std::vector<std::shared_ptr<PendingFault>> requests;
+  std::vector<std::shared_ptr<PendingFault>> finished;  ///< applied this iteration (simulation thread)
   // heartbeat mirrors
   std::atomic<std::int64_t> sent{}, received{}, sendFailures{}, awake{}, connection{}, socTenths{}, pairsOk{},
       pairsRefused{}, timeRequests{}, timeAnswers{}, timeErrors{}, sohAnswers{}, faultsActive{};
@@ -51,7 +65,11 @@ struct EcuSimAppImpl {
 
   explicit EcuSimAppImpl(service::Service& service) : runtime(service) {}
   ~EcuSimAppImpl() {
-    stopping.store(true);
+    {
+      std::lock_guard lock(requestsMutex);
+      stopping.store(true);
+    }
+    simWake.notify_all();
     if (thread.joinable()) thread.join();
   }
 
@@ -73,6 +91,13 @@ struct EcuSimAppImpl {
       generic.emplace(std::move(*modelResult));
     }
     if (config.peer) peer.emplace(*config.peer, runtime.log());
+    std::vector<FaultBus> faultBuses;
+    for (const config::BusConfig& busConfig : vehicle.buses) {
+      faultBuses.push_back(
+          FaultBus{busConfig.name, busConfig.bitrate, busConfig.dataBitrate,
+                   busConfig.j1939 ? std::optional<j1939::Name>(busConfig.j1939->name) : std::nullopt});
+    }
+    faults.emplace(std::move(faultBuses));
     if (!config.wakeSignal.empty()) {
       wakeIndex = runtime.catalog().indexOf(config.wakeSignal);
       if (!wakeIndex) return Error{config.file + ": /wakeSignal: no signal '" + config.wakeSignal + "' in the catalog"};
@@ -89,7 +114,8 @@ struct EcuSimAppImpl {
     if (Status answering = runtime.answerCommands(std::move(policy)); !answering) return answering.error();
     registerCounters();
     std::string what = "simulating " + std::to_string(bus->nodes().size()) + " nodes on " +
-                       std::to_string(links.size()) + " bus(es), model " + std::string(config::simModelName(config.model));
+                       std::to_string(links.size()) + " bus(es), model " +
+                       std::string(config::simModelName(config.model));
     if (model) what += "; SOC " + std::to_string(static_cast<int>(config.initialSoc)) + " %";
     if (generic) {
       const config::SimRules& rules = config.rules;
@@ -102,62 +128,109 @@ struct EcuSimAppImpl {
     return {};
   }
 
-  /// A fault request: checked here, applied by the simulation thread at its next wake.
+  /// A fault request: checked here, applied by the simulation thread, which is woken for it;
+  /// answered once applied (so the fault is in effect when the issuer hears "accepted"), or
+  /// refused when the simulation thread did not take it within APPLY_TIMEOUT.
   std::optional<std::string> request_(const ipc::CommandRequest& request) {
-    const std::string& name = request.key;
-    const bool on = request.value != 0;
-    if (name.starts_with(SILENT_PREFIX)) {
-      const std::string node = name.substr(SILENT_PREFIX.size());
-      const auto nodes = bus->nodes();
-      if (std::find(nodes.begin(), nodes.end(), node) == nodes.end()) {
-        std::string known;
-        for (const std::string& candidate : nodes) known += (known.empty() ? "" : ", ") + candidate;
-        return "no simulated node '" + node + "' (nodes: " + known + ")";
+    auto pending = std::make_shared<PendingFault>();
+    pending->name = request.key;
+    pending->on = request.value != 0;
+    if (auto frameResult = parseFrameFault(request.key, pending->on)) {
+      if (!*frameResult) return frameResult->error().message;
+      FrameFaultRequest& frame = **frameResult;
+      if (frame.kind != FrameFaultKind::Claim && frame.kind != FrameFaultKind::Babble) {
+        pending->targets = bus->transmitted(frame.target);
+        if (pending->targets.empty()) {
+          std::string known;
+          for (const std::string& node : bus->nodes()) known += (known.empty() ? "" : ", ") + node;
+          return "no DBC message or simulated node '" + frame.target + "' (nodes: " + known + ")";
+        }
       }
-    } else if (model ? !faultByName(name) : !generic->faultIndex(name)) {
+      pending->frame = std::move(frame);
+    } else if (model ? !faultByName(request.key) : !generic->faultIndex(request.key)) {
       std::string known;
-      for (std::size_t i = 0; model && i < FAULT_COUNT; ++i) known += std::string(faultName(static_cast<Fault>(i))) + ", ";
+      for (std::size_t i = 0; model && i < FAULT_COUNT; ++i)
+        known += std::string(faultName(static_cast<Fault>(i))) + ", ";
       for (std::size_t i = 0; generic && i < generic->faultCount(); ++i) known += generic->faultName(i) + ", ";
-      return "unknown fault '" + name + "' (faults: " + known + "silent.<node>)";
+      return "unknown fault '" + request.key + "' (faults: " + known +
+             "silent.<node> or silent.<message>; frame faults delay, corrupt, replay, spoof, claim, babble: "
+             "`vcu inject --help`)";
     }
-    std::lock_guard lock(requestsMutex);
-    requests.emplace_back(name, on);
-    runtime.log().warning(std::string("fault ") + name + (on ? " injected" : " cleared"));
-    return std::nullopt;
+    std::unique_lock lock(requestsMutex);
+    requests.push_back(pending);
+    simWake.notify_all();
+    if (!applied.wait_for(lock, APPLY_TIMEOUT, [&] { return pending->done; })) {
+      std::erase(requests, pending);  // never applied later
+      return "the simulation thread did not take the fault within 1 s";
+    }
+    return pending->refusal;
   }
 
-  void applyRequests() {
+  /// Applies the waiting requests (simulation thread); their answers go out with
+  /// finishRequests(), after this iteration's frames were sent.
+  void applyRequests(std::int64_t nowNs) {
     std::lock_guard lock(requestsMutex);
-    for (const auto& [name, on] : requests) {
-      if (name.starts_with(SILENT_PREFIX)) {
-        bus->setSilent(name.substr(SILENT_PREFIX.size()), on);
+    for (const std::shared_ptr<PendingFault>& pending : requests) {
+      const std::string& name = pending->name;
+      const bool on = pending->on;
+      if (pending->frame) {
+        pending->refusal = faults->apply(*pending->frame, on, pending->targets, nowNs);
       } else if (const auto fault = faultByName(name); fault && model) {
         model->setFault(*fault, on);
       } else if (const auto index = generic ? generic->faultIndex(name) : std::nullopt) {
         generic->setFault(*index, on);
       }
+      finished.push_back(pending);
+      if (pending->refusal) continue;
+      const std::string eventName = pending->frame ? pending->frame->name() : name;
+      const std::string text = std::string("injected fault ") + name + (on ? " on" : " off") + " at monotonic " +
+                               std::to_string(nowNs) + " ns";
+      runtime.log().warning(text);
       ipc::FaultEvent event;
       event.timestampNs = clock::realtimeNs();
-      event.name = "sim." + name;
+      event.name = "sim." + eventName;
       event.source = runtime.program();
       event.severity = ipc::FaultSeverity::Warning;
       event.active = on;
-      event.text = std::string("injected fault ") + name + (on ? " on" : " off");
+      event.text = text;
       runtime.events().publish(event);
     }
     requests.clear();
   }
 
+  /// Answers the requests applied in this iteration.
+  void finishRequests() {
+    if (finished.empty()) return;
+    {
+      std::lock_guard lock(requestsMutex);
+      for (const std::shared_ptr<PendingFault>& pending : finished) pending->done = true;
+    }
+    finished.clear();
+    applied.notify_all();
+  }
+
+  /// Sleeps until `monotonicNs` or a fault request, whichever comes first.
+  void sleepUntil(std::int64_t monotonicNs) {
+    std::unique_lock lock(requestsMutex);
+    const std::chrono::steady_clock::time_point until{std::chrono::nanoseconds(monotonicNs)};
+    simWake.wait_until(lock, until, [this] { return !requests.empty() || stopping.load(std::memory_order_relaxed); });
+  }
+
   void run() {
     std::array<can::ReceivedFrame, 64> batch{};
-    const auto send = [this](std::size_t busIndex, const can::Frame& frame) {
+    const auto wire = [this](std::size_t busIndex, const can::Frame& frame) {
       if (links[busIndex]->send(frame) != can::SendStatus::Sent) sendFailures.fetch_add(1, std::memory_order_relaxed);
     };
-    std::int64_t nextTick = clock::monotonicNs();
+    std::int64_t now = clock::monotonicNs();
+    // every frame of the nodes passes the frame faults on its way to the link
+    const auto send = [this, &wire, &now](std::size_t busIndex, const can::Frame& frame) {
+      faults->send(busIndex, frame, now, wire);
+    };
+    std::int64_t nextTick = now;
     bus->start(nextTick);
     if (peer) peer->start(nextTick);
     while (!stopping.load(std::memory_order_relaxed)) {
-      const std::int64_t now = clock::monotonicNs();
+      now = clock::monotonicNs();
       for (auto& link : links) {
         std::size_t count = 0;
         while ((count = link->receive(batch)) > 0) {
@@ -169,7 +242,7 @@ struct EcuSimAppImpl {
           if (count < batch.size()) break;
         }
       }
-      applyRequests();
+      applyRequests(now);
       if (now >= nextTick) {
         bool wake = true;
         if (wakeIndex) {
@@ -191,8 +264,10 @@ struct EcuSimAppImpl {
         bus->sendDue(now, send);
       }
       if (peer) peer->step(now, send);
+      faults->step(now, wire);
+      finishRequests();
       mirror();
-      sleepUntil(std::min({nextTick, bus->nextDueNs(), peer ? peer->nextDueNs() : NEVER}));
+      sleepUntil(std::min({nextTick, bus->nextDueNs(), peer ? peer->nextDueNs() : NEVER, faults->nextDueNs()}));
     }
   }
 
@@ -226,9 +301,9 @@ struct EcuSimAppImpl {
     event.source = runtime.program();
     event.severity = ipc::FaultSeverity::Error;
     event.active = !ok;
-    event.text = ok ? std::string(who) + " accepts the VCU's J1939-76 pairs again"
-                    : std::string(who) + " refuses the VCU's J1939-76 pairs: " +
-                          std::string(j1939::safetyResultName(*change));
+    event.text =
+        ok ? std::string(who) + " accepts the VCU's J1939-76 pairs again"
+           : std::string(who) + " refuses the VCU's J1939-76 pairs: " + std::string(j1939::safetyResultName(*change));
     runtime.events().publish(event);
     if (ok) {
       runtime.log().info(event.text);
@@ -292,6 +367,13 @@ struct EcuSimAppImpl {
     add("frames_sent", sent);
     add("frames_received", received);
     add("send_failures", sendFailures);
+    add("inject_dropped", faults->dropped);
+    add("inject_delayed", faults->delayed);
+    add("inject_corrupted", faults->corrupted);
+    add("inject_replayed", faults->replayed);
+    add("inject_spoofed", faults->spoofed);
+    add("inject_claims", faults->claims);
+    add("inject_babble_frames", faults->babbleFrames);
     if (peer) registerPeerCounters();
     if (generic) {
       add("faults_active", faultsActive);  // bit i: the file's fault i (file order)

@@ -141,4 +141,13 @@ std::vector<std::string> VirtualBus::nodes() const {
   return names;
 }
 
+std::vector<FrameTarget> VirtualBus::transmitted(const std::string& messageOrNode) const {
+  std::vector<FrameTarget> targets;
+  for (const Tx& tx : m_tx) {
+    if (tx.node != messageOrNode && m_vehicle->database.messages[tx.messageIndex].name != messageOrNode) continue;
+    targets.push_back(FrameTarget{tx.bus, tx.frame.id, tx.frame.extended()});
+  }
+  return targets;
+}
+
 }  // namespace openvcu::ecusim

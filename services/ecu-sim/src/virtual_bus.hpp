@@ -20,14 +20,21 @@
 #include <string>
 #include <vector>
 
-#include "openvcu/can/frame.hpp"
 #include "openvcu/bridge/message_binding.hpp"
+#include "openvcu/can/frame.hpp"
 #include "openvcu/config/vehicle.hpp"
 #include "openvcu/core/result.hpp"
 
 namespace openvcu::ecusim {
 
 inline constexpr std::int64_t NEVER = std::numeric_limits<std::int64_t>::max();
+
+/// One frame a simulated node sends: its bus and identifier.
+struct FrameTarget {
+  std::size_t bus{};
+  std::uint32_t id{};
+  bool extended{};
+};
 
 /// @note restricted thread-safe: one thread (the simulation's).
 class VirtualBus {
@@ -85,6 +92,10 @@ class VirtualBus {
   /// Silences (or revives) every message `node` transmits. false for an unknown node.
   bool setSilent(const std::string& node, bool silent);
   [[nodiscard]] std::vector<std::string> nodes() const;
+  /// The frames of the DBC message `messageOrNode` on every bus that carries it, or of every
+  /// message the node `messageOrNode` sends; empty when no simulated node sends it.
+  /// @note reads only what create() set: safe beside the simulation thread.
+  [[nodiscard]] std::vector<FrameTarget> transmitted(const std::string& messageOrNode) const;
   [[nodiscard]] std::uint32_t frameId(std::size_t message) const noexcept { return m_tx[message].frame.id; }
   [[nodiscard]] std::uint64_t framesSent() const noexcept { return m_sent; }
   [[nodiscard]] std::uint64_t framesReceived() const noexcept { return m_received; }

@@ -21,6 +21,8 @@ constexpr const char* FAULT_FOOTER =
     "  (st_mot_fault 2), obc, soc_low / soc_high (SOC jumps to the configured low / high\n"
     "  value; restored when cleared), shm_expectation (the simulated VIC expects another\n"
     "  CRC: it refuses every J1939-76 pair), silent.<NODE> (silent.VIC, silent.PDU, ...).\n"
+    "Either model: silent.<NODE> or silent.<MESSAGE>, and the frame faults of `vcu inject`\n"
+    "(delay, corrupt, replay, spoof, claim, babble), which also prints time stamps.\n"
     "The stack: --config FILE or $OPENVCU_CONFIG, --instance NAME.\n"
     "\n"
     "Examples:\n"
