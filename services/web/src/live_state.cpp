@@ -4,8 +4,8 @@
 #include <nlohmann/json.hpp>
 #include <string_view>
 
-#include "openvcu/core/clock.hpp"
 #include "openvcu/commands/command_check.hpp"
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::web {
 namespace {
@@ -29,7 +29,8 @@ std::optional<std::pair<double, std::int64_t>> shown(const signals::SignalInfo& 
 /// A page's stream: its signals' values with the common part, when something changed.
 class LiveStream final : public EventSource {
  public:
-  LiveStream(LiveState& live, std::vector<signals::SignalIndex> indices) : m_live(live), m_indices(std::move(indices)) {}
+  LiveStream(LiveState& live, std::vector<signals::SignalIndex> indices)
+      : m_live(live), m_indices(std::move(indices)) {}
 
   std::string next() override {
     const std::int64_t now = clock::monotonicNs();
@@ -75,7 +76,11 @@ class LiveStream final : public EventSource {
 }  // namespace
 
 LiveState::LiveState(const signals::Catalog& catalog, const signals::SignalTable& table, LiveSetup setup)
-    : m_catalog(catalog), m_table(table), m_setup(std::move(setup)), m_health(display::expectedServices(), display::HEARTBEAT_STALE_NS) {
+    : m_catalog(catalog),
+      m_table(table),
+      m_setup(std::move(setup)),
+      m_health(display::expectedServices(), display::HEARTBEAT_STALE_NS),
+      m_slots(catalog) {
   if (!m_setup.fsmFile.empty()) {
     if (auto rules = display::FsmRules::load(m_setup.fsmFile)) {
       m_rules = std::move(*rules);
@@ -88,7 +93,8 @@ LiveState::LiveState(const signals::Catalog& catalog, const signals::SignalTable
   for (signals::SignalIndex i = 0; i < m_catalog.size(); ++i) {
     const signals::SignalInfo& info = m_catalog[i];
     if (info.key.starts_with(DM1_PREFIX) && info.key.ends_with(DM1_SUFFIX)) {
-      m_dm1.emplace_back(info.key.substr(DM1_PREFIX.size(), info.key.size() - DM1_PREFIX.size() - DM1_SUFFIX.size()), i);
+      m_dm1.emplace_back(info.key.substr(DM1_PREFIX.size(), info.key.size() - DM1_PREFIX.size() - DM1_SUFFIX.size()),
+                         i);
     }
     if (!info.key.starts_with(commands::OPERATOR_PREFIX) || info.key == commands::FAULT_RESET_KEY) continue;
     OperatorRow row{.key = info.key, .label = info.key.substr(commands::OPERATOR_PREFIX.size()), .index = i};
@@ -133,6 +139,10 @@ const std::string& LiveState::common(std::int64_t nowMonoNs, std::uint64_t& vers
 
 void LiveState::rebuild(std::int64_t nowMonoNs) {
   m_builtAtNs = nowMonoNs;
+  m_slots.feed(m_health, m_table);
+  const std::int64_t nowRealNs = clock::realtimeNs();
+  // a silent service's "since" on the real-time clock, in ms, stable from build to build
+  const auto sinceUnixMs = [&](std::int64_t silentNs) { return (nowRealNs - silentNs) / 1'000'000; };
   Json header = Json::object();
   double state = -1;
   if (m_stateIndex) {
@@ -155,6 +165,17 @@ void LiveState::rebuild(std::int64_t nowMonoNs) {
   } else {
     header["state"] = nullptr;
   }
+  // the state is vcu-fsm's: while it does not beat, what the table holds is its last state
+  const display::ServiceHealth* fsm = m_health.find("vcu-fsm");
+  const display::Liveness fsmLiveness = fsm ? m_health.livenessOf(*fsm, nowMonoNs) : display::Liveness::NotHeard;
+  header["stateStale"] = state >= 0 && fsmLiveness != display::Liveness::Beating;
+  header["stateNote"] = fsmLiveness == display::Liveness::Beating
+                            ? ""
+                            : "vcu-fsm " + std::string(display::livenessName(fsmLiveness)) +
+                                  ": the last state written, not the current one";
+  if (const auto silentNs = fsm ? m_health.silentFor(*fsm, nowMonoNs) : std::nullopt) {
+    header["stateWriterSilentSinceUnixMs"] = sinceUnixMs(*silentNs);
+  }
   if (m_socIndex) {
     const signals::SignalInfo& info = m_catalog[*m_socIndex];
     Json soc = {{"key", info.key}};
@@ -174,23 +195,45 @@ void LiveState::rebuild(std::int64_t nowMonoNs) {
     const display::ValueStatus status = m_health.statusOf(service, nowMonoNs);
     allReady = allReady && status == display::ValueStatus::Ready;
     anyHeard = anyHeard || status != display::ValueStatus::NotConnected;
-    services.push_back({{"name", service.name}, {"status", std::string(display::statusName(status))},
-                        {"text", service.status}, {"restarts", service.restarts}});
+    const display::Liveness liveness = m_health.livenessOf(service, nowMonoNs);
+    Json entry = {{"name", service.name},
+                  {"status", std::string(display::statusName(status))},
+                  {"liveness", std::string(display::livenessName(liveness))},
+                  {"text", service.status},
+                  {"restarts", service.restarts}};
+    if (const auto silentNs = m_health.silentFor(service, nowMonoNs)) {
+      entry["text"] = std::string(display::livenessName(liveness)) +
+                      (service.status.empty() ? std::string() : " (last: " + service.status + ")");
+      entry["silentSinceUnixMs"] = sinceUnixMs(*silentNs);
+    }
+    services.push_back(std::move(entry));
   }
   header["health"] = allReady ? "Ready" : (anyHeard ? "Stale" : "NotConnected");
   header["services"] = std::move(services);
 
   Json faults = Json::array();
-  for (const auto& [key, fault] : m_faults) {
-    faults.push_back({{"name", fault.name}, {"source", fault.source}, {"severity", std::string(display::faultSeverityName(fault.severity))},
-                      {"text", fault.text}, {"sinceUnixMs", fault.timestampNs / 1'000'000}});
+  std::vector<ipc::FaultEvent> listed;
+  for (const auto& [key, fault] : m_faults) listed.push_back(fault);
+  // a silent service is a fault on its own, also without vcu-watchdog (which raises the same name)
+  for (ipc::FaultEvent& silent : m_health.silentFaults(nowMonoNs, nowRealNs)) {
+    if (!display::namesFault(listed, silent.name)) listed.push_back(std::move(silent));
+  }
+  for (const ipc::FaultEvent& fault : listed) {
+    faults.push_back({{"name", fault.name},
+                      {"source", fault.source},
+                      {"severity", std::string(display::faultSeverityName(fault.severity))},
+                      {"text", fault.text},
+                      {"sinceUnixMs", fault.timestampNs / 1'000'000}});
   }
   for (const auto& [node, index] : m_dm1) {
     const auto slot = m_table.read(index);
     if (!slot || slot->bus.updates == 0 || slot->bus.value <= 0) continue;
-    faults.push_back({{"name", "dm1." + node}, {"source", "DM1"}, {"severity", "warning"},
-                      {"text", std::to_string(static_cast<long long>(slot->bus.value)) + " active DTC(s) (J1939-73 DM1)"},
-                      {"sinceUnixMs", nullptr}});
+    faults.push_back(
+        {{"name", "dm1." + node},
+         {"source", "DM1"},
+         {"severity", "warning"},
+         {"text", std::to_string(static_cast<long long>(slot->bus.value)) + " active DTC(s) (J1939-73 DM1)"},
+         {"sinceUnixMs", nullptr}});
   }
 
   Json operatorRows = Json::array();
@@ -201,13 +244,16 @@ void LiveState::rebuild(std::int64_t nowMonoNs) {
     const double current = value ? value->first : 0.0;
     const bool on = value.has_value() && current == row.onValue;
     const bool reads = m_rules && state >= 0 && m_rules->stateReads(state, row.key);
-    operatorRows.push_back({{"key", row.key}, {"label", row.label}, {"on", on}, {"onValue", row.onValue},
+    operatorRows.push_back({{"key", row.key},
+                            {"label", row.label},
+                            {"on", on},
+                            {"onValue", row.onValue},
                             {"enabled", reads || on},
                             {"stateText", value ? display::formatValue(info, current, "") : std::string()}});
   }
 
-  std::string text = "\"header\":" + header.dump() + ",\"faults\":" + faults.dump() +
-                     ",\"operator\":" + operatorRows.dump();
+  std::string text =
+      "\"header\":" + header.dump() + ",\"faults\":" + faults.dump() + ",\"operator\":" + operatorRows.dump();
   if (text != m_common) {
     m_common = std::move(text);
     ++m_version;
@@ -273,7 +319,10 @@ std::string LiveState::buildCatalogJson() const {
   Json list = Json::array();
   for (signals::SignalIndex i = 0; i < m_catalog.size(); ++i) {
     const signals::SignalInfo& info = m_catalog[i];
-    Json entry = {{"key", info.key}, {"unit", info.unit}, {"min", info.minimum}, {"max", info.maximum},
+    Json entry = {{"key", info.key},
+                  {"unit", info.unit},
+                  {"min", info.minimum},
+                  {"max", info.maximum},
                   {"comment", info.comment}};
     const bool internal = info.key.starts_with("internal.");
     if (internal) {

@@ -92,6 +92,7 @@ class LiveState {
   std::optional<display::FsmRules> m_rules;
   std::string m_rulesError;
   display::HealthTracker m_health;
+  display::HeartbeatSlots m_slots;  ///< the table's heartbeat slots: who beat, also before vcu-web started
   std::map<FaultKey, ipc::FaultEvent> m_faults;
   std::vector<OperatorRow> m_operator;
   std::vector<std::pair<std::string, signals::SignalIndex>> m_dm1;  ///< node, internal.dm1.<node>.activeDtcs

@@ -1,6 +1,8 @@
 // The live view of one `update` event (docs/design/web.md): the header (FSM state and how
-// long, SOC, health and each service), the active faults (DM1 DTCs included: vcu-web lists
-// them with their source) and the picked-signals table. Durations and ages keep counting
+// long, or, while vcu-fsm is silent, the last state marked stale with how long vcu-fsm has
+// been silent; SOC, health and each service, a silent one with how long), the active faults
+// (DM1 DTCs and silent services included: vcu-web lists them with their source) and the
+// picked-signals table. Durations and ages keep counting
 // between events (vcu-web sends an event only when something changed).
 
 import { byId, clear, el, formatAge, formatDuration, formatNumber, setAttr, setText, statusLabel } from './dom.js';
@@ -11,6 +13,8 @@ export class LiveView {
     this.catalog = catalog;
     this.picks = picks;
     this.stateSince = null;       // {seconds, receivedAt}
+    this.stateNote = '';          // vcu-fsm silent: why the state shown is not the current one
+    this.writerSilent = null;     // {seconds, receivedAt}: how long vcu-fsm has been silent
     this.signalAges = new Map();  // key -> {ageMs, receivedAt}
     this.faultKey = '';
     this.rows = new Map();        // key -> row cells
@@ -23,6 +27,11 @@ export class LiveView {
     const header = update.header || {};
     setText(byId('fsm-state'), header.state ?? '?');
     setAttr(byId('fsm-state'), 'data-state-index', header.stateIndex ?? '');
+    const stale = header.stateStale === true;
+    setAttr(byId('fsm-state'), 'data-stale', stale ? 'true' : 'false');
+    setAttr(byId('fsm-state'), 'title', stale ? header.stateNote || 'not current' : '');
+    this.stateNote = stale ? header.stateNote || 'vcu-fsm silent' : '';
+    this.writerSilent = stale ? sinceSeconds(update.t, header.stateWriterSilentSinceUnixMs, undefined, now) : null;
     this.stateSince = sinceSeconds(update.t, header.stateSinceUnixMs, header.stateSinceS, now);
     const soc = header.soc || {};
     setText(byId('soc'), soc.text || (soc.status === 'Ready' ? '?' : statusLabel(soc.status ?? 'NotConnected')));
@@ -47,6 +56,7 @@ export class LiveView {
       const chip = box.children[i];
       setText(chip, String(service.name ?? '').replace(/^vcu-/, ''));
       setAttr(chip, 'data-status', service.status ?? 'NotConnected');
+      setAttr(chip, 'data-liveness', service.liveness ?? '');
       const restarts = service.restarts ? `, restarted ${service.restarts} times` : '';
       setAttr(chip, 'title', `${service.name}: ${service.text || statusLabel(service.status)}${restarts}`);
     });
@@ -144,7 +154,12 @@ export class LiveView {
   tick() {
     const now = performance.now();
     const elapsed = (since) => (since ? since.seconds + (now - since.receivedAt) / 1000 : undefined);
-    setText(byId('fsm-since'), this.stateSince ? `for ${formatDuration(elapsed(this.stateSince))}` : '');
+    if (this.stateNote) {
+      const silent = this.writerSilent ? ` for ${formatDuration(elapsed(this.writerSilent))}` : '';
+      setText(byId('fsm-since'), `${this.stateNote.replace(/:.*$/, '')}${silent}: last state, not current`);
+    } else {
+      setText(byId('fsm-since'), this.stateSince ? `for ${formatDuration(elapsed(this.stateSince))}` : '');
+    }
     const faults = byId('faults').children;
     for (let i = 0; i < faults.length; ++i) {
       const since = faults[i].querySelector('.since');
