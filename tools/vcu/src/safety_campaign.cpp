@@ -190,6 +190,7 @@ std::string formatRepetition(const HazardResult& hazard, const Repetition& repet
     line +=
         separator + item.item + " " + (item.reachedMs ? formatMs(*item.reachedMs) + " ms" : std::string("not seen"));
     if (item.reachedMs && !withinFtti(item, hazard.fttiMs)) line += " (late)";
+    if (item.note.starts_with("already")) line += " (already safe)";
     separator = ", ";
   }
   return line + " (FTTI " + std::to_string(hazard.fttiMs) + " ms)\n";

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "command_request.hpp"
@@ -389,7 +390,8 @@ class Campaign {
 
   /// The first transition of a shortest path from `from` to any of `targets` (breadth first
   /// over fsm.json's transitions), or nullptr.
-  [[nodiscard]] const fsm::Transition* firstStep(std::uint32_t from, const std::vector<std::uint32_t>& targets) const {
+  [[nodiscard]] const fsm::Transition* firstStep(std::uint32_t from, const std::vector<std::uint32_t>& targets,
+                                                 const std::vector<const fsm::Transition*>& avoid) const {
     const std::size_t count = m_machine.states.size();
     std::vector<const fsm::Transition*> firstEdge(count, nullptr);
     std::vector<bool> seen(count, false);
@@ -400,6 +402,7 @@ class Campaign {
       queue.pop_front();
       for (const fsm::Transition& transition : m_machine.states[state].transitions) {
         if (transition.broken || seen[transition.target]) continue;
+        if (std::find(avoid.begin(), avoid.end(), &transition) != avoid.end()) continue;
         seen[transition.target] = true;
         firstEdge[transition.target] = state == from ? &transition : firstEdge[state];
         if (std::find(targets.begin(), targets.end(), transition.target) != targets.end()) {
@@ -427,12 +430,16 @@ class Campaign {
   std::string reach(const std::vector<std::uint32_t>& targets) {
     const auto stepTimeout = std::chrono::duration_cast<std::chrono::nanoseconds>(
         std::chrono::duration<double>(m_options.stepTimeoutSeconds));
+    std::vector<const fsm::Transition*> avoid;  // transitions that did not fire in time
+    std::string stuck;
     for (int step = 0; step < MAX_STEPS; ++step) {
       const auto state = currentState();
       if (!state) return "the FSM state is unknown (is vcu-fsm running?)";
       if (std::find(targets.begin(), targets.end(), *state) != targets.end()) return {};
-      const fsm::Transition* transition = firstStep(*state, targets);
-      if (transition == nullptr) return "no transition path from " + stateName(state) + " in " + m_machine.file;
+      const fsm::Transition* transition = firstStep(*state, targets, avoid);
+      if (transition == nullptr) {
+        return stuck.empty() ? "no transition path from " + stateName(state) + " in " + m_machine.file : stuck;
+      }
       std::vector<std::pair<std::string, double>> sets;
       (void)operatorSets(transition->condition, sets);
       for (const auto& [key, value] : sets) {
@@ -442,7 +449,9 @@ class Campaign {
           std::chrono::steady_clock::now() + std::chrono::nanoseconds(transition->afterNs) + stepTimeout;
       const auto next = waitForStateChange(*state, deadline);
       if (!next || *next == *state) {
-        return "stuck in " + stateName(state) + " on the way to " + m_machine.states[transition->target].name;
+        // e.g. a reset whose other conditions do not come true: another path (Stop, Start) next
+        stuck = "stuck in " + stateName(state) + " on the way to " + m_machine.states[transition->target].name;
+        avoid.push_back(transition);
       }
     }
     return "no target state after " + std::to_string(MAX_STEPS) + " steps";
@@ -569,9 +578,23 @@ class Campaign {
 
   // ---- watching ---------------------------------------------------------------------------
 
-  void drainWires() {
+  /// Takes the frames before the injection; a bus watch whose last value there was already
+  /// the safe one gets a note (its time then says when the next frame came, not a reaction).
+  void drainWires(std::vector<Watch>& watches) {
     for (ipc::FrameSubscriber& wire : m_wires) {
-      while (wire.take()) {
+      while (const auto sample = wire.take()) {
+        const std::int32_t match = m_matcher.match(sample->frame.id, sample->frame.extended());
+        if (match == dbc::MessageMatcher::NO_MATCH) continue;
+        for (Watch& watch : watches) {
+          if (watch.result.kind != ItemKind::BusSignal || watch.messageIndex != match) continue;
+          m_codecs[static_cast<std::size_t>(match)].decode(
+              sample->frame.payload(), [&](std::uint32_t signal, const dbc::DecodedValue& value) {
+                if (signal != watch.signalIndex) return;
+                watch.result.note = std::abs(value.physical - watch.value) < 1e-9
+                                        ? "already at the safe value before the injection"
+                                        : "";
+              });
+        }
       }
     }
   }
@@ -671,11 +694,14 @@ class Campaign {
         return repetition;
       }
     }
+    // the state just entered settles first (HHEA's inverters step up for 400 ms in Driving):
+    // a safe value the vehicle has not yet left is no reaction
+    std::this_thread::sleep_for(std::chrono::duration<double>(m_options.settleSeconds));
     const auto home = currentState();
     for (Watch& watch : watches) {
       if (watch.result.kind == ItemKind::Restarted) watch.pidsBefore = findServiceProcesses(watch.service);
     }
-    drainWires();
+    drainWires(watches);
     while (m_events.handle(0ms) == ipc::HandleResult::Handled) {
     }
     m_faults.clear();

@@ -13,7 +13,8 @@ constexpr const char* CAMPAIGN_DESCRIPTION =
 constexpr const char* CAMPAIGN_FOOTER =
     "For each hazard of the safety case (--hazard: only these) and each repetition:\n"
     "  1. the vehicle is brought to a state of the hazard's \"during\" list: operator signals\n"
-    "     (internal.operator.*) are set as the transitions of fsm.json ask, step by step;\n"
+    "     (internal.operator.*) are set as the transitions of fsm.json ask, step by step (a\n"
+    "     step that does not fire is avoided and another path taken), then --settle s pass;\n"
     "  2. its faults are injected as `vcu inject` does (frame faults by vcu-ecu-sim, SIGSTOP or\n"
     "     SIGKILL of a process, a GPIO input stuck on the simulated chip); the time stamp taken\n"
     "     just before the first one is time 0;\n"
@@ -53,6 +54,10 @@ void registerSafetyCommands(CLI::App& app, CommandContext& context) {
       ->add_option("--step-timeout", options->stepTimeoutSeconds,
                    "seconds one FSM step may take while bringing the vehicle to a state")
       ->check(CLI::PositiveNumber);
+  campaign
+      ->add_option("--settle", options->settleSeconds,
+                   "seconds the vehicle stays in the reached state before the injection (default 1)")
+      ->check(CLI::NonNegativeNumber);
   campaign->add_flag("--strict", options->strict, "a hazard that cannot run fails the campaign");
   addStackOptions(*campaign, options->stack);
   campaign->callback([options, &context] { context.exitCode = runSafetyCampaign(*options, context.streams); });

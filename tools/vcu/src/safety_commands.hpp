@@ -33,6 +33,7 @@ struct SafetyCampaignOptions {
   std::string junitFile;
   std::string htmlFile;
   double stepTimeoutSeconds{15};  ///< --step-timeout: one FSM step of bringing the vehicle to a state
+  double settleSeconds{1};        ///< --settle: time in the reached state before the injection
   bool strict{};                  ///< --strict: a hazard the campaign cannot run fails it too
 };
 
