@@ -125,11 +125,14 @@ std::optional<Result<FrameFaultRequest>> parseFrameFault(std::string_view key, b
       break;
     }
     case FrameFaultKind::Babble: {
-      const auto percent = parseInteger(parameter);
-      if (!percent || *percent < 1 || *percent > 100) {
-        return Result<FrameFaultRequest>(Error{what + "the load must be 1..100 %, not '" + parameter + "'"});
+      double percent = 0;
+      const auto [end, error] = std::from_chars(parameter.data(), parameter.data() + parameter.size(), percent);
+      if (parameter.empty() || error != std::errc{} || end != parameter.data() + parameter.size() || !(percent > 0) ||
+          percent > 100) {
+        return Result<FrameFaultRequest>(
+            Error{what + "the load must be above 0 and at most 100 %, not '" + parameter + "'"});
       }
-      request.load = static_cast<double>(*percent) / 100.0;
+      request.load = percent / 100.0;
       break;
     }
   }

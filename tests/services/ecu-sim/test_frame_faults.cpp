@@ -63,7 +63,8 @@ TEST_CASE("frame fault keys parse their kind, target and parameter, and bad ones
   CHECK(refusal("delay.VIC=20000") == "delay.VIC=20000: the time must be 1..10000 ms, not '20000'");
   CHECK(refusal("claim.254") == "claim.254: the address must be 0..253 (33 or 0x21), not '254'");
   CHECK(refusal("corrupt.X=F") == "corrupt.X=F: the XOR mask must be whole hex bytes (e.g. FF01), not 'F'");
-  CHECK(refusal("babble.vehicle=0") == "babble.vehicle=0: the load must be 1..100 %, not '0'");
+  CHECK(parsed("babble.vehicle=12.5").load == doctest::Approx(0.125));
+  CHECK(refusal("babble.vehicle=0") == "babble.vehicle=0: the load must be above 0 and at most 100 %, not '0'");
   CHECK(refusal("silent.") == "silent.: no target after 'silent.'");
 }
 

@@ -2,7 +2,8 @@
 // of config/hhea, seen by the test as one more node on sim:vehicle: each fault changes the
 // simulated nodes' frames as asked (silenced, delayed, corrupted, replayed, spoofed, a
 // hostile Address Claimed, a babbling priority-0 node at the asked load), is acknowledged
-// with time stamps around the moment it took effect, and `--off` ends it.
+// with time stamps around the moment it took effect, and `--off` ends it. And `vcu inject
+// gpio`: an input of the simulated GPIO chip held stuck through vcu-gpio.
 
 #include <algorithm>
 #include <array>
@@ -228,4 +229,28 @@ TEST_CASE("vcu inject claim sends a NAME one below the VCU's, babble fills the a
   std::this_thread::sleep_for(50ms);
   const auto after = withId(node.record(200ms), BABBLE_ID);
   CHECK(after.empty());
+}
+
+TEST_CASE("vcu inject gpio holds an input of the simulated chip stuck until --off, and refuses outputs") {
+  SKIP_UNLESS_ISOLATED();
+  ConfiguredStack s(copyHheaConfig(fs::temp_directory_path() / "hhea-inject-gpio"));
+  REQUIRE_STATUS(s.sut.startRoudi());
+  s.startService("gpio", GPIO_BINARY);
+  s.openTable();
+  const signals::SignalIndex level = s.index("internal.gpio.ContactorFault");
+  REQUIRE(waitForBus(*s.table, level, 0, 3s));
+
+  const Injected stuck = inject(s, {"gpio", "ContactorFault", "--level", "1"});
+  REQUIRE(waitForBus(*s.table, level, 1, 3s));
+  const std::int64_t seenNs = std::chrono::steady_clock::now().time_since_epoch().count();  // CLOCK_MONOTONIC
+  MESSAGE("ContactorFault read as 1 at most " << (seenNs - stuck.requestedNs) / 1'000'000 << " ms after the request");
+  inject(s, {"gpio", "ContactorFault", "--off"});
+  CHECK(waitForBus(*s.table, level, 0, 3s));
+
+  const auto output = s.vcu({"inject", "gpio", "Cl15", "--level", "0"});
+  CHECK(output.exitCode() == 1);
+  CHECK_MESSAGE(contains(output.err, "line Cl15 is an output"), output.describe());
+  const auto unknown = s.vcu({"inject", "gpio", "Horn", "--level", "1"});
+  CHECK(unknown.exitCode() == 1);
+  CHECK_MESSAGE(contains(unknown.err, "no GPIO line 'Horn' (lines: Cl15, ContactorFault)"), unknown.describe());
 }

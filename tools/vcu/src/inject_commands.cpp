@@ -189,35 +189,32 @@ std::string frameFaultKey(const FrameInjectOptions& options) {
   return key;
 }
 
-ExitCode runFrameInject(const FrameInjectOptions& options, Streams streams) {
-  ExitCode exitCode = ExitCode::Ok;
-  const auto maybeStack = loadStack(options.stack, streams.err, &exitCode);
-  if (!maybeStack) return exitCode;
-  auto clientResult = ipc::CommandClient::connect(maybeStack->config.instance);
+namespace {
+
+/// Sends `request` to the stack, stamped just before it leaves and when the answer comes;
+/// prints the answer with both stamps (text or JSON). `hint` is added when no service owns it.
+ExitCode sendStamped(const config::VehicleConfig& config, ipc::CommandRequest request, bool off, bool json,
+                     double timeoutSeconds, const std::string& hint, Streams streams) {
+  auto clientResult = ipc::CommandClient::connect(config.instance);
   if (!clientResult) {
     reportError(streams.err, clientResult.error().message);
     return ExitCode::Failure;
   }
-  ipc::CommandRequest request;
-  request.kind = ipc::CommandKind::SimFault;
-  request.key = frameFaultKey(options);
-  request.value = options.off ? 0 : 1;
   request.issuer = std::string(COMMAND_ISSUER);
   const auto timeout =
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(options.timeoutSeconds));
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(timeoutSeconds));
+  const std::string key = request.key;
   const Stamp requested = now();
-  auto answer = clientResult->send(request, timeout);
+  auto answer = clientResult->send(std::move(request), timeout);
   const Stamp acknowledged = now();
   if (!answer) {
     const std::string& message = answer.error().message;
-    reportError(streams.err, message.starts_with("no running service answers")
-                                 ? message + "; is vcu-ecu-sim running (frame faults need the simulated vehicle)?"
-                                 : message);
+    reportError(streams.err, message.starts_with("no running service answers") ? message + "; " + hint : message);
     return ExitCode::Failure;
   }
-  const std::string state = options.off ? "off" : "on";
-  if (options.json) {
-    nlohmann::ordered_json out{{"fault", request.key},
+  const std::string state = off ? "off" : "on";
+  if (json) {
+    nlohmann::ordered_json out{{"fault", key},
                                {"state", state},
                                {"accepted", answer->accepted},
                                {"responder", answer->responder},
@@ -228,7 +225,7 @@ ExitCode runFrameInject(const FrameInjectOptions& options, Streams streams) {
     if (!answer->accepted) out["reason"] = answer->reason;
     streams.out.write(out.dump() + "\n");
   } else if (answer->accepted) {
-    streams.out.write("accepted: " + request.key + " " + state + "; requested at monotonic " +
+    streams.out.write("accepted: " + key + " " + state + "; requested at monotonic " +
                       std::to_string(requested.monotonicNs) + " ns (realtime " + std::to_string(requested.realtimeNs) +
                       "), acknowledged at monotonic " + std::to_string(acknowledged.monotonicNs) + " ns (realtime " +
                       std::to_string(acknowledged.realtimeNs) + ")\n");
@@ -236,6 +233,57 @@ ExitCode runFrameInject(const FrameInjectOptions& options, Streams streams) {
     streams.out.write("refused: " + answer->reason + "\n");
   }
   return answer->accepted ? ExitCode::Ok : ExitCode::Failure;
+}
+
+}  // namespace
+
+ExitCode runFrameInject(const FrameInjectOptions& options, Streams streams) {
+  ExitCode exitCode = ExitCode::Ok;
+  const auto maybeStack = loadStack(options.stack, streams.err, &exitCode);
+  if (!maybeStack) return exitCode;
+  ipc::CommandRequest request;
+  request.kind = ipc::CommandKind::SimFault;
+  request.key = frameFaultKey(options);
+  request.value = options.off ? 0 : 1;
+  return sendStamped(maybeStack->config, std::move(request), options.off, options.json, options.timeoutSeconds,
+                     "is vcu-ecu-sim running (frame faults need the simulated vehicle)?", streams);
+}
+
+ExitCode runGpioInject(const GpioInjectOptions& options, Streams streams) {
+  if (!options.off && options.level != 0 && options.level != 1) {
+    reportError(streams.err, "--level must be 0 or 1 (or --off to clear)");
+    return ExitCode::Usage;
+  }
+  ExitCode exitCode = ExitCode::Ok;
+  const auto maybeStack = loadStack(options.stack, streams.err, &exitCode);
+  if (!maybeStack) return exitCode;
+  const config::GpioMap& map = maybeStack->config.gpio;
+  const auto line = std::find_if(map.lines.begin(), map.lines.end(),
+                                 [&](const config::GpioLine& l) { return l.name == options.line; });
+  if (line == map.lines.end()) {
+    std::string known;
+    for (const config::GpioLine& l : map.lines) known += (known.empty() ? "" : ", ") + l.name;
+    reportError(streams.err, "no GPIO line '" + options.line + "' (lines: " + (known.empty() ? "none" : known) + ")");
+    return ExitCode::Failure;
+  }
+  if (line->direction == config::LineDirection::Output) {
+    reportError(streams.err, "line " + options.line +
+                                 " is an output: only inputs can be held stuck (the simulated chip keeps no level "
+                                 "of its own for outputs)");
+    return ExitCode::Failure;
+  }
+  if (map.backend != config::GpioBackend::Sim) {
+    reportError(streams.err,
+                "the GPIO map uses a real chip: stuck-at works on the simulated chip (\"backend\": \"sim\")");
+    return ExitCode::Failure;
+  }
+  ipc::CommandRequest request;
+  request.kind = options.off ? ipc::CommandKind::ClearOverride : ipc::CommandKind::SetOverride;
+  request.key = "internal.gpio.sim." + options.line;
+  request.value = options.off ? 0 : options.level;
+  request.text = "vcu inject gpio";
+  return sendStamped(maybeStack->config, std::move(request), options.off, options.json, options.timeoutSeconds,
+                     "is vcu-gpio running?", streams);
 }
 
 void registerInjectCommands(CLI::App& app, CommandContext& context) {
@@ -263,7 +311,7 @@ void registerInjectCommands(CLI::App& app, CommandContext& context) {
       {"claim", "claim", "one Address Claimed for ADDRESS with a NAME of higher priority than the VCU's",
        "the address, 0..253 (0x21 or 33)", nullptr, nullptr},
       {"babble", "babble", "a node sends frames at priority 0 filling N % of the bus's bit rate", "a bus name",
-       "--load", "the bus load in % (1..100)"},
+       "--load", "the bus load in % (above 0, at most 100)"},
   };
   for (const FrameKind& kind : FRAME_KINDS) {
     auto options = std::make_shared<FrameInjectOptions>();
@@ -288,6 +336,25 @@ void registerInjectCommands(CLI::App& app, CommandContext& context) {
       context.exitCode = runFrameInject(*options, context.streams);
     });
   }
+
+  auto gpio = std::make_shared<GpioInjectOptions>();
+  CLI::App* gpioCommand = group->add_subcommand("gpio", "an input line of the simulated GPIO chip stuck at 0 or 1");
+  gpioCommand->footer(
+      "Holds the electrical level of an input line of the simulated chip (internal.gpio.sim.LINE)\n"
+      "with an operator override that vcu-gpio answers, until --off clears it. Outputs and real\n"
+      "chips are refused. Prints the requested and acknowledged time stamps.\n"
+      "\n"
+      "Examples:\n"
+      "  vcu inject gpio ContactorFault --level 1\n"
+      "  vcu inject gpio ContactorFault --off\n");
+  gpioCommand->add_option("LINE", gpio->line, "the line's name in gpio.json")->required();
+  gpioCommand->add_option("--level", gpio->level, "the stuck level, 0 or 1");
+  gpioCommand->add_flag("--off", gpio->off, "release the line");
+  gpioCommand->add_flag("--json", gpio->json, "print the answer and its time stamps as one JSON object");
+  gpioCommand->add_option("--timeout", gpio->timeoutSeconds, "seconds to wait for the acknowledgement")
+      ->check(CLI::PositiveNumber);
+  addStackOptions(*gpioCommand, gpio->stack);
+  gpioCommand->callback([gpio, &context] { context.exitCode = runGpioInject(*gpio, context.streams); });
 
   auto process = std::make_shared<ProcessInjectOptions>();
   CLI::App* processCommand =

@@ -8,6 +8,7 @@
 //       vcu inject corrupt PDU_Tx_1 [--xor FF00]   vcu inject replay VIC --age 2000
 //       vcu inject spoof PDU --from 0x30           vcu inject claim 0x21
 //       vcu inject babble vehicle --load 30        ... --off clears it
+//   - GPIO: an input line of the simulated chip stuck at 0 or 1 (vcu inject gpio LINE --level 1)
 //   - process faults: SIGSTOP, SIGCONT or SIGKILL of a running service, found by its
 //     executable's name among this user's processes:
 //       vcu inject process stop fsm                vcu inject process kill roudi --pid 4242
@@ -40,6 +41,19 @@ struct FrameInjectOptions {
 [[nodiscard]] std::string frameFaultKey(const FrameInjectOptions& options);
 
 ExitCode runFrameInject(const FrameInjectOptions& options, Streams streams);
+
+/// An input line of the simulated GPIO chip held at `level` (an override of
+/// internal.gpio.sim.<line>, answered by vcu-gpio), or released (`off`).
+struct GpioInjectOptions {
+  StackOptions stack;
+  std::string line;
+  int level{-1};
+  bool off{};
+  bool json{};
+  double timeoutSeconds{DEFAULT_ACK_TIMEOUT_SECONDS};
+};
+
+ExitCode runGpioInject(const GpioInjectOptions& options, Streams streams);
 
 struct ProcessInjectOptions {
   std::string action;   ///< stop, cont, kill
