@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
-#include <deque>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -28,6 +27,7 @@
 #include "openvcu/safety/safety_case.hpp"
 #include "openvcu/signals/table.hpp"
 #include "safety_campaign.hpp"
+#include "safety_campaign_plan.hpp"
 #include "safety_commands.hpp"
 
 namespace openvcu::cli {
@@ -35,13 +35,10 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr std::string_view OPERATOR_PREFIX = "internal.operator.";
 constexpr std::int64_t NS_PER_MS = 1'000'000;
 /// The watch loop waits at most this long for an LCM event between two looks at the table
 /// and the bus (the resolution of table and process observations).
 constexpr auto WATCH_TICK = 5ms;
-/// At most this many FSM steps to bring the vehicle to a state.
-constexpr int MAX_STEPS = 24;
 
 double msBetween(std::int64_t fromNs, std::int64_t toNs) {
   return static_cast<double>(toNs - fromNs) / static_cast<double>(NS_PER_MS);
@@ -86,6 +83,7 @@ class Campaign {
       : m_stack(stack),
         m_machine(std::move(machine)),
         m_table(std::move(table)),
+        m_planner(stack, m_machine, m_table, options.stepTimeoutSeconds, streams.err),
         m_events(std::move(events)),
         m_options(options),
         m_streams(streams),
@@ -302,161 +300,6 @@ class Campaign {
     return watches;
   }
 
-  // ---- the stack --------------------------------------------------------------------------
-
-  struct Reading {
-    double value{};
-    std::int64_t timestampNs{};
-    std::uint64_t updates{};
-  };
-
-  /// A slot as the stack sees it: the effective command when there is one, else the bus plane.
-  [[nodiscard]] std::optional<Reading> read(signals::SignalIndex index) const {
-    const auto slot = m_table.read(index);
-    if (!slot) return std::nullopt;
-    if (const auto command = signals::effectiveCommand(*slot)) {
-      return Reading{command->value, command->timestampNs, slot->command.updates + slot->bus.updates};
-    }
-    if (slot->bus.updates > 0) return Reading{slot->bus.value, slot->bus.timestampNs, slot->bus.updates};
-    return std::nullopt;
-  }
-
-  [[nodiscard]] std::optional<std::uint32_t> currentState() const {
-    const auto index = m_stack.catalog.indexOf("internal.fsm.state");
-    if (!index) return std::nullopt;
-    const auto reading = read(*index);
-    if (!reading || reading->value < 0 || reading->value >= static_cast<double>(m_machine.states.size())) {
-      return std::nullopt;
-    }
-    return static_cast<std::uint32_t>(reading->value);
-  }
-
-  [[nodiscard]] std::string stateName(std::optional<std::uint32_t> state) const {
-    return state ? m_machine.states[*state].name : std::string("(unknown)");
-  }
-
-  bool setSignal(const std::string& key, double value) {
-    ipc::CommandRequest request;
-    request.kind = ipc::CommandKind::SetSignal;
-    request.key = key;
-    request.value = value;
-    StringSink out;
-    StringSink err;
-    const ExitCode code = sendCommandRequest(m_stack.config, request, DEFAULT_ACK_TIMEOUT_SECONDS, Streams{out, err});
-    if (code != ExitCode::Ok) {
-      m_streams.err.write("vcu: warning: " + key + " = " + formatNumber(value) + " not accepted: " + out.text() +
-                          err.text());
-    }
-    return code == ExitCode::Ok;
-  }
-
-  // ---- bringing the vehicle to a state ----------------------------------------------------
-
-  /// The operator signals to set for condition `node` to hold (the first operator branch of
-  /// an `any`, every one of an `all`); false when the condition reads none.
-  bool operatorSets(std::uint32_t node, std::vector<std::pair<std::string, double>>& sets) const {
-    if (node == fsm::NONE) return false;
-    const fsm::ConditionNode& condition = m_machine.nodes[node];
-    switch (condition.kind) {
-      case fsm::NodeKind::Compare: {
-        const std::string& key = m_stack.catalog[m_machine.signals[condition.signal].index].key;
-        if (!key.starts_with(OPERATOR_PREFIX)) return false;
-        if (condition.op == fsm::CompareOp::Eq) {
-          sets.emplace_back(key, condition.value);
-          return true;
-        }
-        if (condition.op == fsm::CompareOp::In && condition.count > 0) {
-          sets.emplace_back(key, m_machine.constants[condition.first]);
-          return true;
-        }
-        return false;
-      }
-      case fsm::NodeKind::All: {
-        bool any = false;
-        for (std::uint32_t i = 0; i < condition.count; ++i) {
-          any = operatorSets(m_machine.children[condition.first + i], sets) || any;
-        }
-        return any;
-      }
-      case fsm::NodeKind::Any:
-        for (std::uint32_t i = 0; i < condition.count; ++i) {
-          if (operatorSets(m_machine.children[condition.first + i], sets)) return true;
-        }
-        return false;
-      default:
-        return false;
-    }
-  }
-
-  /// The first transition of a shortest path from `from` to any of `targets` (breadth first
-  /// over fsm.json's transitions), or nullptr.
-  [[nodiscard]] const fsm::Transition* firstStep(std::uint32_t from, const std::vector<std::uint32_t>& targets,
-                                                 const std::vector<const fsm::Transition*>& avoid) const {
-    const std::size_t count = m_machine.states.size();
-    std::vector<const fsm::Transition*> firstEdge(count, nullptr);
-    std::vector<bool> seen(count, false);
-    std::deque<std::uint32_t> queue{from};
-    seen[from] = true;
-    while (!queue.empty()) {
-      const std::uint32_t state = queue.front();
-      queue.pop_front();
-      for (const fsm::Transition& transition : m_machine.states[state].transitions) {
-        if (transition.broken || seen[transition.target]) continue;
-        if (std::find(avoid.begin(), avoid.end(), &transition) != avoid.end()) continue;
-        seen[transition.target] = true;
-        firstEdge[transition.target] = state == from ? &transition : firstEdge[state];
-        if (std::find(targets.begin(), targets.end(), transition.target) != targets.end()) {
-          return firstEdge[transition.target];
-        }
-        queue.push_back(transition.target);
-      }
-    }
-    return nullptr;
-  }
-
-  /// Waits (table change futex) until the FSM state is not `state`, at most until `deadline`.
-  std::optional<std::uint32_t> waitForStateChange(std::uint32_t state, std::chrono::steady_clock::time_point deadline) {
-    std::uint32_t epoch = m_table.changeEpoch();
-    for (;;) {
-      const auto now = currentState();
-      if (now && *now != state) return now;
-      const auto left = deadline - std::chrono::steady_clock::now();
-      if (left <= 0ns) return now;
-      epoch = m_table.waitForChange(epoch, std::min<std::chrono::nanoseconds>(left, 100ms));
-    }
-  }
-
-  /// Brings the vehicle to one of `targets`; empty when it is there, else why not.
-  std::string reach(const std::vector<std::uint32_t>& targets) {
-    const auto stepTimeout = std::chrono::duration_cast<std::chrono::nanoseconds>(
-        std::chrono::duration<double>(m_options.stepTimeoutSeconds));
-    std::vector<const fsm::Transition*> avoid;  // transitions that did not fire in time
-    std::string stuck;
-    for (int step = 0; step < MAX_STEPS; ++step) {
-      const auto state = currentState();
-      if (!state) return "the FSM state is unknown (is vcu-fsm running?)";
-      if (std::find(targets.begin(), targets.end(), *state) != targets.end()) return {};
-      const fsm::Transition* transition = firstStep(*state, targets, avoid);
-      if (transition == nullptr) {
-        return stuck.empty() ? "no transition path from " + stateName(state) + " in " + m_machine.file : stuck;
-      }
-      std::vector<std::pair<std::string, double>> sets;
-      (void)operatorSets(transition->condition, sets);
-      for (const auto& [key, value] : sets) {
-        if (!setSignal(key, value)) return "cannot set " + key;
-      }
-      const auto deadline =
-          std::chrono::steady_clock::now() + std::chrono::nanoseconds(transition->afterNs) + stepTimeout;
-      const auto next = waitForStateChange(*state, deadline);
-      if (!next || *next == *state) {
-        // e.g. a reset whose other conditions do not come true: another path (Stop, Start) next
-        stuck = "stuck in " + stateName(state) + " on the way to " + m_machine.states[transition->target].name;
-        avoid.push_back(transition);
-      }
-    }
-    return "no target state after " + std::to_string(MAX_STEPS) + " steps";
-  }
-
   // ---- injecting --------------------------------------------------------------------------
 
   struct Stamp {
@@ -508,15 +351,16 @@ class Campaign {
         *error = "no " + key + " (GPIO inputs are stuck on the simulated chip only)";
         return std::nullopt;
       }
-      const auto before = read(*index);
+      const auto before = m_planner.read(*index);
       const double level = fault.level.value_or(false) ? 1 : 0;
       *stamp = Stamp{clock::monotonicNs(), clock::realtimeNs()};
-      if (!setSignal(key, level)) {
+      if (!m_planner.setSignal(key, level)) {
         *error = key + " = " + formatNumber(level) + " refused";
         return std::nullopt;
       }
       const double restore = before ? before->value : 1 - level;
-      return Applied{key + "=" + formatNumber(level), [this, key, restore] { (void)setSignal(key, restore); }};
+      return Applied{key + "=" + formatNumber(level),
+                     [this, key, restore] { (void)m_planner.setSignal(key, restore); }};
     }
     FrameInjectOptions frame;
     frame.stack = m_options.stack;
@@ -604,10 +448,11 @@ class Campaign {
                std::optional<std::uint32_t>& lastState) {
     // the FSM state (and its changes, for the timeline)
     const auto stateIndex = m_stack.catalog.indexOf("internal.fsm.state");
-    std::optional<Reading> stateReading = stateIndex ? read(*stateIndex) : std::nullopt;
-    const auto state = currentState();
+    std::optional<SlotReading> stateReading = stateIndex ? m_planner.read(*stateIndex) : std::nullopt;
+    const auto state = m_planner.currentState();
     if (state != lastState && state && stateReading) {
-      repetition.timeline.push_back({msBetween(at.monotonicNs, stateReading->timestampNs), "FSM " + stateName(state)});
+      repetition.timeline.push_back(
+          {msBetween(at.monotonicNs, stateReading->timestampNs), "FSM " + m_planner.stateName(state)});
       lastState = state;
     }
     // frames on the simulated buses
@@ -634,17 +479,17 @@ class Campaign {
         case ItemKind::FsmState:
           if (state && stateReading &&
               std::find(watch.states.begin(), watch.states.end(), *state) != watch.states.end()) {
-            watch.result.reached = stateName(state);
+            watch.result.reached = m_planner.stateName(state);
             reached(watch, std::max(0.0, msBetween(at.monotonicNs, stateReading->timestampNs)), repetition);
           }
           break;
         case ItemKind::GpioLevel:
-          if (const auto level = read(*watch.slot); level && level->value == watch.value) {
+          if (const auto level = m_planner.read(*watch.slot); level && level->value == watch.value) {
             reached(watch, std::max(0.0, msBetween(at.monotonicNs, level->timestampNs)), repetition);
           }
           break;
         case ItemKind::Restarted:
-          if (const auto beat = read(*watch.slot);
+          if (const auto beat = m_planner.read(*watch.slot);
               beat && beat->updates != watch.beatsSeen && beat->timestampNs > at.monotonicNs) {
             watch.beatsSeen = beat->updates;
             for (const std::int32_t pid : findServiceProcesses(watch.service)) {
@@ -689,7 +534,7 @@ class Campaign {
       if (const auto state = m_machine.findState(name)) during.push_back(*state);
     }
     if (!during.empty()) {
-      if (const std::string why = reach(during); !why.empty()) {
+      if (const std::string why = m_planner.reach(during); !why.empty()) {
         repetition.error = "cannot bring the vehicle to " + join(hazard.during, " or ") + ": " + why;
         return repetition;
       }
@@ -697,7 +542,7 @@ class Campaign {
     // the state just entered settles first (HHEA's inverters step up for 400 ms in Driving):
     // a safe value the vehicle has not yet left is no reaction
     std::this_thread::sleep_for(std::chrono::duration<double>(m_options.settleSeconds));
-    const auto home = currentState();
+    const auto home = m_planner.currentState();
     for (Watch& watch : watches) {
       if (watch.result.kind == ItemKind::Restarted) watch.pidsBefore = findServiceProcesses(watch.service);
     }
@@ -749,9 +594,9 @@ class Campaign {
       if (it->clear) it->clear();
     }
     if (home) {
-      if (const std::string why = reach({*home}); !why.empty()) {
+      if (const std::string why = m_planner.reach({*home}); !why.empty()) {
         m_streams.err.write("vcu: warning: " + hazard.id + " #" + std::to_string(index) + ": not back in " +
-                            stateName(home) + ": " + why + "\n");
+                            m_planner.stateName(home) + ": " + why + "\n");
       }
     }
     return repetition;
@@ -760,6 +605,7 @@ class Campaign {
   const Stack& m_stack;
   fsm::Machine m_machine;
   signals::SignalTable m_table;
+  StatePlanner m_planner;
   ipc::EventBus m_events;
   std::optional<ipc::Subscription> m_subscription;
   const SafetyCampaignOptions& m_options;
