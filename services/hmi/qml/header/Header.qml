@@ -28,8 +28,10 @@ Rectangle {
         }
         Item { Layout.fillWidth: true }
         Column {
-            Text { objectName: "fsmState"; text: header.fsm ? header.fsm.stateName : "--"; color: Theme.text; font.pixelSize: Theme.fontLarge; anchors.right: parent.right }
-            Text { text: header.fsm ? "for " + header.fsm.stateAge : ""; color: Theme.textDim; font.pixelSize: Theme.fontSmall; anchors.right: parent.right }
+            // while vcu-fsm is silent the state is its last one: struck through, amber, with the note
+            readonly property bool stale: header.fsm ? header.fsm.stateNote !== "" : false
+            Text { objectName: "fsmState"; text: header.fsm ? header.fsm.stateName : "--"; color: parent.stale ? Theme.warn : Theme.text; font.strikeout: parent.stale; font.pixelSize: Theme.fontLarge; anchors.right: parent.right }
+            Text { objectName: "fsmNote"; text: header.fsm ? (parent.stale ? header.fsm.stateNote : "for " + header.fsm.stateAge) : ""; color: parent.stale ? Theme.warn : Theme.textDim; font.pixelSize: Theme.fontSmall; anchors.right: parent.right }
         }
         Grid {
             columns: 3

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/core/clock.hpp"
 
 namespace openvcu::hmi {
 namespace {
@@ -11,7 +12,8 @@ constexpr std::string_view FAULT_RESET_KEY = "internal.operator.FaultReset";
 
 }  // namespace
 
-FaultModel::FaultModel(QObject* parent) : StatusListModel(parent) {
+FaultModel::FaultModel(QObject* parent)
+    : StatusListModel(parent), m_health(display::expectedServices(), display::HEARTBEAT_STALE_NS) {
   // the base's status and errorString are notified with countChanged(), where this model sets them
   connect(this, &FaultModel::countChanged, this, &StatusListModel::statusChanged);
   StackConnection* stack = StackConnection::instance();
@@ -24,6 +26,9 @@ FaultModel::FaultModel(QObject* parent) : StatusListModel(parent) {
     }
   }
   connect(stack, &StackConnection::fault, this, &FaultModel::onFault);
+  connect(stack, &StackConnection::heartbeat, this,
+          [this](const ipc::Heartbeat& beat) { m_health.onHeartbeat(beat, clock::monotonicNs()); });
+  m_slots.emplace(catalog);
   connect(stack, &StackConnection::displayTick, this, &FaultModel::refresh);
   connect(stack, &StackConnection::commandFinished, this, [this](qint64 id, bool, const QString& text) {
     if (id != m_pendingId) return;
@@ -109,9 +114,33 @@ void FaultModel::refresh() {
       onFault(event);
     }
   }
+  refreshSilent();
   if (status != m_status) {
     m_status = status;
     Q_EMIT countChanged();
+  }
+}
+
+void FaultModel::refreshSilent() {
+  StackConnection* stack = StackConnection::instance();
+  if (m_slots && stack && stack->table()) m_slots->feed(m_health, *stack->table());
+  const std::vector<ipc::FaultEvent> silent =
+      m_health.silentFaults(clock::monotonicNs(), QDateTime::currentMSecsSinceEpoch() * 1'000'000);
+  // ours end when the service beats again, or give way to a fault event of the same name
+  for (std::size_t i = m_faults.size(); i-- > 0;) {
+    const ipc::FaultEvent& fault = m_faults[i];
+    if (fault.source != display::SILENT_FAULT_SOURCE) continue;
+    const bool namedByEvent = std::any_of(m_faults.begin(), m_faults.end(), [&](const ipc::FaultEvent& other) {
+      return other.name == fault.name && other.source != display::SILENT_FAULT_SOURCE;
+    });
+    if (namedByEvent || !display::namesFault(silent, fault.name)) {
+      ipc::FaultEvent cleared = fault;
+      cleared.active = false;
+      onFault(cleared);
+    }
+  }
+  for (const ipc::FaultEvent& fault : silent) {
+    if (!display::namesFault(m_faults, fault.name)) onFault(fault);
   }
 }
 

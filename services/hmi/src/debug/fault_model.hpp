@@ -6,6 +6,7 @@
 #include <QQmlEngine>
 #include <QString>
 #include <QStringList>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,7 +22,9 @@
 namespace openvcu::hmi {
 
 /// Active faults from LCM fault events (raised adds, cleared removes), plus the DM1
-/// summary of every node from the table (internal.dm1.<Node>.activeDtcs > 0).
+/// summary of every node from the table (internal.dm1.<Node>.activeDtcs > 0), plus
+/// service_silent.<name> (source "heartbeats", CRITICAL) for every service that beat and
+/// has not for 2.5 s, unless a fault event of that name (vcu-watchdog's) is listed.
 /// `resetFaults()` publishes the operator's FaultReset switch.
 class FaultModel : public StatusListModel {
   Q_OBJECT
@@ -43,8 +46,13 @@ class FaultModel : public StatusListModel {
   void countChanged();
 
  private:
+  void refreshSilent();
+
+ private:
   std::vector<ipc::FaultEvent> m_faults;
   std::vector<std::pair<std::string, sig::SignalIndex>> m_dm1;  ///< node -> activeDtcs slot
+  HealthTracker m_health;                                       ///< who beats, for the silent faults
+  std::optional<HeartbeatSlots> m_slots;
   qint64 m_pendingId{-1};
   QString m_lastResult;
 };

@@ -20,12 +20,15 @@
 namespace openvcu::hmi {
 
 /// The FSM state (internal.fsm.state by name, since when) and the transitions heard on
-/// LCM since the HMI started (newest first).
+/// LCM since the HMI started (newest first). The state is vcu-fsm's: while vcu-fsm does not
+/// beat (LCM heartbeat or its table slot, 2.5 s), the model is Stale and `stateNote` says
+/// "vcu-fsm silent for 4 s: last state, not current" (empty while it beats).
 class FsmModel : public StatusListModel {
   Q_OBJECT
   QML_ELEMENT
   Q_PROPERTY(QString stateName READ stateName NOTIFY stateChanged)
   Q_PROPERTY(QString stateAge READ stateAge NOTIFY stateChanged)
+  Q_PROPERTY(QString stateNote READ stateNote NOTIFY stateChanged)
  public:
   enum Role { TimeRole = Qt::UserRole + 1, FromRole, ToRole, CauseRole };
   explicit FsmModel(QObject* parent = nullptr);
@@ -34,6 +37,7 @@ class FsmModel : public StatusListModel {
   [[nodiscard]] QHash<int, QByteArray> roleNames() const override;
   [[nodiscard]] QString stateName() const { return m_stateName; }
   [[nodiscard]] QString stateAge() const { return m_stateAge; }
+  [[nodiscard]] QString stateNote() const { return m_stateNote; }
   void addTransition(const ipc::FsmTransition& transition);
   void refresh();
  Q_SIGNALS:
@@ -45,6 +49,9 @@ class FsmModel : public StatusListModel {
   std::optional<sig::SignalIndex> m_stateIndex;
   QString m_stateName{QStringLiteral("--")};
   QString m_stateAge;
+  QString m_stateNote;
+  HealthTracker m_writer;  ///< vcu-fsm's liveness
+  std::optional<HeartbeatSlots> m_slots;
 };
 
 }  // namespace openvcu::hmi

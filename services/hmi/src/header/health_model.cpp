@@ -3,15 +3,14 @@
 #include <sys/sysinfo.h>
 #include <unistd.h>
 
-#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/service/process_stats.hpp"
 
 namespace openvcu::hmi {
 namespace {
 
 constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;  // services beat once a second
-
 
 }  // namespace
 
@@ -20,6 +19,7 @@ HealthModel::HealthModel(QObject* parent)
   if (StackConnection* stack = StackConnection::instance()) {
     connect(stack, &StackConnection::heartbeat, this, &HealthModel::onHeartbeat);
     connect(stack, &StackConnection::displayTick, this, &HealthModel::refresh);
+    m_slots.emplace(stack->catalog());
   }
   refresh();
 }
@@ -52,7 +52,15 @@ QVariant HealthModel::data(const QModelIndex& index, int role) const {
       return cpu != m_cpu.end() && cpu->second.rssMb >= 0 ? QString::number(cpu->second.rssMb, 'f', 1)
                                                           : QStringLiteral("-");
     case StatusTextRole:
+      if (const auto silent = m_tracker.silentFor(service, now)) {
+        return toQ(std::string(livenessName(m_tracker.livenessOf(service, now)))) + QStringLiteral(" for ") +
+               durationText(*silent) +
+               (service.status.empty() ? QString()
+                                       : QStringLiteral(" (last: ") + toQ(service.status) + QStringLiteral(")"));
+      }
       return toQ(service.status);
+    case LivenessRole:
+      return toQ(std::string(livenessName(m_tracker.livenessOf(service, now))));
     case ConnectionRole:
       return static_cast<int>(m_tracker.statusOf(service, now));
     default:
@@ -69,13 +77,13 @@ QHash<int, QByteArray> HealthModel::roleNames() const {
           {CpuRole, "cpu"},
           {RssRole, "rss"},
           {StatusTextRole, "statusText"},
-          {ConnectionRole, "connection"}};
+          {ConnectionRole, "connection"},
+          {LivenessRole, "liveness"}};
 }
 
 int HealthModel::connectionOf(const QString& name) const {
   const ServiceHealth* service = m_tracker.find(name.toStdString());
-  return static_cast<int>(service ? m_tracker.statusOf(*service, clock::monotonicNs())
-                                  : ValueStatus::NotConnected);
+  return static_cast<int>(service ? m_tracker.statusOf(*service, clock::monotonicNs()) : ValueStatus::NotConnected);
 }
 
 void HealthModel::onHeartbeat(const ipc::Heartbeat& beat) {
@@ -88,6 +96,15 @@ void HealthModel::onHeartbeat(const ipc::Heartbeat& beat) {
 
 void HealthModel::refresh() {
   const std::int64_t now = clock::monotonicNs();
+  // the table's heartbeat slots: a service that beats there (or stopped before the HMI started)
+  const StackConnection* stack = StackConnection::instance();
+  if (m_slots && stack && stack->table()) {
+    const int before = rowCount();
+    if (m_slots->feed(m_tracker, *stack->table())) {
+      beginInsertRows({}, before, rowCount() - 1);
+      endInsertRows();
+    }
+  }
   // /proc once a second, not at display rate
   if (++m_tick % 10 == 1) {
     const double ticksPerSecond = service::clockTicksPerSecond();
@@ -126,8 +143,9 @@ void HealthModel::refresh() {
   if (ready > 0 && ready < rowCount()) status = ModelStatus::Stale;
   m_status = status;
   if (rowCount() > 0)
-    Q_EMIT dataChanged(index(0), index(rowCount() - 1),
-                       {AgeRole, CpuRole, RssRole, ConnectionRole, UptimeRole, PidRole, RestartsRole, StatusTextRole});
+    Q_EMIT dataChanged(
+        index(0), index(rowCount() - 1),
+        {AgeRole, CpuRole, RssRole, ConnectionRole, UptimeRole, PidRole, RestartsRole, StatusTextRole, LivenessRole});
   Q_EMIT statusChanged();
 }
 

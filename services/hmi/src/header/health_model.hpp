@@ -7,6 +7,7 @@
 #include <QString>
 #include <QStringList>
 #include <map>
+#include <optional>
 #include <string>
 
 #ifndef Q_MOC_RUN  // moc reads "signals" in openvcu::signals as a keyword
@@ -20,7 +21,10 @@
 namespace openvcu::hmi {
 
 /// One row per service: the configuration's services from the start (NotConnected until
-/// heard), then whatever else sends heartbeats. CPU and RSS from /proc for local pids.
+/// heard), then whatever else beats (LCM heartbeats, or the table's heartbeat slots, which
+/// also name services that stopped before the HMI started). A row never disappears; one
+/// that beat and has not for 2.5 s says "silent for N s" (liveness "silent" or "stopped").
+/// CPU and RSS from /proc for local pids.
 /// Aggregate status: Ready when every expected service beats, Stale when one is late,
 /// NotConnected when none is heard. `connectionSummary` is for the header.
 class HealthModel : public StatusListModel {
@@ -37,7 +41,8 @@ class HealthModel : public StatusListModel {
     CpuRole,
     RssRole,
     StatusTextRole,
-    ConnectionRole
+    ConnectionRole,
+    LivenessRole  ///< "beating", "silent", "stopped", "not heard"
   };
   explicit HealthModel(QObject* parent = nullptr);
   [[nodiscard]] int rowCount(const QModelIndex& parent = {}) const override;
@@ -49,6 +54,7 @@ class HealthModel : public StatusListModel {
   Q_INVOKABLE int connectionOf(const QString& name) const;
   void onHeartbeat(const ipc::Heartbeat& beat);
   void refresh();
+
  private:
   struct Cpu {
     std::int64_t ticks{-1};
@@ -57,6 +63,7 @@ class HealthModel : public StatusListModel {
     double rssMb{-1};
   };
   HealthTracker m_tracker;
+  std::optional<HeartbeatSlots> m_slots;
   std::map<std::string, Cpu> m_cpu;
   int m_tick{};
   QString m_systemText;
