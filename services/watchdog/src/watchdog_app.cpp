@@ -124,6 +124,7 @@ struct WatchdogAppImpl {
                                                      : std::string(" (timeout unknown)"))
                               : std::string("none")) +
                        " (" + policy.origin + ")");
+    onWatchTick();  // the first read now: the status says what was read, not what is hoped
     updateStatus();
     return {};
   }

@@ -46,9 +46,10 @@ constexpr std::int64_t SILENT_AFTER_MS = 1500;
 constexpr auto BEAT_PERIOD = 1000ms;
 /// Detection: silentAfterMs after the last beat, which lies up to one period before the hang.
 constexpr auto DETECTION_BOUND = std::chrono::milliseconds(SILENT_AFTER_MS) + BEAT_PERIOD;
-/// Restart: detection, the kill, supervisord's restart (its loop ticks once a second), the
-/// new process's start-up and first beat.
-constexpr auto RESTART_BOUND = DETECTION_BOUND + 2500ms;
+/// Restart: detection, the kill, supervisord's restart (at once or at its next once-a-second
+/// tick), the new process's start-up (configuration, DBC, checks: slow on a loaded machine)
+/// and first beat.
+constexpr auto RESTART_BOUND = DETECTION_BOUND + 5000ms;
 
 std::int64_t msSince(Clock::time_point start, Clock::time_point end) {
   return std::chrono::duration_cast<std::chrono::milliseconds>(end - start).count();
@@ -253,8 +254,11 @@ TEST_CASE("a SIGSTOPped vcu-gpio is reported silent, killed and restarted by vcu
                         }
                         return killedAt && restartedAt && stack.silentFault(false, raisedAt);
                       },
-                      8s),
-                  "not killed, restarted and cleared within 8 s: " << stack.log());
+                      15s),
+                  "within 15 s of the fault: reaped "
+                      << killedAt.has_value() << ", a new vcu-gpio beating " << restartedAt.has_value() << ", cleared "
+                      << stack.silentFault(false, raisedAt).has_value() << "; " << stack.log()
+                      << readAll(stack.folder / "gpio.log"));
   const auto clearedAt = *stack.silentFault(false, raisedAt);
   const std::string watchdogLog = stack.log();
 
