@@ -21,9 +21,9 @@ using config::JsonChecker;
 /// Every kind name, in enum order (detectionKindName / injectKindName index these).
 constexpr std::array<std::string_view, 8> DETECTION_KINDS = {
     "receiveTimeout", "j1939_76", "dm1", "dtc", "gpioInput", "serviceWatchdog", "addressLoss", "statusSignal"};
-constexpr std::array<std::string_view, 13> INJECT_KINDS = {"silence", "delay",     "corrupt", "freezeCounter", "replay",
+constexpr std::array<std::string_view, 14> INJECT_KINDS = {"silence", "delay",     "corrupt", "freezeCounter", "replay",
                                                            "babble",  "spoof",     "busOff",  "addressClaim",  "kill",
-                                                           "stop",    "gpioStuck", "signal"};
+                                                           "stop",    "gpioStuck", "signal",  "simFault"};
 /// Processes a kill or stop may name besides the VCU's services.
 constexpr std::array<std::string_view, 2> OTHER_PROCESSES = {"roudi", "supervisor"};
 /// A day: an FTTI or silence longer than this is a typing error, not a time budget.
@@ -47,6 +47,17 @@ bool validSeverity(std::string_view tag) {
   if (tag.size() == 6 && tag.substr(0, 5) == "ASIL ") return tag[5] >= 'A' && tag[5] <= 'D';
   if (tag.size() == 5 && tag.substr(0, 4) == "SIL ") return tag[4] >= '1' && tag[4] <= '4';
   return false;
+}
+
+/// A simulated vehicle's fault name: "pdu", "silent.VIC", "bms_fault".
+bool validFaultName(std::string_view name) {
+  if (name.size() > 64) return false;
+  for (const char c : name) {
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' || c == '.';
+    if (!ok) return false;
+  }
+  return true;
 }
 
 bool knownProcess(std::string_view name) {
@@ -362,7 +373,7 @@ class Parser {
     if (!m_check.isObject(item, path)) return result;
     m_check.onlyKeys(item, path,
                      {"inject", "node", "message", "signal", "service", "line", "bus", "value", "level", "validCrc",
-                      "delayMs", "loadPercent", "address", "comment"});
+                      "delayMs", "loadPercent", "address", "name", "comment"});
     const auto kind = m_check.string(item, path, "inject");
     if (!kind) return result;
     const auto index = indexOfName(INJECT_KINDS, *kind);
@@ -372,8 +383,8 @@ class Parser {
     }
     result.kind = static_cast<InjectKind>(*index);
     const std::initializer_list<std::pair<std::string_view, std::string*>> members = {
-        {"node", &result.node},       {"message", &result.message}, {"signal", &result.signal},
-        {"service", &result.service}, {"line", &result.line},       {"bus", &result.bus}};
+        {"node", &result.node}, {"message", &result.message}, {"signal", &result.signal}, {"service", &result.service},
+        {"line", &result.line}, {"bus", &result.bus},         {"name", &result.name}};
     // The one parameter a kind takes (none: empty); any other is refused.
     std::string_view parameter;
     switch (result.kind) {
@@ -418,6 +429,12 @@ class Parser {
       case InjectKind::GpioStuck:
         target(item, path, *kind, {"line"}, members);
         parameter = "level";
+        break;
+      case InjectKind::SimFault:
+        target(item, path, *kind, {"name"}, members);
+        if (!result.name.empty() && !validFaultName(result.name)) {
+          m_check.error(path + "/name", "'" + result.name + "' is not a fault name: letters, digits, '_', '-' and '.'");
+        }
         break;
       case InjectKind::Signal:
         target(item, path, *kind, {"signal"}, members);

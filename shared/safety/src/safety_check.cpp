@@ -2,6 +2,7 @@
 #include <algorithm>
 
 #include "openvcu/config/json.hpp"
+#include "openvcu/config/simulation.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/safety/safety_case.hpp"
 
@@ -169,6 +170,35 @@ class Checker {
     if (!fault.signal.empty()) signal(fault.signal, path + "/signal");
     if (!fault.line.empty()) gpioLine(fault.line, path + "/line");
     if (!fault.bus.empty()) bus(fault.bus, path + "/bus");
+    if (fault.kind == InjectKind::SimFault) simFault(fault.name, path + "/name");
+  }
+
+  /// A named fault of the simulated vehicle: "silent.<NODE>" for a DBC node, or one of the
+  /// simulation file's faults (generic model). The HHEA model's own names are vcu-ecu-sim's
+  /// (services/ecu-sim), not checked here: vcu-ecu-sim refuses an unknown one with the list.
+  void simFault(const std::string& name, const std::string& path) {
+    if (m_vehicle.simulationFile.empty()) {
+      error(path,
+            "the vehicle has no simulation (\"simulation\" in " + m_vehicle.path + ") to inject '" + name + "' into");
+      return;
+    }
+    if (name.rfind("silent.", 0) == 0) {
+      node(name.substr(7), path);
+      return;
+    }
+    if (!m_simulationLoaded) {
+      m_simulationLoaded = true;
+      if (auto simulation = config::loadSimConfig(m_vehicle.simulationFile, m_vehicle)) {
+        if (simulation->model == config::SimModel::Generic) {
+          m_simulationFaults.emplace();
+          for (const config::SimFault& known : simulation->rules.faults) m_simulationFaults->push_back(known.name);
+        }
+      }
+    }
+    if (!m_simulationFaults) return;  // the HHEA model, or a simulation file that does not load (its own error)
+    if (std::find(m_simulationFaults->begin(), m_simulationFaults->end(), name) != m_simulationFaults->end()) return;
+    error(path, "no fault '" + name + "' in " + m_vehicle.simulationFile + " (nor silent.<NODE>)" +
+                    suggest(name, *m_simulationFaults));
   }
 
   const SafetyCase& m_case;
@@ -176,6 +206,8 @@ class Checker {
   const signals::Catalog& m_catalog;
   const std::vector<std::string>* m_fsmStates;
   std::vector<Error> m_out;
+  bool m_simulationLoaded{false};
+  std::optional<std::vector<std::string>> m_simulationFaults;  ///< the generic model's fault names
 };
 
 }  // namespace

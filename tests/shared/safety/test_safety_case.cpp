@@ -139,7 +139,8 @@ TEST_CASE("every detection kind and fault kind reads with the target it takes") 
       {"inject": "busOff", "bus": "vehicle"}, {"inject": "addressClaim", "address": 33},
       {"inject": "kill", "service": "roudi"}, {"inject": "stop", "service": "fsm"},
       {"inject": "gpioStuck", "line": "ContactorFault", "level": 1},
-      {"inject": "signal", "signal": "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts", "value": 14}])";
+      {"inject": "signal", "signal": "VIC.HVESSS1_PGN61590.HS_HiUBusCnctnSts", "value": 14},
+      {"inject": "simFault", "name": "pdu"}])";
   text.replace(text.find(R"("faults": [{"inject": "silence", "node": "VIC"}])"),
                std::string_view(R"("faults": [{"inject": "silence", "node": "VIC"}])").size(), faults);
   auto sut = safety::parseSafety(text, std::string(FILE_NAME));
@@ -158,7 +159,7 @@ TEST_CASE("every detection kind and fault kind reads with the target it takes") 
     CHECK(parsed.detection[i].kind == static_cast<safety::DetectionKind>(i));
   }
   CHECK(safety::detectionKindName(safety::DetectionKind::AddressLoss) == "addressLoss");
-  REQUIRE(parsed.faults.size() == 13);
+  REQUIRE(parsed.faults.size() == 14);
   for (std::size_t i = 0; i < parsed.faults.size(); ++i) {
     CHECK(parsed.faults[i].kind == static_cast<safety::InjectKind>(i));
   }
@@ -171,6 +172,7 @@ TEST_CASE("every detection kind and fault kind reads with the target it takes") 
   CHECK(parsed.faults[9].service == "roudi");
   CHECK(parsed.faults[11].level == true);
   CHECK(parsed.faults[12].value == 14);
+  CHECK(parsed.faults[13].name == "pdu");
   CHECK(safety::injectKindName(safety::InjectKind::AddressClaim) == "addressClaim");
 }
 

@@ -219,3 +219,15 @@ TEST_CASE("a hazard without a fault to inject is a warning, not an error") {
   CHECK(diagnostics[0].severity == Severity::Warning);
   CHECK(contains(diagnostics[0].toString(), "/hazards/3: warning: hazard 'HHEA-CONTACTOR-FAULT' lists no fault"));
 }
+
+TEST_CASE("a simulated fault the simulation file does not define, or silent.<NODE> of no node, is refused") {
+  VehicleCopy copy("tractor");
+  copy.replace("safety.json", R"({"inject": "simFault", "name": "bms_fault"})",
+               R"({"inject": "simFault", "name": "bms_faults"})");
+  copy.replace("safety.json", R"({"inject": "simFault", "name": "pump_fault"})",
+               R"({"inject": "simFault", "name": "silent.Pump"})");
+  const std::string diagnostics = checkCopy(copy);
+  CHECK_MESSAGE(contains(diagnostics, "/faults/0/name: no fault 'bms_faults' in "), diagnostics);
+  CHECK(contains(diagnostics, "did you mean 'bms_fault'?"));
+  CHECK(contains(diagnostics, "/faults/0/name: no node 'Pump' in the DBC's BU_ list"));
+}

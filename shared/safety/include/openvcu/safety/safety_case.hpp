@@ -115,10 +115,11 @@ enum class InjectKind : std::uint8_t {
   Stop,           ///< SIGSTOP (a hang) of a process (as Kill)
   GpioStuck,      ///< an input line stuck at "level" ("line")
   Signal,         ///< a simulated node reports "value" in "signal" (a fault it detects itself)
+  SimFault,       ///< a named fault of the simulated vehicle ("name": `vcu sim fault NAME`)
 };
 
 /// "silence", "delay", "corrupt", "freezeCounter", "replay", "babble", "spoof", "busOff",
-/// "addressClaim", "kill", "stop", "gpioStuck", "signal".
+/// "addressClaim", "kill", "stop", "gpioStuck", "signal", "simFault".
 [[nodiscard]] std::string_view injectKindName(InjectKind kind) noexcept;
 
 /// A fault a campaign injects, as data (the injection itself is `vcu inject`'s). Only the
@@ -131,6 +132,7 @@ struct Injection {
   std::string service;
   std::string line;
   std::string bus;
+  std::string name;                     ///< SimFault
   std::optional<double> value;          ///< Signal
   std::optional<bool> level;            ///< GpioStuck
   std::optional<bool> validCrc;         ///< Corrupt
