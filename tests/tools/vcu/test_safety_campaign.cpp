@@ -19,14 +19,18 @@ Repetition repetition(int index, std::optional<double> fsmMs, std::optional<doub
   r.index = index;
   r.windowMs = 2 * FTTI_MS;
   r.injected = {"silent.VIC"};
-  r.items.push_back(ItemResult{.kind = ItemKind::FsmState,
-                               .item = "fsm Battery Timeout",
-                               .reachedMs = fsmMs,
-                               .reached = fsmMs ? "Battery Timeout" : ""});
-  r.items.push_back(ItemResult{.kind = ItemKind::Fault,
-                               .item = "fault rx_timeout.*.HVESSS1",
-                               .detection = "receiveTimeout",
-                               .reachedMs = faultMs});
+  ItemResult fsm;
+  fsm.kind = ItemKind::FsmState;
+  fsm.item = "fsm Battery Timeout";
+  fsm.reachedMs = fsmMs;
+  fsm.reached = fsmMs ? "Battery Timeout" : "";
+  r.items.push_back(fsm);
+  ItemResult fault;
+  fault.kind = ItemKind::Fault;
+  fault.item = "fault rx_timeout.*.HVESSS1";
+  fault.detection = "receiveTimeout";
+  fault.reachedMs = faultMs;
+  r.items.push_back(fault);
   r.timeline.push_back({0, "injected silent.VIC"});
   if (fsmMs) r.timeline.push_back({*fsmMs, "fsm Battery Timeout"});
   return r;

@@ -109,11 +109,12 @@ class Campaign {
   }
 
   HazardResult run(const safety::Hazard& hazard) {
-    HazardResult result{.id = hazard.id,
-                        .description = hazard.description,
-                        .severity = hazard.severity,
-                        .fttiMs = hazard.fttiMs,
-                        .during = hazard.during};
+    HazardResult result;
+    result.id = hazard.id;
+    result.description = hazard.description;
+    result.severity = hazard.severity;
+    result.fttiMs = hazard.fttiMs;
+    result.during = hazard.during;
     std::vector<const safety::Injection*> runnable;
     for (const safety::Injection& fault : hazard.faults) {
       if (const std::string why = unsupported(fault); !why.empty()) {
@@ -345,22 +346,24 @@ class Campaign {
       return applied;
     }
     if (fault.kind == InjectKind::GpioStuck) {
-      const std::string key = "internal.gpio.sim." + fault.line;
-      const auto index = m_stack.catalog.indexOf(key);
-      if (!index) {
-        *error = "no " + key + " (GPIO inputs are stuck on the simulated chip only)";
-        return std::nullopt;
-      }
-      const auto before = m_planner.read(*index);
-      const double level = fault.level.value_or(false) ? 1 : 0;
-      *stamp = Stamp{clock::monotonicNs(), clock::realtimeNs()};
-      if (!m_planner.setSignal(key, level)) {
-        *error = key + " = " + formatNumber(level) + " refused";
-        return std::nullopt;
-      }
-      const double restore = before ? before->value : 1 - level;
-      return Applied{key + "=" + formatNumber(level),
-                     [this, key, restore] { (void)m_planner.setSignal(key, restore); }};
+      // `vcu inject gpio`: an override of the simulated input, released with --off
+      GpioInjectOptions gpio;
+      gpio.stack.configPath = m_stack.config.path;
+      gpio.stack.instance = m_stack.config.instance;
+      gpio.line = fault.line;
+      gpio.level = fault.level.value_or(false) ? 1 : 0;
+      gpio.json = true;
+      if (runGpioInject(gpio, captured) != ExitCode::Ok) return failed("inject gpio " + fault.line);
+      const auto answer = nlohmann::json::parse(out.text(), nullptr, false);
+      if (answer.is_discarded()) return failed("inject gpio " + fault.line);
+      *stamp = Stamp{answer.value("requestedMonotonicNs", std::int64_t{}),
+                     answer.value("requestedRealtimeNs", std::int64_t{})};
+      return Applied{"gpio " + fault.line + "=" + std::to_string(gpio.level), [gpio]() mutable {
+                       gpio.off = true;
+                       StringSink ignoredOut;
+                       StringSink ignoredErr;
+                       (void)runGpioInject(gpio, Streams{ignoredOut, ignoredErr});
+                     }};
     }
     FrameInjectOptions frame;
     frame.stack = m_options.stack;
@@ -448,11 +451,17 @@ class Campaign {
                std::optional<std::uint32_t>& lastState) {
     // the FSM state (and its changes, for the timeline)
     const auto stateIndex = m_stack.catalog.indexOf("internal.fsm.state");
-    std::optional<SlotReading> stateReading = stateIndex ? m_planner.read(*stateIndex) : std::nullopt;
+    std::int64_t stateStampNs = 0;  // when internal.fsm.state was written last
+    bool stateKnown = false;
+    if (stateIndex) {
+      if (const auto reading = m_planner.read(*stateIndex)) {
+        stateStampNs = reading->timestampNs;
+        stateKnown = true;
+      }
+    }
     const auto state = m_planner.currentState();
-    if (state != lastState && state && stateReading) {
-      repetition.timeline.push_back(
-          {msBetween(at.monotonicNs, stateReading->timestampNs), "FSM " + m_planner.stateName(state)});
+    if (state != lastState && state && stateKnown) {
+      repetition.timeline.push_back({msBetween(at.monotonicNs, stateStampNs), "FSM " + m_planner.stateName(state)});
       lastState = state;
     }
     // frames on the simulated buses
@@ -477,10 +486,10 @@ class Campaign {
       if (watch.result.reachedMs) continue;
       switch (watch.result.kind) {
         case ItemKind::FsmState:
-          if (state && stateReading &&
+          if (state && stateKnown &&
               std::find(watch.states.begin(), watch.states.end(), *state) != watch.states.end()) {
             watch.result.reached = m_planner.stateName(state);
-            reached(watch, std::max(0.0, msBetween(at.monotonicNs, stateReading->timestampNs)), repetition);
+            reached(watch, std::max(0.0, msBetween(at.monotonicNs, stateStampNs)), repetition);
           }
           break;
         case ItemKind::GpioLevel:
