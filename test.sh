@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The second command: installs what is missing, builds, runs every test.
-#   ./test.sh            Release build + all tests, then an ASan+UBSan build + the unit tests
+#   ./test.sh            Release build + all tests, then an ASan+UBSan build of the unit tests + them
 #   ./test.sh --fast     Release build + all tests only
 # Exits non-zero if anything fails; prints ctest's summary.
 set -euo pipefail
@@ -28,8 +28,17 @@ ctest --test-dir build --output-on-failure -j "$jobs" || status=1
 if [ $fast -eq 0 ]; then
   echo "== ASan+UBSan build (build-asan/)"
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Asan -DOPENVCU_BUILD_BENCH=OFF >/dev/null
-  cmake --build build-asan -j "$jobs"
-  echo "== Unit tests under ASan+UBSan"
+  # only what `ctest -L unit` runs; a unit test whose executable is missing from the target
+  # would vanish from the list without an error, so the two lists must be equally long
+  cmake --build build-asan -j "$jobs" --target unit-tests
+  release_units=$(ctest --test-dir build -N -L unit | sed -n 's/^Total Tests: //p')
+  asan_units=$(ctest --test-dir build-asan -N -L unit | sed -n 's/^Total Tests: //p')
+  if [ "$release_units" != "$asan_units" ]; then
+    echo "test.sh: build-asan lists $asan_units unit tests, build lists $release_units:" \
+         "an executable is missing from the unit-tests target (openvcu_unit_test_target)" >&2
+    status=1
+  fi
+  echo "== Unit tests under ASan+UBSan ($asan_units)"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan -L unit --output-on-failure -j "$jobs" || status=1
 fi

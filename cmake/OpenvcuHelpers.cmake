@@ -22,6 +22,13 @@ function(openvcu_library concern)
   add_library(openvcu::${concern} ALIAS ${target})
 endfunction()
 
+# openvcu_unit_test_target(<target>...): executables that `ctest -L unit` runs. The target
+# `unit-tests` builds exactly these (and what they depend on): test.sh builds only it under
+# ASan, and checks that its build lists as many unit tests as the full Release build.
+function(openvcu_unit_test_target)
+  set_property(GLOBAL APPEND PROPERTY OPENVCU_UNIT_TEST_TARGETS ${ARGN})
+endfunction()
+
 # openvcu_test(<name> SOURCES ... DEPS ... [LABELS ...]): one doctest executable,
 # every TEST_CASE registered with ctest.
 function(openvcu_test name)
@@ -37,6 +44,9 @@ function(openvcu_test name)
   set(labels unit)
   if(ARG_LABELS)
     set(labels ${ARG_LABELS})
+  endif()
+  if("unit" IN_LIST labels)
+    openvcu_unit_test_target(${name})
   endif()
   # SERIAL: timing checks that must not share the 2 cores with other tests (RUN_SERIAL)
   set(serial FALSE)
