@@ -29,6 +29,7 @@
 #include "safety_campaign.hpp"
 #include "safety_campaign_plan.hpp"
 #include "safety_commands.hpp"
+#include "sim_commands.hpp"
 
 namespace openvcu::cli {
 namespace {
@@ -164,6 +165,7 @@ class Campaign {
       case InjectKind::Kill:
       case InjectKind::Stop:
       case InjectKind::GpioStuck:
+      case InjectKind::SimFault:
         return {};
       case InjectKind::Corrupt:
         if (fault.validCrc.value_or(false))
@@ -344,6 +346,22 @@ class Campaign {
         };
       }
       return applied;
+    }
+    if (fault.kind == InjectKind::SimFault) {
+      // `vcu sim fault NAME on`: a fault the simulated node detects and reports itself; its
+      // answer carries no stamps, so the stamp is taken just before the request left
+      SimFaultOptions sim;
+      sim.stack.configPath = m_stack.config.path;
+      sim.stack.instance = m_stack.config.instance;
+      sim.name = fault.name;
+      *stamp = Stamp{clock::monotonicNs(), clock::realtimeNs()};
+      if (runSimFault(sim, captured) != ExitCode::Ok) return failed("sim fault " + fault.name);
+      return Applied{"sim fault " + fault.name, [sim]() mutable {
+                       sim.state = "off";
+                       StringSink ignoredOut;
+                       StringSink ignoredErr;
+                       (void)runSimFault(sim, Streams{ignoredOut, ignoredErr});
+                     }};
     }
     if (fault.kind == InjectKind::GpioStuck) {
       // `vcu inject gpio`: an override of the simulated input, released with --off
