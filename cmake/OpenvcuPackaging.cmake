@@ -76,7 +76,7 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/services/telemetry/examples/
         DESTINATION share/doc/openvcu/examples/telemetry ${comp} EXCLUDE_FROM_ALL)
 set(openvcuUnits openvcu.target openvcu-roudi.service openvcu-can-rx.service openvcu-can-tx.service
     openvcu-fsm.service openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service
-    openvcu-telemetry.service openvcu-bench.target)
+    openvcu-telemetry.service openvcu-watchdog.service openvcu-bench.target)
 list(TRANSFORM openvcuUnits PREPEND ${PROJECT_SOURCE_DIR}/config/systemd/ OUTPUT_VARIABLE unitFiles)
 install(FILES ${unitFiles} DESTINATION /lib/systemd/system ${comp} EXCLUDE_FROM_ALL)
 install(FILES ${OPENVCU_PACKAGING_DIR}/60-openvcu.rules DESTINATION /lib/udev/rules.d ${comp} EXCLUDE_FROM_ALL)

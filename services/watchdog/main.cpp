@@ -9,21 +9,8 @@
 
 namespace service = openvcu::service;
 
-namespace {
-
-/// Not in config::SERVICES (shared/config): vcu-watchdog writes nothing to the signal table,
-/// so it has no heartbeat slot and its writer id stamps nothing; 9 is the next free id.
-constexpr openvcu::signals::WriterId WATCHDOG_WRITER = 9;
-
-}  // namespace
-
 int main(int argc, char** argv) {
-  const service::ServiceInfo info{
-      .name = "watchdog",
-      .program = {},
-      .description = "service watchdog: a silent service is reported, killed for its supervisor to restart it",
-      .version = {},
-      .writerId = WATCHDOG_WRITER,
-      .usesFrameStreams = false};
-  return service::runApp<openvcu::watchdog::WatchdogApp>(info, argc, argv);
+  return service::runApp<openvcu::watchdog::WatchdogApp>(
+      openvcu::config::ServiceId::Watchdog,
+      "service watchdog: a silent service is reported, killed for its supervisor to restart it", false, argc, argv);
 }

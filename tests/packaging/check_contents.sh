@@ -69,7 +69,7 @@ etc=(openvcu.env vehicle.json hhea.dbc fsm.json schedule.json diagnostics.json g
      simulation.json web.json telemetry.json safety.json)
 units=(openvcu.target openvcu-roudi.service openvcu-can-rx.service openvcu-can-tx.service openvcu-fsm.service
        openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service
-       openvcu-telemetry.service)
+       openvcu-telemetry.service openvcu-watchdog.service)
 expected=(/usr/bin/vcu /usr/bin/vcu-can-rx /usr/bin/vcu-can-tx /usr/bin/vcu-fsm /usr/bin/vcu-gpio
           /usr/bin/vcu-ecu-sim /usr/bin/vcu-web /usr/bin/vcu-telemetry /usr/share/openvcu/www/index.html
           /usr/share/openvcu/iceoryx/iox-roudi.sh /usr/share/openvcu/iceoryx/roudi.toml

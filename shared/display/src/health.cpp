@@ -9,7 +9,8 @@ namespace openvcu::display {
 std::vector<std::string> expectedServices() {
   std::vector<std::string> names;
   for (const std::string_view name : config::SERVICES) {
-    if (name == "hmi" || name == "web" || name == "telemetry") continue;  // optional: a VCU may run without them
+    // optional: a VCU may run without them (listed once heard)
+    if (name == "hmi" || name == "web" || name == "telemetry" || name == "watchdog") continue;
     names.push_back("vcu-" + std::string(name));
   }
   return names;

@@ -18,7 +18,7 @@
 
 namespace openvcu::config {
 
-enum class ServiceId : std::uint8_t { CanRx, CanTx, Fsm, Gpio, Hmi, EcuSim, Web, Telemetry };
+enum class ServiceId : std::uint8_t { CanRx, CanTx, Fsm, Gpio, Hmi, EcuSim, Web, Telemetry, Watchdog };
 
 struct ServiceEntry {
   ServiceId id;
@@ -30,7 +30,7 @@ struct ServiceEntry {
 
 /// Writer ids start at 1 (0 is "never written"); ids from 200 are free for tools and tests
 /// (the integration fixture service uses 240).
-inline constexpr std::array<ServiceEntry, 8> SERVICES = {{
+inline constexpr std::array<ServiceEntry, 9> SERVICES = {{
     {ServiceId::CanRx, "can-rx", 1},
     {ServiceId::CanTx, "can-tx", 2},
     {ServiceId::Fsm, "fsm", 3},
@@ -39,6 +39,7 @@ inline constexpr std::array<ServiceEntry, 8> SERVICES = {{
     {ServiceId::EcuSim, "ecu-sim", 6},
     {ServiceId::Web, "web", 7},  ///< writes nothing but its heartbeat slot
     {ServiceId::Telemetry, "telemetry", 8},  ///< writes nothing but its heartbeat slot
+    {ServiceId::Watchdog, "watchdog", 9},  ///< writes nothing but its heartbeat slot
 }};
 
 constexpr const ServiceEntry& serviceEntry(ServiceId id) noexcept { return SERVICES[static_cast<std::size_t>(id)]; }
