@@ -4,7 +4,7 @@
 // after DEFAULT_SILENT_AFTER_MS, restarted, no board watchdog.
 //
 //   auto policyResult = watchdog::policyOf(runtime.config(), runtime.catalog());
-//   // -> WatchedPolicy{{"can-rx", "can-tx", "fsm", "gpio"}, 1500, true, "", "defaults: ..."}
+//   // -> WatchedPolicy{{"can-rx", "can-tx", "fsm", "gpio"}, 2500, true, "", "defaults: ..."}
 //   // or "config/hhea/safety.json: /watchdog/services/1: 'fms' has no heartbeat slot ..."
 
 #include <array>
@@ -20,7 +20,7 @@
 namespace openvcu::watchdog {
 
 inline constexpr std::array<std::string_view, 4> DEFAULT_SERVICES = {"can-rx", "can-tx", "fsm", "gpio"};
-inline constexpr std::int64_t DEFAULT_SILENT_AFTER_MS = 1500;
+inline constexpr std::int64_t DEFAULT_SILENT_AFTER_MS = 2500;  // above the FSM dead-man of config/*/schedule.json (1500 ms)
 
 struct WatchedPolicy {
   std::vector<std::string> services;  ///< short names ("fsm"), each with a heartbeat slot

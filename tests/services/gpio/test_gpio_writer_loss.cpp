@@ -25,8 +25,8 @@ const std::string FSM = FSM_BINARY;
 const std::string GPIO = GPIO_BINARY;
 
 constexpr std::int64_t MS = 1'000'000;
-/// config/hhea/schedule.json: "writers": [{"service": "fsm", "timeoutMs": 3000}]
-constexpr std::int64_t WRITER_TIMEOUT_NS = 3'000 * MS;
+/// config/hhea/schedule.json: "writers": [{"service": "fsm", "timeoutMs": 1500}]
+constexpr std::int64_t WRITER_TIMEOUT_NS = 1'500 * MS;
 /// The bound the task sets: the timeout plus one 100 ms tick of a periodic watcher.
 constexpr std::int64_t TICK_NS = 100 * MS;
 /// config/hhea/gpio.json: Cl15 "onDelay": "2s".
@@ -64,7 +64,7 @@ TEST_CASE("a hung vcu-fsm drives Cl15 to its safe level within the writer timeou
   harness::Process& fsm = f.startService("fsm", FSM);
   f.openTable();
   harness::Process& gpio = f.startService("gpio", GPIO);
-  CHECK(gpio.waitForLine("watching writer fsm (timeout 3 s)", 2s));
+  CHECK(gpio.waitForLine("watching writer fsm (timeout 1500 ms)", 2s));
   const signals::SignalIndex cl15 = f.index("internal.gpio.Cl15");
   const signals::SignalIndex heartbeat = f.index("internal.service.fsm.heartbeat");
   REQUIRE(waitForBus(*f.table, f.index("internal.fsm.state"), hheaStateIndex("Standby"), 5s));
@@ -90,7 +90,7 @@ TEST_CASE("a hung vcu-fsm drives Cl15 to its safe level within the writer timeou
   const auto raised = f.waitForFault(true, 2s);
   REQUIRE_MESSAGE(raised, "no writer_lost.fsm from vcu-gpio");
   CHECK(raised->severity == ipc::FaultSeverity::Critical);
-  CHECK(contains(raised->text, "no heartbeat from fsm for 3000 ms"));
+  CHECK(contains(raised->text, "no heartbeat from fsm for 1500 ms"));
   // the command is still "on": the safe level holds while the writer is lost
   const auto command = f.table->readCommand(f.index("internal.relay.Cl15"));
   REQUIRE(command);

@@ -53,7 +53,7 @@ TEST_CASE("the shipped HHEA vehicle is watched as its safety case says") {
   const auto policy = sut.policy();
   REQUIRE_MESSAGE(policy.ok(), (policy.ok() ? "" : policy.error().toString()));
   CHECK(policy->services == std::vector<std::string>{"can-rx", "can-tx", "fsm", "gpio"});
-  CHECK(policy->silentAfterMs == 1500);
+  CHECK(policy->silentAfterMs == 2500);
   CHECK(policy->restart);
   CHECK(policy->device.empty());
   CHECK(policy->origin.find("safety.json /watchdog") != std::string::npos);

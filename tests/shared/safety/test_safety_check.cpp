@@ -189,7 +189,7 @@ TEST_CASE("a watched service the watchdog does not watch or restart, or a silenc
   VehicleCopy copy("hhea");
   copy.replace("safety.json", R"("services": ["can-rx", "can-tx", "fsm", "gpio"])",
                R"("services": ["can-rx", "can-tx", "gpio"])");
-  copy.replace("safety.json", R"("silentAfterMs": 1500)", R"("silentAfterMs": 4500)");
+  copy.replace("safety.json", R"("silentAfterMs": 2500)", R"("silentAfterMs": 4500)");
   const std::string diagnostics = checkCopy(copy);
   CHECK(contains(diagnostics,
                  "/detection/0/service: service 'fsm' is not in /watchdog/services: nothing detects "
@@ -203,7 +203,7 @@ TEST_CASE("a watched service the watchdog does not watch or restart, or a silenc
 
 TEST_CASE("a vehicle without a J1939 address claim on the bus has no address to lose") {
   VehicleCopy copy("tractor");
-  copy.replace("safety.json", R"({"kind": "serviceWatchdog", "service": "gpio", "withinMs": 2000})",
+  copy.replace("safety.json", R"({"kind": "serviceWatchdog", "service": "gpio", "withinMs": 3000})",
                R"({"kind": "addressLoss", "bus": "vehicle"})");
   CHECK(contains(checkCopy(copy), "/detection/0/bus: bus 'vehicle' has no J1939 address claim"));
 }
