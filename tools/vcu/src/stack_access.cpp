@@ -23,10 +23,11 @@
 #include <iterator>
 
 #include "diagnostics.hpp"
-#include "openvcu/ipc/frame_stream.hpp"
-#include "openvcu/core/clock.hpp"
 #include "openvcu/config/catalog.hpp"
+#include "openvcu/core/clock.hpp"
+#include "openvcu/display/health.hpp"
 #include "openvcu/ipc/command_socket.hpp"
+#include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/signals/table.hpp"
 
 namespace openvcu::cli {
@@ -277,6 +278,21 @@ std::string formatDuration(std::int64_t nanoseconds) {
     std::snprintf(text.data(), text.size(), "%ld h %ld min", whole / 3600, (whole % 3600) / 60);
   }
   return text.data();
+}
+
+std::string livenessText(const display::HealthTracker& health, const display::ServiceHealth& service,
+                         std::int64_t nowMonoNs) {
+  const auto silentNs = health.silentFor(service, nowMonoNs);
+  switch (health.livenessOf(service, nowMonoNs)) {
+    case display::Liveness::Silent:
+      return "silent for " + formatDuration(silentNs.value_or(0));
+    case display::Liveness::Stopped:
+      return "stopped " + formatDuration(silentNs.value_or(0)) + " ago";
+    case display::Liveness::NotHeard:
+      return "not heard";
+    default:
+      return {};
+  }
 }
 
 /// How long a new sim link may take to be connected (normally < 0.1 s).

@@ -28,8 +28,8 @@
 #include <vector>
 
 #include "cli.hpp"
-#include "openvcu/core/clock.hpp"
 #include "openvcu/config/vehicle.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/core/result.hpp"
 #include "openvcu/service/logger.hpp"
 #include "openvcu/signals/catalog.hpp"
@@ -37,6 +37,11 @@
 namespace CLI {
 class App;
 }
+
+namespace openvcu::display {
+class HealthTracker;
+struct ServiceHealth;
+}  // namespace openvcu::display
 
 namespace openvcu::cli {
 
@@ -94,6 +99,9 @@ using service::formatUtc;
 std::int64_t monotonicToRealtimeNs(std::int64_t monotonicNs) noexcept;
 /// "0.52 s", "3 min 5 s", "2 h 4 min" for a duration in ns.
 std::string formatDuration(std::int64_t nanoseconds);
+/// "silent for 4.02 s", "stopped 4.02 s ago", "not heard"; empty while the service beats.
+std::string livenessText(const display::HealthTracker& health, const display::ServiceHealth& service,
+                         std::int64_t nowMonoNs);
 
 /// Starts argv[0] with `argv` (from PATH when `searchPath`), the signals in `defaults` at
 /// their default action in the child (a parent that ignores SIGINT must not pass that on).

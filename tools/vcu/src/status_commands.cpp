@@ -198,19 +198,7 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
   const std::int64_t now = clock::realtimeNs();
   const std::int64_t nowMono = clock::monotonicNs();
   std::vector<std::string> silent;  // "vcu-fsm silent for 4.12 s": these make the exit code 1
-  const auto livenessText = [&](const display::ServiceHealth& service) -> std::string {
-    const auto silentNs = health.silentFor(service, nowMono);
-    switch (health.livenessOf(service, nowMono)) {
-      case display::Liveness::Silent:
-        return "silent for " + formatDuration(*silentNs);
-      case display::Liveness::Stopped:
-        return "stopped " + formatDuration(*silentNs) + " ago";
-      case display::Liveness::NotHeard:
-        return "not heard";
-      default:
-        return {};
-    }
-  };
+  const auto livenessOf = [&](const display::ServiceHealth& service) { return livenessText(health, service, nowMono); };
   std::vector<std::vector<std::string>> rows;
   for (const auto& [key, heartbeat] : latest) {
     std::vector<ipc::Counter> counters = heartbeat.counters;
@@ -220,8 +208,8 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
     std::string statusText = heartbeat.status.empty() ? "-" : heartbeat.status;
     const display::ServiceHealth* service = health.find(heartbeat.service);
     if (service != nullptr && service->pid == heartbeat.pid && health.silentFor(*service, nowMono)) {
-      statusText = livenessText(*service) + " (last: " + statusText + ")";
-      silent.push_back(heartbeat.service + " " + livenessText(*service));
+      statusText = livenessOf(*service) + " (last: " + statusText + ")";
+      silent.push_back(heartbeat.service + " " + livenessOf(*service));
     }
     rows.push_back({heartbeat.service, std::to_string(heartbeat.pid), formatDuration(heartbeat.uptimeMs * 1'000'000),
                     formatDuration(std::max<std::int64_t>(0, now - heartbeat.timestampNs)) + " ago", statusText,
@@ -235,7 +223,7 @@ ExitCode runStatus(const StatusOptions& options, Streams streams) {
     const bool heard =
         std::any_of(latest.begin(), latest.end(), [&](const auto& entry) { return entry.first.first == service.name; });
     if (heard) continue;
-    std::string statusText = livenessText(service);
+    std::string statusText = livenessOf(service);
     if (statusText.empty()) statusText = "beating (its table slot counts; no LCM heartbeat heard)";
     const bool own = std::find(expected.begin(), expected.end(), service.name) != expected.end();
     if (own && health.silentFor(service, nowMono)) silent.push_back(service.name + " " + statusText);

@@ -165,19 +165,8 @@ class Top {
     view.last = beat;
   }
 
-  /// "silent for 4.02 s", "stopped 4.02 s ago", "not heard"; empty while the service beats.
   [[nodiscard]] std::string livenessText(const display::ServiceHealth& service, std::int64_t nowMono) const {
-    const auto silentNs = m_health.silentFor(service, nowMono);
-    switch (m_health.livenessOf(service, nowMono)) {
-      case display::Liveness::Silent:
-        return "silent for " + formatDuration(*silentNs);
-      case display::Liveness::Stopped:
-        return "stopped " + formatDuration(*silentNs) + " ago";
-      case display::Liveness::NotHeard:
-        return "not heard";
-      default:
-        return {};
-    }
+    return cli::livenessText(m_health, service, nowMono);
   }
 
   void services(std::string& out) {
