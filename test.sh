@@ -23,7 +23,10 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j "$jobs"
 echo "== Tests (Release)"
 status=0
-ctest --test-dir build --output-on-failure -j "$jobs" || status=1
+rm -f build/ctest.log build-asan/ctest.log
+# ctest's own list of failures scrolls away under the ASan run: each run is also logged,
+# and the lists are printed again at the end
+ctest --test-dir build --output-on-failure -j "$jobs" 2>&1 | tee build/ctest.log || status=1
 
 if [ $fast -eq 0 ]; then
   echo "== ASan+UBSan build (build-asan/)"
@@ -40,8 +43,15 @@ if [ $fast -eq 0 ]; then
   fi
   echo "== Unit tests under ASan+UBSan ($asan_units)"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    ctest --test-dir build-asan -L unit --output-on-failure -j "$jobs" || status=1
+    ctest --test-dir build-asan -L unit --output-on-failure -j "$jobs" 2>&1 | tee build-asan/ctest.log || status=1
 fi
 
-if [ $status -ne 0 ]; then echo "test.sh: FAILED" >&2; else echo "test.sh: all tests passed"; fi
+if [ $status -ne 0 ]; then
+  for log in build/ctest.log build-asan/ctest.log; do
+    if [ -f "$log" ]; then
+      sed -n '/^The following tests FAILED/,/^Errors while running/p' "$log" | sed "s|^|${log%/*}: |" >&2
+    fi
+  done
+  echo "test.sh: FAILED" >&2
+else echo "test.sh: all tests passed"; fi
 exit $status
