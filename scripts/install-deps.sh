@@ -31,6 +31,8 @@ PACKAGES=(
   supervisor
   # cyclictest: the platform's wake-up latency beside vcu-can-tx (bench/can-tx, issue 27)
   rt-tests
+  # stress-ng: CPU load beside the safety campaign (bench/stack/safety_campaign.sh --stress)
+  stress-ng
   # setfacl/getfacl: iox-roudi's shared memory without ACL (config/iceoryx/iox-roudi.sh) and its test
   acl
   # the Qt 6 HMI (services/hmi) and its offscreen / Xvfb tests and screenshots
