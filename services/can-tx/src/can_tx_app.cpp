@@ -11,6 +11,7 @@
 
 #include "network.hpp"
 #include "openvcu/config/diagnostics.hpp"
+#include "openvcu/config/faults.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/core/text.hpp"
 #include "openvcu/fsm/machine.hpp"
@@ -350,13 +351,13 @@ struct CanTxAppImpl final : TxPort, Clock, ScheduleChangeSink {
       if (change == WriterChange::Lost) {
         ++writersLost;
         writeSafeValues(now);
-        fault("writer_lost." + writer.service, ipc::FaultSeverity::Critical, true,
+        fault(faults::writerLost(writer.service), ipc::FaultSeverity::Critical, true,
               "no heartbeat from " + writer.service + " for " + std::to_string(writer.timeoutNs / NS_PER_MS) +
                   " ms: " + std::to_string(schedule.safeValues.size()) +
                   " safe values commanded; keep-alive and safety messages continue");
         runtime.setStatus("writer " + writer.service + " lost: safe values commanded");
       } else if (change == WriterChange::Back) {
-        fault("writer_lost." + writer.service, ipc::FaultSeverity::Critical, false,
+        fault(faults::writerLost(writer.service), ipc::FaultSeverity::Critical, false,
               writer.service + " is back; the safe values stay until it commands otherwise");
         if (std::none_of(writers.begin(), writers.end(), [](const WriterWatch& watch) { return watch.lost(); })) {
           runtime.setStatus("ready");

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "controller.hpp"
+#include "openvcu/config/faults.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/schedule/schedule_config.hpp"
 #include "openvcu/service/app_impl.hpp"
@@ -124,7 +125,7 @@ struct GpioAppImpl {
                                         std::to_string(writer.timeoutNs / 1'000'000) +
                                         " ms: every GPIO output at its safe level"
                                   : writer.service + " is back; the GPIO outputs follow its commands again";
-    runtime.events().publish(ipc::FaultEvent{0, "writer_lost." + writer.service, runtime.program(),
+    runtime.events().publish(ipc::FaultEvent{0, faults::writerLost(writer.service), runtime.program(),
                                              ipc::FaultSeverity::Critical, lost, text});
   }
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "board_watchdog.hpp"
+#include "openvcu/config/faults.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/service/app_impl.hpp"
 #include "openvcu/service/heartbeat.hpp"
@@ -207,12 +208,12 @@ struct WatchdogAppImpl {
   }
 
   void fault(const Watched& entry, bool active, const std::string& text) {
-    runtime.events().publish(ipc::FaultEvent{0, "service_silent." + entry.name, runtime.program(),
-                                             ipc::FaultSeverity::Critical, active, text});
+    const std::string name = faults::serviceSilent(entry.name);
+    runtime.events().publish(ipc::FaultEvent{0, name, runtime.program(), ipc::FaultSeverity::Critical, active, text});
     if (active) {
-      runtime.log().critical("fault raised: service_silent." + entry.name + ": " + text);
+      runtime.log().critical("fault raised: " + name + ": " + text);
     } else {
-      runtime.log().info("fault cleared: service_silent." + entry.name + ": " + text);
+      runtime.log().info("fault cleared: " + name + ": " + text);
     }
   }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "openvcu/config/faults.hpp"
 #include "openvcu/config/services.hpp"
 
 namespace openvcu::display {
@@ -19,7 +20,7 @@ std::vector<std::string> expectedServices() {
 std::string silentFaultName(std::string_view program) {
   constexpr std::string_view PROGRAM_PREFIX = "vcu-";
   if (program.starts_with(PROGRAM_PREFIX)) program.remove_prefix(PROGRAM_PREFIX.size());
-  return std::string(SERVICE_SILENT_PREFIX) + std::string(program);
+  return faults::serviceSilent(program);
 }
 
 std::string_view livenessName(Liveness liveness) noexcept {

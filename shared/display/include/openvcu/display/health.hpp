@@ -49,12 +49,11 @@ struct ServiceHealth {
 /// has its own setting).
 inline constexpr std::int64_t HEARTBEAT_STALE_NS = 2'500'000'000;
 
-/// The fault a display lists for a silent service: "service_silent.<name>" ("service_silent.fsm"
-/// for vcu-fsm), the name vcu-watchdog raises too; a display lists one of the two.
-inline constexpr std::string_view SERVICE_SILENT_PREFIX = "service_silent.";
 /// The source of the fault a display derives itself from the heartbeats it sees.
 inline constexpr std::string_view SILENT_FAULT_SOURCE = "heartbeats";
 
+/// The fault a display lists for a silent program: faults::serviceSilent (openvcu/config/faults.hpp)
+/// of its service, the name vcu-watchdog raises too; a display lists one of the two.
 /// "vcu-fsm" -> "service_silent.fsm" (a name without "vcu-" is kept as it is).
 [[nodiscard]] std::string silentFaultName(std::string_view program);
 
