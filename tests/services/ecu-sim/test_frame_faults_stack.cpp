@@ -7,12 +7,14 @@
 
 #include <algorithm>
 #include <array>
+#include <optional>
 #include <thread>
 
 #include "integration_support.hpp"
 #include "openvcu/can/wire_time.hpp"
 #include "openvcu/can_links/sim_link.hpp"
 #include "openvcu/ipc/runtime.hpp"
+#include "openvcu/ipc/waiter.hpp"
 
 namespace {
 
@@ -20,6 +22,7 @@ constexpr std::uint32_t EXTENDED_MASK = 0x1FFFFFFFu;
 constexpr std::uint8_t SPOOFED_ADDRESS = 0x30;
 constexpr std::uint8_t VCU_ADDRESS = 0x21;
 constexpr std::uint32_t BABBLE_ID = 0x00EFFFFDu;  // priority 0, PGN 0xEF00 (Proprietary A) to global, from 0xFD
+constexpr std::uint64_t LINK_ID = 1;              // the node's link in its ipc::Waiter
 
 struct Received {
   std::int64_t atNs{};  ///< the sender's CLOCK_MONOTONIC
@@ -29,16 +32,31 @@ struct Received {
 /// The test's node on sim:vehicle.
 struct Node {
   std::unique_ptr<can::Link> link;
+  std::optional<ipc::Waiter> waiter;  ///< wakes when the link has frames; declared after it
 
-  /// Every frame for `duration`.
+  /// Opens sim:vehicle and a waiter on its wait handle (needs an initialised ipc::Runtime).
+  void open() {
+    auto opened = can::openSimLink("vehicle", can::LinkOptions{});
+    REQUIRE_STATUS(opened);
+    link = std::move(*opened);
+    auto created = ipc::Waiter::create();
+    REQUIRE_STATUS(created);
+    waiter.emplace(std::move(*created));
+    const Status attached = waiter->attachLink(link->waitHandle(), LINK_ID);
+    REQUIRE_STATUS(attached);
+  }
+
+  /// Every frame for `duration`: blocks on the link's wait handle between frames.
   std::vector<Received> record(std::chrono::milliseconds duration) {
     std::vector<Received> frames;
     std::array<can::ReceivedFrame, 64> batch{};
     const auto end = std::chrono::steady_clock::now() + duration;
     while (std::chrono::steady_clock::now() < end) {
-      const std::size_t count = link->receive(batch);
-      for (std::size_t i = 0; i < count; ++i) frames.push_back(Received{batch[i].monotonicNs, batch[i].frame});
-      if (count == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      waiter->waitUntil(end);
+      while (const std::size_t count = link->receive(batch)) {
+        for (std::size_t i = 0; i < count; ++i) frames.push_back(Received{batch[i].monotonicNs, batch[i].frame});
+        if (count < batch.size()) break;
+      }
     }
     return frames;
   }
@@ -98,9 +116,7 @@ struct InjectStack {
     REQUIRE_STATUS(s.sut.startRoudi());
     sim = &s.startService("ecu-sim", ECU_SIM_BINARY);
     if (!ipc::Runtime::initialized()) REQUIRE_STATUS(ipc::Runtime::init("test-frame-faults", 5s));
-    auto opened = can::openSimLink("vehicle", can::LinkOptions{});
-    REQUIRE_STATUS(opened);
-    node.link = std::move(*opened);
+    node.open();
     pdu1 = messageId(s, "PDU_Tx_1");
     pdu2 = messageId(s, "PDU_Tx_2");
     const auto before = withId(node.record(300ms), pdu1);
