@@ -15,15 +15,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "integration_support.hpp"
+#include "safety_campaign_stack.hpp"
 
 namespace {
-
-const std::string CAN_RX = CAN_RX_BINARY;
-const std::string CAN_TX = CAN_TX_BINARY;
-const std::string FSM = FSM_BINARY;
-const std::string GPIO = GPIO_BINARY;
-const std::string ECU_SIM = ECU_SIM_BINARY;
 
 constexpr std::int64_t BATTERY_FTTI_MS = 4000;
 constexpr std::int64_t HANG_FTTI_MS = 4000;
@@ -54,29 +48,6 @@ nlohmann::json safetyCase(std::int64_t batteryFttiMs, std::int64_t hangFttiMs) {
       .patch(nlohmann::json::parse(
           "[{\"op\": \"replace\", \"path\": \"/hazards/0/fttiMs\", \"value\": " + std::to_string(batteryFttiMs) +
           "}, {\"op\": \"replace\", \"path\": \"/hazards/1/fttiMs\", \"value\": " + std::to_string(hangFttiMs) + "}]"));
-}
-
-struct CampaignStack : ConfiguredStack {
-  CampaignStack() : ConfiguredStack(copyHheaConfig(fs::temp_directory_path() / "hhea")) {
-    REQUIRE_STATUS(sut.startRoudi());
-    startService("can-rx", CAN_RX);
-    startService("can-tx", CAN_TX);
-    startService("fsm", FSM);
-    startService("gpio", GPIO);
-    startService("ecu-sim", ECU_SIM);
-    openTable();
-    REQUIRE(waitForBus(*table, index("internal.fsm.state"), hheaStateIndex("Standby"), 5s));
-  }
-  fs::path writeSafety(const nlohmann::json& content) {
-    const fs::path path = config.parent_path() / "campaign-safety.json";
-    std::ofstream(path) << content.dump(2);
-    return path;
-  }
-};
-
-nlohmann::json readJson(const fs::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in, nullptr, false);
 }
 
 }  // namespace
