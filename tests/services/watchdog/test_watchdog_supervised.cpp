@@ -182,9 +182,14 @@ struct SupervisedStack {
     // both beat, and the watchdog sees gpio beating (its status)
     REQUIRE_MESSAGE(pumpUntil(
                         [&] {
+                          // vcu-watchdog kills only a process it has seen beat (or one older than
+                          // its start grace): it reads the slot every 100 ms, so a watchdog beat
+                          // after vcu-gpio's second beat comes after it saw the first
+                          int gpioBeats = 0;
                           for (const auto& [at, beat] : heard.heartbeats) {
-                            if (beat.service == "vcu-watchdog" && beat.status == "all 1 services beating" &&
-                                latestPid("vcu-gpio")) {
+                            if (beat.service == "vcu-gpio") ++gpioBeats;
+                            if (gpioBeats >= 2 && beat.service == "vcu-watchdog" &&
+                                beat.status == "all 1 services beating" && latestPid("vcu-gpio")) {
                               return true;
                             }
                           }
