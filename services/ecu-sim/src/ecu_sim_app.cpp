@@ -138,7 +138,8 @@ struct EcuSimAppImpl {
     if (auto frameResult = parseFrameFault(request.key, pending->on)) {
       if (!*frameResult) return frameResult->error().message;
       FrameFaultRequest& frame = **frameResult;
-      if (frame.kind != FrameFaultKind::Claim && frame.kind != FrameFaultKind::Babble) {
+      if (frame.kind != FrameFaultKind::Claim && frame.kind != FrameFaultKind::Babble &&
+          frame.kind != FrameFaultKind::BusOff) {
         pending->targets = bus->transmitted(frame.target);
         if (pending->targets.empty()) {
           std::string known;
@@ -153,8 +154,8 @@ struct EcuSimAppImpl {
         known += std::string(faultName(static_cast<Fault>(i))) + ", ";
       for (std::size_t i = 0; generic && i < generic->faultCount(); ++i) known += generic->faultName(i) + ", ";
       return "unknown fault '" + request.key + "' (faults: " + known +
-             "silent.<node> or silent.<message>; frame faults delay, corrupt, replay, spoof, claim, babble: "
-             "`vcu inject --help`)";
+             "silent.<node> or silent.<message>; frame faults delay, corrupt, replay, spoof, claim, babble, "
+             "busoff: `vcu inject --help`)";
     }
     std::unique_lock lock(requestsMutex);
     requests.push_back(pending);
@@ -232,12 +233,17 @@ struct EcuSimAppImpl {
     while (!stopping.load(std::memory_order_relaxed)) {
       now = clock::monotonicNs();
       for (auto& link : links) {
+        const std::size_t busIndex = static_cast<std::size_t>(&link - links.data());
         std::size_t count = 0;
         while ((count = link->receive(batch)) > 0) {
+          if (faults->cut(busIndex)) {  // a bus off: the nodes hear nothing of the VCU
+            faults->dropped.fetch_add(static_cast<std::int64_t>(count), std::memory_order_relaxed);
+            if (count < batch.size()) break;
+            continue;
+          }
           for (std::size_t i = 0; i < count; ++i) {
             receive(batch[i].frame, batch[i].monotonicNs);
-            if (peer)
-              peer->receive(static_cast<std::size_t>(&link - links.data()), batch[i].frame, batch[i].monotonicNs);
+            if (peer) peer->receive(busIndex, batch[i].frame, batch[i].monotonicNs);
           }
           if (count < batch.size()) break;
         }

@@ -12,13 +12,14 @@ struct KindName {
   FrameFaultKind kind;
   std::string_view name;
 };
-constexpr std::array<KindName, 7> KINDS{{{FrameFaultKind::Silent, "silent"},
+constexpr std::array<KindName, 8> KINDS{{{FrameFaultKind::Silent, "silent"},
                                          {FrameFaultKind::Delay, "delay"},
                                          {FrameFaultKind::Corrupt, "corrupt"},
                                          {FrameFaultKind::Replay, "replay"},
                                          {FrameFaultKind::Spoof, "spoof"},
                                          {FrameFaultKind::Claim, "claim"},
-                                         {FrameFaultKind::Babble, "babble"}}};
+                                         {FrameFaultKind::Babble, "babble"},
+                                         {FrameFaultKind::BusOff, "busoff"}}};
 
 constexpr std::int64_t MS = 1'000'000;
 constexpr std::int64_t MAX_DELAY_MS = 10'000;
@@ -84,6 +85,7 @@ std::optional<Result<FrameFaultRequest>> parseFrameFault(std::string_view key, b
   switch (request.kind) {
     case FrameFaultKind::Silent:
     case FrameFaultKind::Claim:
+    case FrameFaultKind::BusOff:
       if (!parameter.empty()) return Result<FrameFaultRequest>(Error{what + "takes no parameter"});
       break;
     case FrameFaultKind::Delay:
@@ -159,7 +161,10 @@ std::optional<std::string> FrameFaults::apply(const FrameFaultRequest& request, 
   const std::string name = request.name();
   const auto existing = std::find_if(m_faults.begin(), m_faults.end(), [&](const Fault& f) { return f.name == name; });
   if (!on) {
-    if (existing != m_faults.end()) m_faults.erase(existing);
+    if (existing != m_faults.end()) {
+      if (existing->request.kind == FrameFaultKind::BusOff) --m_cutBuses;
+      m_faults.erase(existing);
+    }
     return std::nullopt;  // clearing what is not active changes nothing
   }
   Fault fault;
@@ -177,7 +182,8 @@ std::optional<std::string> FrameFaults::apply(const FrameFaultRequest& request, 
       fault.claimPending = true;
       break;
     }
-    case FrameFaultKind::Babble: {
+    case FrameFaultKind::Babble:
+    case FrameFaultKind::BusOff: {
       const auto bus =
           std::find_if(m_buses.begin(), m_buses.end(), [&](const FaultBus& b) { return b.name == request.target; });
       if (bus == m_buses.end()) {
@@ -186,6 +192,7 @@ std::optional<std::string> FrameFaults::apply(const FrameFaultRequest& request, 
         return "no bus '" + request.target + "' (buses: " + known + ")";
       }
       fault.bus = static_cast<std::size_t>(bus - m_buses.begin());
+      if (request.kind == FrameFaultKind::BusOff) break;
       can::Frame sample;
       sample.id = BABBLE_CAN_ID;
       sample.flags = can::FLAG_EXTENDED;
@@ -223,6 +230,7 @@ std::optional<std::string> FrameFaults::apply(const FrameFaultRequest& request, 
     return std::nullopt;
   }
   if (m_faults.size() == MAX_FAULTS) return "already " + std::to_string(MAX_FAULTS) + " frame faults active";
+  if (request.kind == FrameFaultKind::BusOff) ++m_cutBuses;
   m_faults.push_back(std::move(fault));
   return std::nullopt;
 }

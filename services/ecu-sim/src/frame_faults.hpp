@@ -3,8 +3,10 @@
 // KIND.TARGET[=PARAM]): every frame the nodes send passes send(), which drops, replays,
 // corrupts, re-addresses or delays the frames of the targets of the active faults; step()
 // sends the delayed frames when due, a hostile Address Claimed once, and a babbling node's
-// priority-0 frames at the asked share of the bus's bit rate. A thread-free engine on
-// explicit time; the app wires it between the models and the links.
+// priority-0 frames at the asked share of the bus's bit rate. A bus off cuts a bus both ways:
+// nothing the nodes send goes out on it, and the app gives nothing received on it to the
+// models (cut()). A thread-free engine on explicit time; the app wires it between the
+// models and the links.
 //
 //   auto request = parseFrameFault("delay.VIC=300");      // Result<FrameFaultRequest>
 //   faults.apply(*request, true, bus.transmitted("VIC"), nowNs);   // refusal reason or empty
@@ -12,6 +14,7 @@
 //   faults.step(nowNs, out);                              // delayed, claim, babble frames
 //   sleep until min(..., faults.nextDueNs())
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -27,12 +30,12 @@
 
 namespace openvcu::ecusim {
 
-enum class FrameFaultKind : std::uint8_t { Silent, Delay, Corrupt, Replay, Spoof, Claim, Babble };
+enum class FrameFaultKind : std::uint8_t { Silent, Delay, Corrupt, Replay, Spoof, Claim, Babble, BusOff };
 
 /// One frame fault as asked: "corrupt.PDU_Tx_1=FF01" -> {Corrupt, "PDU_Tx_1", "FF01"}.
 struct FrameFaultRequest {
   FrameFaultKind kind{};
-  std::string target;      ///< a DBC message or node; the address (claim); the bus (babble)
+  std::string target;      ///< a DBC message or node; the address (claim); the bus (babble, busoff)
   std::string parameter;   ///< as given; empty when there is none
   std::int64_t delayNs{};  ///< delay, replay (the age)
   std::array<std::uint8_t, can::MAX_DATA_LENGTH> mask{};  ///< corrupt: XORed from byte 0
@@ -44,7 +47,7 @@ struct FrameFaultRequest {
 };
 
 /// Parses KIND.TARGET[=PARAM]; empty when the key is no frame fault (KIND is not one of
-/// silent, delay, corrupt, replay, spoof, claim, babble), an Error naming the bad part
+/// silent, delay, corrupt, replay, spoof, claim, babble, busoff), an Error naming the bad part
 /// otherwise (a parameter missing or out of range).
 [[nodiscard]] std::optional<Result<FrameFaultRequest>> parseFrameFault(std::string_view key, bool on);
 
@@ -83,6 +86,13 @@ class FrameFaults {
   void step(std::int64_t nowNs, Out&& out) noexcept;
   [[nodiscard]] std::int64_t nextDueNs() const noexcept;
   [[nodiscard]] std::size_t active() const noexcept { return m_faults.size(); }
+  /// true while a bus off cuts bus `busIndex`: the app drops what it receives there (counted
+  /// in `dropped`), and nothing is sent on it.
+  [[nodiscard]] bool cut(std::size_t busIndex) const noexcept {
+    return m_cutBuses != 0 && std::any_of(m_faults.begin(), m_faults.end(), [&](const Fault& fault) {
+             return fault.request.kind == FrameFaultKind::BusOff && fault.bus == busIndex;
+           });
+  }
 
   static constexpr std::size_t MAX_FAULTS = 32;
   static constexpr std::size_t HISTORY = 16384;    ///< frames kept for replay (about 10 s of HHEA)
@@ -90,7 +100,7 @@ class FrameFaults {
   static constexpr std::size_t BABBLE_BURST = 64;
 
   // Counters (heartbeat: inject_*).
-  std::atomic<std::int64_t> dropped{};  ///< silenced frames, and delayed ones beyond DELAY_LINE
+  std::atomic<std::int64_t> dropped{};  ///< silenced frames, delayed ones beyond DELAY_LINE, both ways of a bus off
   std::atomic<std::int64_t> delayed{};
   std::atomic<std::int64_t> corrupted{};
   std::atomic<std::int64_t> replayed{};
@@ -104,7 +114,7 @@ class FrameFaults {
     std::string name;
     std::vector<FrameTarget> targets;
     std::vector<can::Frame> replayFrames;  ///< by target: the frame captured at apply
-    std::size_t bus{};                     ///< babble
+    std::size_t bus{};                     ///< babble, busoff
     std::int64_t periodNs{};               ///< babble
     std::int64_t nextNs{NEVER};            ///< babble
     bool claimPending{};
@@ -134,6 +144,7 @@ class FrameFaults {
   std::size_t m_historyCount{};
   std::vector<Held> m_held;  ///< capacity DELAY_LINE, in send order
   std::uint64_t m_babbleCounter{};
+  std::size_t m_cutBuses{};  ///< bus off faults active
 };
 
 template <typename Out>
@@ -150,6 +161,10 @@ template <typename Out>
 void FrameFaults::send(std::size_t busIndex, const can::Frame& frame, std::int64_t nowNs, Out&& out) noexcept {
   if (m_faults.empty()) {
     emit(busIndex, frame.id, frame, nowNs, out);
+    return;
+  }
+  if (cut(busIndex)) {
+    dropped.fetch_add(1, std::memory_order_relaxed);
     return;
   }
   can::Frame sent = frame;
@@ -179,6 +194,7 @@ void FrameFaults::send(std::size_t busIndex, const can::Frame& frame, std::int64
         break;
       case FrameFaultKind::Claim:
       case FrameFaultKind::Babble:
+      case FrameFaultKind::BusOff:
         break;
     }
   }
@@ -199,7 +215,9 @@ void FrameFaults::step(std::int64_t nowNs, Out&& out) noexcept {
   if (!m_held.empty()) {
     std::size_t kept = 0;
     for (std::size_t i = 0; i < m_held.size(); ++i) {
-      if (m_held[i].dueNs <= nowNs) {
+      if (m_held[i].dueNs <= nowNs && cut(m_held[i].bus)) {
+        dropped.fetch_add(1, std::memory_order_relaxed);
+      } else if (m_held[i].dueNs <= nowNs) {
         emit(m_held[i].bus, m_held[i].id, m_held[i].frame, nowNs, out);
       } else {
         m_held[kept++] = m_held[i];
@@ -211,7 +229,7 @@ void FrameFaults::step(std::int64_t nowNs, Out&& out) noexcept {
     if (fault.claimPending) {
       fault.claimPending = false;
       for (std::size_t b = 0; b < m_buses.size(); ++b) {
-        if (!m_buses[b].vcuName) continue;
+        if (!m_buses[b].vcuName || cut(b)) continue;
         const j1939::Name hostile = j1939::Name::fromValue(m_buses[b].vcuName->toValue() - 1);
         const j1939::NamePayload bytes = j1939::encodeName(hostile);
         can::Frame claim;
@@ -224,7 +242,7 @@ void FrameFaults::step(std::int64_t nowNs, Out&& out) noexcept {
       }
     }
     if (fault.request.kind != FrameFaultKind::Babble) continue;
-    for (std::size_t n = 0; n < BABBLE_BURST && fault.nextNs <= nowNs; ++n) {
+    for (std::size_t n = 0; n < BABBLE_BURST && fault.nextNs <= nowNs && !cut(fault.bus); ++n) {
       can::Frame babble;
       babble.id = BABBLE_CAN_ID;
       babble.flags = can::FLAG_EXTENDED;

@@ -68,7 +68,7 @@ bool StatePlanner::setSignal(const std::string& key, double value) {
 
 /// The operator signals to set for condition `node` to hold (the first operator branch of
 /// an `any`, every one of an `all`); false when the condition reads none.
-bool StatePlanner::operatorSets(std::uint32_t node, std::vector<std::pair<std::string, double>>& sets) const {
+bool StatePlanner::operatorSets(std::uint32_t node, Sets& sets) const {
   if (node == fsm::NONE) return false;
   const fsm::ConditionNode& condition = m_machine.nodes[node];
   switch (condition.kind) {
@@ -102,30 +102,154 @@ bool StatePlanner::operatorSets(std::uint32_t node, std::vector<std::pair<std::s
   }
 }
 
-/// The first transition of a shortest path from `from` to any of `targets` (breadth first
-/// over fsm.json's transitions), or nullptr.
-const fsm::Transition* StatePlanner::firstStep(std::uint32_t from, const std::vector<std::uint32_t>& targets,
-                                               const std::vector<const fsm::Transition*>& avoid) const {
+std::optional<double> StatePlanner::valueAfter(signals::SignalIndex index, const Sets& sets) const {
+  const std::string& key = m_stack.catalog[index].key;
+  for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
+    if (it->first == key) return it->second;
+  }
+  return valueOf(index);
+}
+
+bool StatePlanner::operatorHolds(const fsm::ConditionNode& condition, double value) const {
+  switch (condition.op) {
+    case fsm::CompareOp::Eq:
+      return value == condition.value;
+    case fsm::CompareOp::Ne:
+      return value != condition.value;
+    case fsm::CompareOp::Lt:
+      return value < condition.value;
+    case fsm::CompareOp::Gt:
+      return value > condition.value;
+    case fsm::CompareOp::Le:
+      return value <= condition.value;
+    case fsm::CompareOp::Ge:
+      return value >= condition.value;
+    case fsm::CompareOp::In:
+      for (std::uint32_t i = 0; i < condition.count; ++i) {
+        if (value == m_machine.constants[condition.first + i]) return true;
+      }
+      return false;
+  }
+  return false;
+}
+
+/// An `all` turns false with one operator branch false, an `any` only with every operator
+/// branch false (its vehicle branches are not the planner's to change).
+bool StatePlanner::operatorBlocks(std::uint32_t node, const Sets& sets, Sets& blocks) const {
+  if (node == fsm::NONE) return false;
+  const fsm::ConditionNode& condition = m_machine.nodes[node];
+  switch (condition.kind) {
+    case fsm::NodeKind::Compare: {
+      const signals::SignalIndex index = m_machine.signals[condition.signal].index;
+      const signals::SignalInfo& info = m_stack.catalog[index];
+      if (!info.key.starts_with(OPERATOR_PREFIX)) return false;
+      const auto value = valueAfter(index, sets);
+      if (!value || !operatorHolds(condition, *value)) return false;
+      // the switch's first named value for which the comparison fails (0 / 1 without names)
+      std::vector<double> candidates;
+      for (const auto& [number, text] : info.valueTexts) candidates.push_back(static_cast<double>(number));
+      if (candidates.empty()) candidates = {0, 1};
+      for (const double candidate : candidates) {
+        if (!operatorHolds(condition, candidate)) {
+          blocks.emplace_back(info.key, candidate);
+          return true;
+        }
+      }
+      return false;
+    }
+    case fsm::NodeKind::All:
+      for (std::uint32_t i = 0; i < condition.count; ++i) {
+        if (operatorBlocks(m_machine.children[condition.first + i], sets, blocks)) return true;
+      }
+      return false;
+    case fsm::NodeKind::Any: {
+      bool any = false;
+      for (std::uint32_t i = 0; i < condition.count; ++i) {
+        any = operatorBlocks(m_machine.children[condition.first + i], sets, blocks) || any;
+      }
+      return any;
+    }
+    default:
+      return false;
+  }
+}
+
+void StatePlanner::blockEarlier(std::uint32_t state, const fsm::Transition* wanted, const Sets& sets,
+                                Sets& blocks) const {
+  for (const fsm::Transition& transition : m_machine.states[state].transitions) {
+    if (&transition == wanted) return;
+    if (transition.broken || transition.target == wanted->target || transition.target == state) continue;
+    Sets found;
+    if (!operatorBlocks(transition.condition, sets, found)) continue;
+    for (const auto& block : found) {
+      // never undo what the wanted step needs
+      const bool needed =
+          std::any_of(sets.begin(), sets.end(), [&](const auto& set) { return set.first == block.first; });
+      if (!needed) blocks.push_back(block);
+    }
+  }
+}
+
+bool StatePlanner::raisesFault(std::uint32_t state) const {
+  const auto& entry = m_machine.states[state].entry;
+  return std::any_of(entry.begin(), entry.end(),
+                     [](const fsm::Action& action) { return action.kind == fsm::ActionKind::RaiseFault; });
+}
+
+/// Breadth first over fsm.json's transitions; from each state the transitions an operator
+/// input fires come before those it can only wait for.
+std::vector<const fsm::Transition*> StatePlanner::pathTo(std::uint32_t from, const std::vector<std::uint32_t>& targets,
+                                                         const std::vector<const fsm::Transition*>& avoid,
+                                                         bool throughFaultStates) const {
   const std::size_t count = m_machine.states.size();
-  std::vector<const fsm::Transition*> firstEdge(count, nullptr);
+  std::vector<const fsm::Transition*> edgeInto(count, nullptr);
+  std::vector<std::uint32_t> previous(count, fsm::NONE);
   std::vector<bool> seen(count, false);
   std::deque<std::uint32_t> queue{from};
   seen[from] = true;
   while (!queue.empty()) {
     const std::uint32_t state = queue.front();
     queue.pop_front();
-    for (const fsm::Transition& transition : m_machine.states[state].transitions) {
-      if (transition.broken || seen[transition.target]) continue;
-      if (std::find(avoid.begin(), avoid.end(), &transition) != avoid.end()) continue;
-      seen[transition.target] = true;
-      firstEdge[transition.target] = state == from ? &transition : firstEdge[state];
-      if (std::find(targets.begin(), targets.end(), transition.target) != targets.end()) {
-        return firstEdge[transition.target];
+    for (const bool byOperator : {true, false}) {
+      for (const fsm::Transition& transition : m_machine.states[state].transitions) {
+        if (transition.broken || seen[transition.target]) continue;
+        if (std::find(avoid.begin(), avoid.end(), &transition) != avoid.end()) continue;
+        Sets sets;
+        if (operatorSets(transition.condition, sets) != byOperator) continue;
+        const bool isTarget = std::find(targets.begin(), targets.end(), transition.target) != targets.end();
+        if (!isTarget && !throughFaultStates && raisesFault(transition.target)) continue;
+        seen[transition.target] = true;
+        edgeInto[transition.target] = &transition;
+        previous[transition.target] = state;
+        if (isTarget) {
+          std::vector<const fsm::Transition*> path;
+          for (std::uint32_t at = transition.target; at != from; at = previous[at]) path.push_back(edgeInto[at]);
+          std::reverse(path.begin(), path.end());
+          return path;
+        }
+        queue.push_back(transition.target);
       }
-      queue.push_back(transition.target);
     }
   }
-  return nullptr;
+  return {};
+}
+
+std::optional<double> StatePlanner::valueOf(signals::SignalIndex index) const {
+  if (const auto reading = read(index)) return reading->value;
+  for (const fsm::SignalRef& ref : m_machine.signals) {
+    if (ref.index == index && ref.initial) return *ref.initial;
+  }
+  return std::nullopt;
+}
+
+bool StatePlanner::waitUntil(const std::function<bool()>& done, std::chrono::steady_clock::time_point deadline) {
+  std::uint32_t epoch = m_table.changeEpoch();
+  for (;;) {
+    if (done()) return true;
+    const auto left = deadline - std::chrono::steady_clock::now();
+    if (left <= 0ns) return false;
+    epoch = m_table.waitForChange(epoch, std::min<std::chrono::nanoseconds>(left, 100ms));
+  }
 }
 
 /// Waits (table change futex) until the FSM state is not `state`, at most until `deadline`.
@@ -151,12 +275,22 @@ std::string StatePlanner::reach(const std::vector<std::uint32_t>& targets) {
     const auto state = currentState();
     if (!state) return "the FSM state is unknown (is vcu-fsm running?)";
     if (std::find(targets.begin(), targets.end(), *state) != targets.end()) return {};
-    const fsm::Transition* transition = firstStep(*state, targets, avoid);
-    if (transition == nullptr) {
+    // a way round a fault state only when there is no other
+    auto path = pathTo(*state, targets, avoid, false);
+    if (path.empty()) path = pathTo(*state, targets, avoid, true);
+    if (path.empty()) {
       return stuck.empty() ? "no transition path from " + stateName(state) + " in " + m_machine.file : stuck;
     }
-    std::vector<std::pair<std::string, double>> sets;
+    const fsm::Transition* transition = path.front();
+    Sets sets;
     (void)operatorSets(transition->condition, sets);
+    // switches left on that would take an earlier transition, here or in the next state
+    Sets blocks;
+    blockEarlier(*state, transition, sets, blocks);
+    if (path.size() > 1) blockEarlier(transition->target, path[1], sets, blocks);
+    for (const auto& [key, value] : blocks) {
+      if (!setSignal(key, value)) return "cannot set " + key;
+    }
     for (const auto& [key, value] : sets) {
       if (!setSignal(key, value)) return "cannot set " + key;
     }

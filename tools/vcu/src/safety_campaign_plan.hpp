@@ -6,6 +6,15 @@
 // every one of an `all`), and the FSM is waited for on the signal table's change futex.
 // Conditions on the vehicle (the battery connecting) are waited for. A step that does not
 // fire within the step timeout (plus its `after`) is avoided and the path planned again.
+// The path:
+//   - passes through no state whose entry raises a fault (Crash, Battery Fault, ...) unless
+//     no other path exists: such a state is a target, never a way round;
+//   - from each state takes first the transitions an operator input fires, then the ones
+//     it waits for (Driving -> Disconnecting by ConnectDriving = Off, not by "the battery
+//     no longer reports connected for 1 s");
+//   - an operator switch left on that would fire an earlier transition of the same state
+//     (fsm.json's order is its priority) is switched off first: ConnectDriving = Off before
+//     ACCharging = AC charging in Ready.
 //
 //   StatePlanner planner(stack, machine, table, 15.0, streams.err);
 //   std::string why = planner.reach({*machine.findState("Driving")});
@@ -17,6 +26,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -43,6 +53,12 @@ class StatePlanner {
                Sink& warnings);
 
   [[nodiscard]] std::optional<SlotReading> read(signals::SignalIndex index) const;
+  /// The value vcu-fsm reads for the signal: as read(), else the machine's initial value of
+  /// an internal signal nobody wrote yet; empty when neither is known.
+  [[nodiscard]] std::optional<double> valueOf(signals::SignalIndex index) const;
+  /// Waits on the table's change futex (looking at least every 100 ms) until `done` or
+  /// `deadline`; true when done.
+  bool waitUntil(const std::function<bool()>& done, std::chrono::steady_clock::time_point deadline);
   /// internal.fsm.state as a state index; empty when unknown.
   [[nodiscard]] std::optional<std::uint32_t> currentState() const;
   [[nodiscard]] std::string stateName(std::optional<std::uint32_t> state) const;
@@ -52,9 +68,23 @@ class StatePlanner {
   std::string reach(const std::vector<std::uint32_t>& targets);
 
  private:
-  bool operatorSets(std::uint32_t node, std::vector<std::pair<std::string, double>>& sets) const;
-  [[nodiscard]] const fsm::Transition* firstStep(std::uint32_t from, const std::vector<std::uint32_t>& targets,
-                                                 const std::vector<const fsm::Transition*>& avoid) const;
+  using Sets = std::vector<std::pair<std::string, double>>;
+  bool operatorSets(std::uint32_t node, Sets& sets) const;
+  /// Adds to `blocks` the operator switches to change so that condition `node` turns false
+  /// once `sets` are applied; false when it reads no operator switch that would hold.
+  bool operatorBlocks(std::uint32_t node, const Sets& sets, Sets& blocks) const;
+  /// `condition` compares an operator switch, and holds once `sets` are applied.
+  [[nodiscard]] bool operatorHolds(const fsm::ConditionNode& condition, double value) const;
+  [[nodiscard]] std::optional<double> valueAfter(signals::SignalIndex index, const Sets& sets) const;
+  /// Blocks for every transition of `state` before `wanted` (fsm.json's priority) to
+  /// another state that an operator switch would fire once `sets` are applied.
+  void blockEarlier(std::uint32_t state, const fsm::Transition* wanted, const Sets& sets, Sets& blocks) const;
+  /// The transitions of a shortest path from `from` to any of `targets`; empty when none.
+  [[nodiscard]] std::vector<const fsm::Transition*> pathTo(std::uint32_t from,
+                                                           const std::vector<std::uint32_t>& targets,
+                                                           const std::vector<const fsm::Transition*>& avoid,
+                                                           bool throughFaultStates) const;
+  [[nodiscard]] bool raisesFault(std::uint32_t state) const;
   std::optional<std::uint32_t> waitForStateChange(std::uint32_t state, std::chrono::steady_clock::time_point deadline);
 
   const Stack& m_stack;

@@ -5,9 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <fstream>
-#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -27,9 +25,9 @@
 #include "openvcu/safety/safety_case.hpp"
 #include "openvcu/signals/table.hpp"
 #include "safety_campaign.hpp"
+#include "safety_campaign_inject.hpp"
 #include "safety_campaign_plan.hpp"
 #include "safety_commands.hpp"
-#include "sim_commands.hpp"
 
 namespace openvcu::cli {
 namespace {
@@ -71,12 +69,6 @@ struct Watch {
   std::uint64_t beatsSeen{};                 ///< Restarted: the heartbeat updates last looked at
 };
 
-/// A fault applied, and how to take it back.
-struct Applied {
-  std::string label;
-  std::function<void()> clear;
-};
-
 class Campaign {
  public:
   Campaign(const Stack& stack, fsm::Machine machine, signals::SignalTable table, ipc::EventBus events,
@@ -85,6 +77,7 @@ class Campaign {
         m_machine(std::move(machine)),
         m_table(std::move(table)),
         m_planner(stack, m_machine, m_table, options.stepTimeoutSeconds, streams.err),
+        m_injector(stack, options.stack, m_planner, streams.err),
         m_events(std::move(events)),
         m_options(options),
         m_streams(streams),
@@ -118,7 +111,7 @@ class Campaign {
     result.during = hazard.during;
     std::vector<const safety::Injection*> runnable;
     for (const safety::Injection& fault : hazard.faults) {
-      if (const std::string why = unsupported(fault); !why.empty()) {
+      if (const std::string why = m_injector.whyNot(fault); !why.empty()) {
         result.notInjected.push_back(why);
       } else {
         runnable.push_back(&fault);
@@ -150,36 +143,6 @@ class Campaign {
 
  private:
   // ---- what is watched --------------------------------------------------------------------
-
-  /// Why the campaign cannot inject `fault` today; empty when it can.
-  static std::string unsupported(const safety::Injection& fault) {
-    using safety::InjectKind;
-    const std::string kind(safety::injectKindName(fault.kind));
-    switch (fault.kind) {
-      case InjectKind::Silence:
-      case InjectKind::Delay:
-      case InjectKind::Replay:
-      case InjectKind::Spoof:
-      case InjectKind::Babble:
-      case InjectKind::AddressClaim:
-      case InjectKind::Kill:
-      case InjectKind::Stop:
-      case InjectKind::GpioStuck:
-      case InjectKind::SimFault:
-        return {};
-      case InjectKind::Corrupt:
-        if (fault.validCrc.value_or(false))
-          return "corrupt with a valid J1939-76 CRC: vcu inject corrupt has no such mode";
-        return {};
-      case InjectKind::FreezeCounter:
-        return "freezeCounter: vcu inject has no frozen sequence counter";
-      case InjectKind::BusOff:
-        return "busOff: vcu inject has no bus-off of a link";
-      case InjectKind::Signal:
-        return "signal " + fault.signal + ": vcu inject cannot make a simulated node report a value";
-    }
-    return kind + ": unknown injection";
-  }
 
   std::vector<Watch> watchesOf(const safety::Hazard& hazard, HazardResult& result) {
     std::vector<Watch> watches;
@@ -303,144 +266,6 @@ class Campaign {
     return watches;
   }
 
-  // ---- injecting --------------------------------------------------------------------------
-
-  struct Stamp {
-    std::int64_t monotonicNs{};
-    std::int64_t realtimeNs{};
-  };
-
-  /// Applies `fault`; the stamp just before it took effect in *stamp. Empty and *error set on failure.
-  std::optional<Applied> inject(const safety::Injection& fault, Stamp* stamp, std::string* error) {
-    using safety::InjectKind;
-    StringSink out;
-    StringSink err;
-    const Streams captured{out, err};
-    auto failed = [&](const std::string& what) {
-      *error = what + ": " + (err.text().empty() ? out.text() : err.text());
-      while (!error->empty() && error->back() == '\n') error->pop_back();
-      return std::nullopt;
-    };
-    if (fault.kind == InjectKind::Kill || fault.kind == InjectKind::Stop) {
-      ProcessInjectOptions process;
-      process.action = fault.kind == InjectKind::Kill ? "kill" : "stop";
-      process.service = fault.service;
-      process.json = true;
-      if (runProcessInject(process, captured) != ExitCode::Ok)
-        return failed("process " + process.action + " " + fault.service);
-      const auto answer = nlohmann::json::parse(out.text(), nullptr, false);
-      if (answer.is_discarded()) return failed("process " + process.action);
-      *stamp = Stamp{answer.value("monotonicNs", std::int64_t{}), answer.value("realtimeNs", std::int64_t{})};
-      const auto pid = answer.value("pid", std::int32_t{});
-      const std::string executable = answer.value("executable", std::string());
-      Applied applied{std::string(fault.kind == InjectKind::Kill ? "SIGKILL " : "SIGSTOP ") + executable + " (pid " +
-                          std::to_string(pid) + ")",
-                      {}};
-      if (fault.kind == InjectKind::Stop) {
-        const std::string service = fault.service;
-        applied.clear = [service, pid] {
-          ProcessInjectOptions resume{.action = "cont", .service = service, .pid = pid, .json = true};
-          StringSink ignoredOut;
-          StringSink ignoredErr;
-          (void)runProcessInject(resume, Streams{ignoredOut, ignoredErr});  // gone: killed and restarted
-        };
-      }
-      return applied;
-    }
-    if (fault.kind == InjectKind::SimFault) {
-      // `vcu sim fault NAME on`: a fault the simulated node detects and reports itself; its
-      // answer carries no stamps, so the stamp is taken just before the request left
-      SimFaultOptions sim;
-      sim.stack.configPath = m_stack.config.path;
-      sim.stack.instance = m_stack.config.instance;
-      sim.name = fault.name;
-      *stamp = Stamp{clock::monotonicNs(), clock::realtimeNs()};
-      if (runSimFault(sim, captured) != ExitCode::Ok) return failed("sim fault " + fault.name);
-      return Applied{"sim fault " + fault.name, [sim]() mutable {
-                       sim.state = "off";
-                       StringSink ignoredOut;
-                       StringSink ignoredErr;
-                       (void)runSimFault(sim, Streams{ignoredOut, ignoredErr});
-                     }};
-    }
-    if (fault.kind == InjectKind::GpioStuck) {
-      // `vcu inject gpio`: an override of the simulated input, released with --off
-      GpioInjectOptions gpio;
-      gpio.stack.configPath = m_stack.config.path;
-      gpio.stack.instance = m_stack.config.instance;
-      gpio.line = fault.line;
-      gpio.level = fault.level.value_or(false) ? 1 : 0;
-      gpio.json = true;
-      if (runGpioInject(gpio, captured) != ExitCode::Ok) return failed("inject gpio " + fault.line);
-      const auto answer = nlohmann::json::parse(out.text(), nullptr, false);
-      if (answer.is_discarded()) return failed("inject gpio " + fault.line);
-      *stamp = Stamp{answer.value("requestedMonotonicNs", std::int64_t{}),
-                     answer.value("requestedRealtimeNs", std::int64_t{})};
-      return Applied{"gpio " + fault.line + "=" + std::to_string(gpio.level), [gpio]() mutable {
-                       gpio.off = true;
-                       StringSink ignoredOut;
-                       StringSink ignoredErr;
-                       (void)runGpioInject(gpio, Streams{ignoredOut, ignoredErr});
-                     }};
-    }
-    FrameInjectOptions frame;
-    frame.stack = m_options.stack;
-    frame.stack.configPath = m_stack.config.path;
-    frame.stack.instance = m_stack.config.instance;
-    frame.json = true;
-    switch (fault.kind) {
-      case InjectKind::Silence:
-        frame.kind = "silent";
-        frame.target = fault.message.empty() ? fault.node : fault.message;
-        break;
-      case InjectKind::Delay:
-        frame.kind = "delay";
-        frame.target = fault.message.empty() ? fault.node : fault.message;
-        frame.parameter = std::to_string(fault.delayMs.value_or(0));
-        break;
-      case InjectKind::Corrupt:
-        frame.kind = "corrupt";
-        frame.target = fault.message.empty() ? fault.node : fault.message;
-        break;
-      case InjectKind::Replay:
-        frame.kind = "replay";
-        frame.target = fault.message;
-        frame.parameter = std::to_string(fault.delayMs.value_or(2000));
-        break;
-      case InjectKind::Spoof:
-        frame.kind = "spoof";
-        frame.target = fault.message.empty() ? fault.node : fault.message;
-        frame.parameter = std::to_string(fault.address.value_or(0));
-        break;
-      case InjectKind::Babble:
-        frame.kind = "babble";
-        frame.target = fault.bus;
-        frame.parameter = formatNumber(fault.loadPercent.value_or(100));
-        break;
-      case InjectKind::AddressClaim:
-        frame.kind = "claim";
-        frame.target = std::to_string(fault.address.value_or(0));
-        break;
-      default:
-        *error = std::string(safety::injectKindName(fault.kind)) + ": cannot be injected";
-        return std::nullopt;
-    }
-    if (runFrameInject(frame, captured) != ExitCode::Ok) return failed("inject " + frameFaultKey(frame));
-    const auto answer = nlohmann::json::parse(out.text(), nullptr, false);
-    if (answer.is_discarded()) return failed("inject " + frameFaultKey(frame));
-    // the fault took effect between the request and the answer: the request is the earlier bound
-    *stamp = Stamp{answer.value("requestedMonotonicNs", std::int64_t{}),
-                   answer.value("requestedRealtimeNs", std::int64_t{})};
-    const std::string key = frameFaultKey(frame);
-    if (frame.kind == "claim") return Applied{key, {}};  // one frame: nothing to clear
-    return Applied{key, [frame]() mutable {
-                     frame.off = true;
-                     StringSink ignoredOut;
-                     StringSink ignoredErr;
-                     (void)runFrameInject(frame, Streams{ignoredOut, ignoredErr});
-                   }};
-  }
-
   // ---- watching ---------------------------------------------------------------------------
 
   /// Takes the frames before the injection; a bus watch whose last value there was already
@@ -465,7 +290,7 @@ class Campaign {
   }
 
   /// Looks at every watch once; `log` adds to the timeline.
-  void observe(std::vector<Watch>& watches, const Stamp& at, Repetition& repetition,
+  void observe(std::vector<Watch>& watches, const InjectionStamp& at, Repetition& repetition,
                std::optional<std::uint32_t>& lastState) {
     // the FSM state (and its changes, for the timeline)
     const auto stateIndex = m_stack.catalog.indexOf("internal.fsm.state");
@@ -578,12 +403,12 @@ class Campaign {
     }
     m_faults.clear();
 
-    std::vector<Applied> applied;
-    std::optional<Stamp> first;
+    std::vector<AppliedFault> applied;
+    std::optional<InjectionStamp> first;
     {
-      Stamp stamp;
+      InjectionStamp stamp;
       std::string error;
-      auto maybeApplied = inject(fault, &stamp, &error);
+      auto maybeApplied = m_injector.inject(fault, &stamp, &error);
       if (maybeApplied) {
         first = stamp;
         repetition.injected.push_back(maybeApplied->label);
@@ -633,6 +458,7 @@ class Campaign {
   fsm::Machine m_machine;
   signals::SignalTable m_table;
   StatePlanner m_planner;
+  FaultInjector m_injector;
   ipc::EventBus m_events;
   std::optional<ipc::Subscription> m_subscription;
   const SafetyCampaignOptions& m_options;
