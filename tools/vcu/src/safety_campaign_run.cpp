@@ -337,6 +337,9 @@ class Campaign {
           break;
         case ItemKind::GpioLevel:
           if (const auto level = m_planner.read(*watch.slot); level && level->value == watch.value) {
+            // e.g. Cl15 still in its on-delay after the state was reached: no reaction
+            if (level->timestampNs < at.monotonicNs)
+              watch.result.note = "already at the safe level before the injection";
             reached(watch, std::max(0.0, msBetween(at.monotonicNs, level->timestampNs)), repetition);
           }
           break;
