@@ -12,7 +12,7 @@ set -uo pipefail
 
 OUT=$1
 # shellcheck disable=SC1091
-. "$OUT/guest.env"   # VCU_CAN_RX VCU_CAN_TX VCU_GPIO VCU_FSM VCU_ECU_SIM VCU IOX_ROUDI SRC
+. "$OUT/guest.env"   # VCU_CAN_RX VCU_CAN_TX VCU_GPIO VCU_FSM VCU_ECU_SIM VCU VCU_WATCHDOG IOX_ROUDI SRC
 export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 HERE=$SRC/tests/kernel
 CFG=$OUT/vehicle.json   # merged below from config/hhea/vehicle.json + data/vehicle-overrides.json
@@ -468,6 +468,67 @@ fi
 detail="${hhea_steps[*]}; candump vcan0: ${vic_frames:-?} HVESSS1 frames from the VIC, ${vcu_frames:-?} frames from the VCU (SA 21); ${pairs:-}"
 if [[ $hhea_ok == 1 ]]; then result hhea_start_drive_sequence PASS "$detail"
 else result hhea_start_drive_sequence FAIL "$detail; state $(plane_h bus internal.fsm.state)"; fi
+
+# ---------------------------------------------------------------- 7. vcu-watchdog on a real watchdog device
+# softdog with a 2 s timeout that logs instead of rebooting (soft_noboot=1), fed by
+# vcu-watchdog beside the HHEA stack (its policy from a copy of the safety case: device
+# /dev/watchdog, no restart, since this script and not a supervisor started the services).
+# The device must stay quiet while every service beats, fire after vcu-fsm hangs (the
+# feeding stops once it is silent for 2500 ms), and fire when vcu-watchdog itself is killed
+# (the device is closed without the magic character).
+WCFG=$OUT/vehicle-watchdog.json
+$PY - "$HCFG" "$WCFG" "$OUT/safety-watchdog.json" <<'PYEOF'
+import json, sys
+config = json.load(open(sys.argv[1]))
+safety = json.load(open(config["safety"]))
+safety["watchdog"] = {"services": ["can-rx", "can-tx", "fsm", "gpio"], "silentAfterMs": 2500,
+                      "restart": False, "device": "/dev/watchdog"}
+json.dump(safety, open(sys.argv[3], "w"), indent=2)
+config["safety"] = sys.argv[3]
+json.dump(config, open(sys.argv[2], "w"), indent=2)
+PYEOF
+fired() { dmesg | grep -c 'softdog: Triggered'; }
+fired_more() { [[ $(fired) -gt $1 ]]; }
+last_fire() { dmesg | sed -n 's/^\[ *\([0-9.]*\)\] softdog: Triggered.*/\1/p' | tail -1; }
+since() { awk -v a="$1" -v b="$2" 'BEGIN {printf "%.2f", b - a}'; }
+wd_detail=""; wd_ok=0
+load_softdog() {
+  local m
+  for m in $(cat "$OUT/softdog/order"); do
+    if [[ $m == softdog ]]; then insmod "$OUT/softdog/$m.ko" soft_margin=2 soft_noboot=1 || return 1
+    else insmod "$OUT/softdog/$m.ko" || return 1; fi
+  done
+}
+if ! load_softdog || [[ ! -c /dev/watchdog ]]; then
+  wd_detail="softdog did not load: $(dmesg | grep -i softdog | tail -2 | tr '\n' '|')"
+elif ! start hhea-watchdog ready "$VCU_WATCHDOG" --config "$WCFG"; then
+  wd_detail="vcu-watchdog did not start: $(tail -3 "$OUT/hhea-watchdog.log" | tr '\n' '|')"
+else
+  wd_pid=${pids[-1]}
+  sleep 5   # 2.5 device timeouts with every service beating
+  quiet=$(fired)
+  fsm_pid=$(pgrep -x vcu-fsm)
+  stopped_at=$(cut -d' ' -f1 /proc/uptime)
+  kill -STOP "$fsm_pid"
+  if wait_for 20 fired_more "$quiet"; then hang_s=$(since "$stopped_at" "$(last_fire)"); fi
+  kill -CONT "$fsm_pid"
+  # fed again once vcu-fsm beats; then vcu-watchdog dies without closing the device properly
+  wait_for 10 grep -q "beats again" "$OUT/hhea-watchdog.log" && sleep 1.5
+  before_kill=$(fired)
+  killed_at=$(cut -d' ' -f1 /proc/uptime)
+  kill -KILL "$wd_pid"
+  if wait_for 20 fired_more "$before_kill"; then kill_s=$(since "$killed_at" "$(last_fire)"); fi
+  wd_detail="$quiet fires in 5 s while every service beat; vcu-fsm SIGSTOP -> fired after ${hang_s:-never (20 s)} s;"
+  wd_detail+=" vcu-watchdog SIGKILL -> fired after ${kill_s:-never (20 s)} s"
+  # a hang: the last beat up to 1 s and the last feed up to 1 s before the stop -> 2.5..4.6 s
+  # (+ the emulation's slack); a killed feeder: up to the 2 s timeout after its last feed
+  if [[ $quiet == 0 && -n ${hang_s:-} && -n ${kill_s:-} ]] &&
+     awk -v h="$hang_s" -v k="$kill_s" 'BEGIN {exit !(h >= 2.0 && h <= 8.0 && k >= 0.5 && k <= 5.0)}'; then
+    wd_ok=1
+  fi
+fi
+if [[ $wd_ok == 1 ]]; then result watchdog_device PASS "$wd_detail"
+else result watchdog_device FAIL "$wd_detail; $(grep -i 'silent\|board\|watchdog' "$OUT/hhea-watchdog.log" 2>/dev/null | tail -4 | tr '\n' '|')"; fi
 
 t "checks done"
 cleanup; trap - EXIT

@@ -122,6 +122,12 @@ done | awk '!seen[$0]++' | while read -r ko; do
   cp "$ko" "$IRD/mods/"; basename "$ko" .ko >> "$IRD/mods/order"
 done
 cp "$GS/gpio-sim.ko" "$IRD/mods/"; echo gpio-sim >> "$IRD/mods/order"
+# softdog is not loaded at boot: a guest script loads it (after the watchdog core it needs,
+# listed in load order in softdog/order) with its own parameters
+mkdir -p "$VMOUT/softdog"
+modprobe -d "$KROOT" -S "$ABI" --show-depends softdog | awk '$1=="insmod"{print $2}' | while read -r ko; do
+  cp "$ko" "$VMOUT/softdog/"; basename "$ko" .ko >> "$VMOUT/softdog/order"
+done
 # /init: load the modules, overlay the host root, chroot and run the guest script.
 # Unknown key=value pairs of the kernel command line arrive as its environment.
 cat > "$IRD/init" <<'EOF'
