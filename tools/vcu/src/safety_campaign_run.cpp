@@ -15,6 +15,7 @@
 #include "command_request.hpp"
 #include "diagnostics.hpp"
 #include "inject_commands.hpp"
+#include "openvcu/config/faults.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/matcher.hpp"
@@ -226,7 +227,7 @@ class Campaign {
       watch.result.detection = std::string(safety::detectionKindName(detection.kind));
       switch (detection.kind) {
         case DetectionKind::ServiceWatchdog:
-          watch.faultName = "service_silent." + detection.service;
+          watch.faultName = faults::serviceSilent(detection.service);
           break;
         case DetectionKind::Dtc:
           watch.faultName = detection.fault;
