@@ -162,8 +162,7 @@ void checkInjected(const nlohmann::json& hazard, const nlohmann::json& shipped) 
 
 }  // namespace
 
-TEST_CASE(
-    "the shipped HHEA safety case: the campaign injects every fault of every hazard and all but the restarts pass") {
+TEST_CASE("the shipped HHEA safety case: every fault injected, every hazard passes but two marginal items") {
   SKIP_UNLESS_ISOLATED();
   std::ifstream shippedFile(fs::path(OPENVCU_SOURCE_DIR) / "config" / "hhea" / "safety.json");
   const nlohmann::json shipped = nlohmann::json::parse(shippedFile);
