@@ -189,7 +189,7 @@ TEST_CASE("a watched service the watchdog does not watch or restart, or a silenc
   VehicleCopy copy("hhea");
   copy.replace("safety.json", R"("services": ["can-rx", "can-tx", "fsm", "gpio"])",
                R"("services": ["can-rx", "can-tx", "gpio"])");
-  copy.replace("safety.json", R"("silentAfterMs": 2500)", R"("silentAfterMs": 4500)");
+  copy.replace("safety.json", R"("silentAfterMs": 2500)", R"("silentAfterMs": 6500)");
   const std::string diagnostics = checkCopy(copy);
   CHECK(contains(diagnostics,
                  "/detection/0/service: service 'fsm' is not in /watchdog/services: nothing detects "
@@ -197,8 +197,8 @@ TEST_CASE("a watched service the watchdog does not watch or restart, or a silenc
   CHECK(
       contains(diagnostics, "/safeState/restarted/0: service 'fsm' is not in /watchdog/services: nothing restarts it"));
   CHECK(contains(diagnostics,
-                 "/detection/0/service: the watchdog counts a service silent after 4500 ms "
-                 "(/watchdog/silentAfterMs): not inside this hazard's FTTI of 4000 ms"));
+                 "/detection/0/service: the watchdog counts a service silent after 6500 ms "
+                 "(/watchdog/silentAfterMs): not inside this hazard's FTTI of 6000 ms"));
 }
 
 TEST_CASE("a vehicle without a J1939 address claim on the bus has no address to lose") {
