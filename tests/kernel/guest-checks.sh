@@ -489,6 +489,8 @@ json.dump(config, open(sys.argv[2], "w"), indent=2)
 PYEOF
 fired() { dmesg | grep -c 'softdog: Triggered'; }
 fired_more() { [[ $(fired) -gt $1 ]]; }
+feeds() { "$VCU" status --config "$WCFG" --stats 2>&1 | grep -o '\bfeeds=[0-9]*' | head -1 | cut -d= -f2; }
+feeds_more() { [[ $(feeds) -gt $1 ]]; }
 last_fire() { dmesg | sed -n 's/^\[ *\([0-9.]*\)\] softdog: Triggered.*/\1/p' | tail -1; }
 since() { awk -v a="$1" -v b="$2" 'BEGIN {printf "%.2f", b - a}'; }
 wd_detail=""; wd_ok=0
@@ -512,8 +514,12 @@ else
   kill -STOP "$fsm_pid"
   if wait_for 20 fired_more "$quiet"; then hang_s=$(since "$stopped_at" "$(last_fire)"); fi
   kill -CONT "$fsm_pid"
-  # fed again once vcu-fsm beats; then vcu-watchdog dies without closing the device properly
-  wait_for 10 grep -q "beats again" "$OUT/hhea-watchdog.log" && sleep 1.5
+  # fed again once vcu-fsm beats (no feed while it was silent, so the feeds counter, even as
+  # published a second late, grows only with a feed after the return); then vcu-watchdog
+  # dies without closing the device properly
+  if wait_for 10 grep -q "beats again" "$OUT/hhea-watchdog.log"; then
+    feeds_back=$(feeds); wait_for 10 feeds_more "${feeds_back:-0}"
+  fi
   before_kill=$(fired)
   killed_at=$(cut -d' ' -f1 /proc/uptime)
   kill -KILL "$wd_pid"
