@@ -152,19 +152,21 @@ std::optional<AppliedFault> FaultInjector::inject(const safety::Injection& fault
   frame.stack.configPath = m_stack.config.path;
   frame.stack.instance = m_stack.config.instance;
   frame.json = true;
+  // a frame fault names one message, else every message of a node
+  const std::string messageOrNode = fault.message.empty() ? fault.node : fault.message;
   switch (fault.kind) {
     case InjectKind::Silence:
       frame.kind = "silent";
-      frame.target = fault.message.empty() ? fault.node : fault.message;
+      frame.target = messageOrNode;
       break;
     case InjectKind::Delay:
       frame.kind = "delay";
-      frame.target = fault.message.empty() ? fault.node : fault.message;
+      frame.target = messageOrNode;
       frame.parameter = std::to_string(fault.delayMs.value_or(0));
       break;
     case InjectKind::Corrupt:
       frame.kind = "corrupt";
-      frame.target = fault.message.empty() ? fault.node : fault.message;
+      frame.target = messageOrNode;
       break;
     case InjectKind::Replay:
       frame.kind = "replay";
@@ -173,7 +175,7 @@ std::optional<AppliedFault> FaultInjector::inject(const safety::Injection& fault
       break;
     case InjectKind::Spoof:
       frame.kind = "spoof";
-      frame.target = fault.message.empty() ? fault.node : fault.message;
+      frame.target = messageOrNode;
       frame.parameter = std::to_string(fault.address.value_or(0));
       break;
     case InjectKind::Babble:
