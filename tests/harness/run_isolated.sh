@@ -11,22 +11,31 @@
 #     kernel ends every process it left behind (iox-roudi, services, java, Xvfb), and
 #     --kill-child does the same when ctest kills us on a timeout.
 # Directories under /tmp that the command needs (the build tree) are bound back into the
-# fresh /tmp at the same path with --keep. /run/openvcu (command sockets) is a private tmpfs
-# too. Supervisor variables that would leak in from
+# fresh /tmp at the same path with --keep. --keep-ro binds a directory at the same path
+# wherever it lives and makes that view read-only (the team kit beside the repository: its
+# corpus and oracle are read by tests, never written). /run/openvcu (command sockets) is a
+# private tmpfs too. Supervisor variables that would leak in from
 # outside (NOTIFY_SOCKET, WATCHDOG_*, JOURNAL_STREAM, OPENVCU_CONFIG) are cleared, and
 # OPENVCU_ISOLATED=1 tells the command it is inside.
 #
-#   run_isolated.sh [--keep DIR]... [--] COMMAND [ARG]...
+#   run_isolated.sh [--keep DIR]... [--keep-ro DIR]... [--] COMMAND [ARG]...
 #
 # Needs root or unprivileged user namespaces (then it adds --user --map-root-user).
 set -euo pipefail
 
 keep=()
+keepRo=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
-    --keep) keep+=("$2"); shift 2 ;;
+    --keep|--keep-ro)
+      if [[ $# -lt 2 || ! -d "$2" ]]; then
+        echo "run_isolated.sh: $1 ${2:-}: not a directory" >&2
+        exit 2
+      fi
+      if [[ "$1" == --keep ]]; then keep+=("$2"); else keepRo+=("$2"); fi
+      shift 2 ;;
     --) shift; break ;;
-    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,25p' "$0"; exit 0 ;;
     *) break ;;
   esac
 done
@@ -40,6 +49,7 @@ if [[ "${OPENVCU_ISOLATION_STAGE:-}" != "inside" ]]; then
   if [[ "$(id -u)" != 0 ]]; then userns=(--user --map-root-user); fi
   keepArgs=()
   for dir in "${keep[@]}"; do keepArgs+=(--keep "$dir"); done
+  for dir in "${keepRo[@]}"; do keepArgs+=(--keep-ro "$dir"); done
   OPENVCU_ISOLATION_STAGE=inside exec unshare "${userns[@]}" --mount --net --pid --fork --kill-child \
     --mount-proc --propagation private -- "$0" "${keepArgs[@]}" -- "$@"
 fi
@@ -51,6 +61,12 @@ for dir in "${keep[@]}"; do
   dir="$(cd "$dir" && pwd -P)"
   exec {fd}<"$dir"  # hold the directory open across the /tmp mount
   fds+=("$fd:$dir")
+done
+roFds=()
+for dir in "${keepRo[@]}"; do
+  dir="$(cd "$dir" && pwd -P)"
+  exec {fd}<"$dir"
+  roFds+=("$fd:$dir")
 done
 workdir="$(pwd -P)"
 
@@ -64,6 +80,12 @@ for entry in "${fds[@]}"; do
       # --no-canonicalize: resolve the fd link in the kernel, not to its (now hidden) path
       mount --no-canonicalize --bind "/proc/$$/fd/$fd" "$dir" ;;
   esac
+done
+for entry in "${roFds[@]}"; do
+  fd="${entry%%:*}"; dir="${entry#*:}"
+  mkdir -p "$dir"
+  mount --no-canonicalize --bind "/proc/$$/fd/$fd" "$dir"
+  mount -o remount,bind,ro "$dir"
 done
 cd "$workdir" 2>/dev/null || true
 
