@@ -19,6 +19,7 @@
 #include "openvcu/config/json.hpp"
 #include "openvcu/core/clock.hpp"
 #include "openvcu/display/health.hpp"
+#include "openvcu/display/values.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "openvcu/service/process_stats.hpp"
 #include "openvcu/signals/table.hpp"
@@ -276,7 +277,7 @@ class Top {
   /// The vehicle's key signals from its dashboard (dashboard.json beside vehicle.json, as
   /// vcu-hmi shows them): BATTERY = the header's SOC, the voltage and current dials and the
   /// charger; STATUS = the Vehicle tab's status keys, labelled as the dashboard's items (else
-  /// the signal's name), wrapped at about 100 columns. Nothing here names one vehicle's signal.
+  /// transmitter and signal), wrapped at about 100 columns. Nothing here names one vehicle's signal.
   void keySignals(std::string& out) {
     if (!m_dashboardError.empty()) {
       out += "DASHBOARD   not loaded: " + m_dashboardError + "\n";
@@ -304,13 +305,14 @@ class Top {
     if (!line.empty()) out += label + line + "\n";
   }
 
-  /// A status key's label: the dashboard item's for the same key, else the key's last part.
+  /// A status key's label: the dashboard item's for the same key, else transmitter and
+  /// signal as vcu-hmi's Vehicle tab labels it ("HVLP_SA72 InverterStatus", "relay Cl15"):
+  /// several senders of one message name stay apart.
   [[nodiscard]] std::string statusLabel(const std::string& key) const {
     for (const config::DashboardItem& item : m_dashboard->items) {
       if (item.key == key) return item.label;
     }
-    const auto dot = key.rfind('.');
-    return dot == std::string::npos ? key : key.substr(dot + 1);
+    return display::shortLabel(key);
   }
 
   void loadDashboard() {
