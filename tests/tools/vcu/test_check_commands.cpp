@@ -145,6 +145,41 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
   CHECK_FALSE(contains(result.err, "note:"));
 }
 
+TEST_CASE("vcu check takes the vehicle file or its folder as a positional argument, as --config (#42)") {
+  const std::string vehicle = (HHEA_FOLDER / "vehicle.json").string();
+  const RunResult byOption = runVcu({"check", "--config", vehicle});
+  const RunResult byFile = runVcu({"check", vehicle});
+  const RunResult byFolder = runVcu({"check", HHEA_FOLDER.string()});
+
+  CHECK_MESSAGE(byFile.exitCode == byOption.exitCode, byFile.err);
+  CHECK_MESSAGE(byFolder.exitCode == byOption.exitCode, byFolder.err);
+  CHECK(byFile.exitCode == EXIT_OK);
+  CHECK(byFolder.exitCode == EXIT_OK);
+  CHECK(contains(byFile.out, "vehicle 'hhea': "));
+  CHECK(byFile.out == byOption.out);  // the same files, the same counts
+  CHECK(contains(byFolder.out, "vehicle 'hhea': "));
+  CHECK(contains(byFolder.out, (HHEA_FOLDER / "vehicle.json").string() + ": 0 errors"));
+}
+
+TEST_CASE("vcu check refuses a positional path and a different --config, and a folder without vehicle.json") {
+  const std::string vehicle = (HHEA_FOLDER / "vehicle.json").string();
+  const std::string other = hheaCopy("check_other");
+  const RunResult different = runVcu({"check", vehicle, "--config", other});
+  CHECK(different.exitCode == EXIT_USAGE);
+  CHECK(contains(different.err, "two configurations given: '" + vehicle + "' and --config '" + other + "'"));
+
+  // the same vehicle named twice, once by its folder: no conflict
+  const RunResult same = runVcu({"check", HHEA_FOLDER.string(), "--config", vehicle});
+  CHECK_MESSAGE(same.exitCode == EXIT_OK, same.err);
+
+  const fs::path empty = scratchFolder() / "check_empty_folder";
+  fs::create_directories(empty);
+  const RunResult noVehicle = runVcu({"check", empty.string()});
+  CHECK(noVehicle.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(noVehicle.err, (empty / "vehicle.json").string()));
+  CHECK(contains(noVehicle.err, "a folder given as the configuration must hold vehicle.json"));
+}
+
 TEST_CASE("vcu check reports a broken simulation, dashboard and schedule together with their locations (#19)") {
   const std::string vehicle = hheaCopy("check_broken", "simulation.json", "{\"vehicle\": {\"x\": 1,}}");
   writeScratchFile("check_broken/dashboard.json", "[1, 2]");

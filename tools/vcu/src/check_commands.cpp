@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli_checks.hpp"
 #include "diagnostics.hpp"
 #include "openvcu/check/vehicle_check.hpp"
 #include "openvcu/config/catalog.hpp"
@@ -42,17 +43,21 @@ constexpr const char* FOOTER =
     "addresses and identifiers (docs/config.md, \"Whole-vehicle checks\").\n"
     "Diagnostics on stderr, one per line with file:line:column or\n"
     "the JSON path; then one summary line per file and a total on stdout.\n"
-    "The configuration: --config FILE, else $OPENVCU_CONFIG, else the running stack's.\n"
+    "The configuration: PATH or --config FILE (vehicle.json or the folder holding it; both\n"
+    "given must name the same file), else $OPENVCU_CONFIG, else the running stack's.\n"
     "\n"
-    "Example:\n"
-    "  vcu check --config config/hhea/vehicle.json\n"
+    "Examples:\n"
+    "  vcu check config/hhea/vehicle.json\n"
+    "  vcu check config/hhea\n"
     "Exit: 0 no errors (warnings allowed), 1 errors, 2 usage error.\n";
 
 std::string plural(std::size_t count, const std::string& word) {
   return std::to_string(count) + " " + word + (count == 1 ? "" : "s");
 }
 
-std::string normal(const std::string& path) { return fs::path(path).lexically_normal().string(); }
+std::string normal(const std::string& path) {
+  return fs::path(path).lexically_normal().string();
+}
 
 /// The files of the vehicle in report order, with their counts.
 class FileTally {
@@ -231,10 +236,24 @@ FileCounts checkFsmFile(const std::string& file, const Stack& stack, bool quiet,
 }
 
 ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
+  StackOptions stackOptions = options.stack;
+  if (!options.path.empty()) {
+    if (!stackOptions.configPath.empty() && !sameVehicleFile(options.path, stackOptions.configPath)) {
+      reportError(streams.err, "two configurations given: '" + options.path + "' and --config '" +
+                                   stackOptions.configPath + "'; give one");
+      return ExitCode::Usage;
+    }
+    stackOptions.configPath = options.path;
+  }
   ExitCode exitCode = ExitCode::Ok;
-  const auto maybePath = resolveConfigPath(options.stack, streams.err, &exitCode);
+  const auto maybePath = resolveConfigPath(stackOptions, streams.err, &exitCode);
   if (!maybePath) return exitCode;
-  const std::string& vehiclePath = *maybePath;
+  const Result<std::string> vehicleFile = vehicleFileOf(*maybePath);
+  if (!vehicleFile) {
+    report(streams.err, vehicleFile.error());
+    return ExitCode::Failure;
+  }
+  const std::string& vehiclePath = *vehicleFile;
   FileTally tally;
   tally.add(vehiclePath);
 
@@ -313,8 +332,9 @@ ExitCode runCheck(const VehicleCheckOptions& options, Streams streams) {
       if (telemetry) {
         for (const config::TelemetrySignal& signal : telemetry->signals) {
           if (!stack->catalog.indexOf(signal.name)) {
-            tally.report(Error{"/signals: unknown signal '" + signal.name + "'", Location{vehicle.telemetryFile, 0, 0, {}}},
-                         options.quiet, streams.err);
+            tally.report(
+                Error{"/signals: unknown signal '" + signal.name + "'", Location{vehicle.telemetryFile, 0, 0, {}}},
+                options.quiet, streams.err);
           }
         }
       }
@@ -352,8 +372,10 @@ void registerCheckCommands(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<VehicleCheckOptions>();
   CLI::App* command = app.add_subcommand("check", DESCRIPTION);
   command->footer(FOOTER);
-  command->add_option("-c,--config", options->stack.configPath,
-                      "the vehicle configuration (default: $OPENVCU_CONFIG, else the running stack's)")
+  command->add_option("PATH", options->path, "the vehicle configuration: vehicle.json or its folder")->type_name("");
+  command
+      ->add_option("-c,--config", options->stack.configPath,
+                   "the same as PATH (default: $OPENVCU_CONFIG, else the running stack's)")
       ->option_text("FILE");
   command->add_flag("-q,--quiet", options->quiet, "errors only, no warnings or notes");
   command->callback([options, &context] { context.exitCode = runCheck(*options, context.streams); });

@@ -2,7 +2,7 @@
 // `vcu check`: every file of a vehicle, checked with the loaders the services use, every
 // problem reported (issue 19; also what `./run.sh --check` runs).
 //
-//   vcu check --config config/hhea/vehicle.json
+//   vcu check config/hhea            (the folder, the file, or --config FILE: the same)
 //   (stderr) schedule.json:4:21: error: syntax error while parsing object - unexpected '}'
 //   (stdout) config/hhea/vehicle.json: 0 errors, 0 warnings
 //            config/hhea/hhea.dbc: 0 errors, 0 warnings
@@ -39,6 +39,7 @@ class App;
 namespace openvcu::cli {
 
 struct VehicleCheckOptions {
+  std::string path;    ///< PATH: vehicle.json or its folder; empty: stack.configPath decides
   StackOptions stack;  ///< --config (the instance is not used)
   bool quiet{};        ///< errors only on stderr (warnings still counted)
 };
