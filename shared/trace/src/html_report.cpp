@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "openvcu/core/text.hpp"
+#include "openvcu/trace/frame_writer.hpp"
 #include "openvcu/trace/svg_chart.hpp"
 #include "report_assets.hpp"
 #include "svg_writer.hpp"
@@ -172,6 +173,7 @@ void appendHeader(std::string& out, const ReportInput& input) {
     esc(out, value);
     out += "</td></tr>";
   };
+  row("first frame", formatFixed(stats.startS, 6) + " s (the log's time; the time axes count from it)");
   row("duration", formatFixed(stats.durationS, 3) + " s");
   row("frames", count(stats.frames) + (stats.skippedFrames ? " (" + count(stats.skippedFrames) +
                                                                     " of streams beyond the limit of " +
@@ -464,11 +466,16 @@ void appendFindingSection(std::string& out, const ReportInput& input) {
     out += "<p>The first " + count(findings.kept.size()) + " of " + count(findings.total) +
            " findings (the counts above are of all).</p>";
   }
-  openTable(out, {"time [s]", "bus", "severity", "check", "finding"}, "rllll");
+  // the log's own time first (as its lines stamp it: grep finds the frame), then the
+  // time axis' seconds from the first frame
+  openTable(out, {"log time [s]", "from start [s]", "bus", "severity", "check", "finding"}, "rrllll");
+  std::string logTime;
   for (const Finding& finding : findings.kept) {
-    appendRow(out, {formatFixed(secondsFromStart(input, finding.timeNs), 6), busName(input, finding.bus),
+    logTime.clear();
+    appendSeconds(logTime, finding.timeNs);
+    appendRow(out, {logTime, formatFixed(secondsFromStart(input, finding.timeNs), 6), busName(input, finding.bus),
                     std::string(severityName(finding.severity)), std::string(checkName(finding.check)), finding.text},
-              "rlllw", finding.severity == Severity::Fault     ? "sev-fault"
+              "rrlllw", finding.severity == Severity::Fault     ? "sev-fault"
                        : finding.severity == Severity::Warning ? "sev-warning"
                                                                : "");
   }

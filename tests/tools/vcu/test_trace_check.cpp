@@ -4,6 +4,8 @@
 #include <doctest/doctest.h>
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -77,12 +79,13 @@ TEST_CASE("vcu trace check exits 1 on a broken J1939-76 pair and names it with i
   CHECK(result.err.empty());  // exit 1 for the fault alone
   j1939::SafetyPayload broken = SDM_DATA;
   broken[7] = 0xFE;
-  char expected[160];
+  char expected[192];
   std::snprintf(expected, sizeof expected,
-                "0.200292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, "
+                "\n1700000000.200292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: SHM CRC "
+                "0x8100EFA3, "
                 "SDM data CRC 0x%08X\n",
                 j1939::crc32J1939_76(broken));
-  CHECK(contains(result.out, expected));
+  CHECK(contains("\n" + result.out, expected));  // a whole line: the log's time, not a part of it
   CHECK(contains(result.out, "info j1939-76 vehicle: HVESSC1_PGN6912 (0x18"));  // configured, not in this log
   CHECK(contains(result.out, "findings: 1 faults, 0 warnings, 4 infos; faults by check: j1939-76 1\n"));
 }
@@ -94,7 +97,8 @@ TEST_CASE("vcu trace check --format json lists the finding, the pair's delta and
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
   const nlohmann::json document = nlohmann::json::parse(result.out);
   REQUIRE(document["findings"].size() == 1);
-  CHECK(document["findings"][0]["t"].get<double>() == doctest::Approx(0.200292));
+  CHECK(document["findings"][0]["t"].get<double>() == doctest::Approx(1700000000.200292).epsilon(1e-15));
+  CHECK(document["findings"][0]["t_rel"].get<double>() == doctest::Approx(0.200292));
   CHECK(document["findings"][0]["severity"] == "fault");
   CHECK(document["findings"][0]["check"] == "j1939-76");
   REQUIRE(document["pairs"].size() == 1);
@@ -122,8 +126,77 @@ TEST_CASE("vcu trace check --dbc FILE LOG names the pairs it finds from the DBC"
 
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
   CHECK(result.err.empty());
-  CHECK(contains(result.out, "0.200292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: "));
+  CHECK(contains("\n" + result.out,
+                 "\n1700000000.200292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: "));
   CHECK(contains(result.out, "S1_ES_PGN61427 (0x0CEFF321) on vehicle: 50 SDMs, 1 faulty"));
+}
+
+namespace {
+
+/// The first field of the first line of `out` that holds `part`; empty when none does.
+std::string firstFieldOfLineWith(const std::string& out, const std::string& part) {
+  for (const std::string& text : splitLines(out)) {
+    if (contains(text, part)) return text.substr(0, text.find(' '));
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("vcu trace check names a finding by the log's own time, which grep finds in the log (#42)") {
+  const std::string logText = hheaLog(true);
+  const std::string log = writeScratchFile("trace_check_logtime.log", logText);
+  const RunResult result = runVcu({"trace", "check", "--config", HHEA_CONFIG, log, "--quiet"});
+
+  CHECK(result.exitCode == EXIT_INPUT_ERROR);
+  const std::string time = firstFieldOfLineWith(result.out, " fault j1939-76 ");
+  REQUIRE_FALSE(time.empty());
+  CHECK(time == "1700000000.200292");
+  // as `grep -F '(TIME)' LOG` would: the broken SDM's line, a whole candump -L time stamp
+  const std::size_t at = logText.find("(" + time + ") vehicle 0CEFF321#");
+  CHECK(at != std::string::npos);
+
+  // the configuration's folder names the same setup as its vehicle.json
+  const std::string folder = HHEA_CONFIG.substr(0, HHEA_CONFIG.rfind('/'));
+  CHECK(runVcu({"trace", "check", "--config", folder, log, "--quiet"}).out == result.out);
+}
+
+TEST_CASE("vcu trace check --time relative gives seconds from the first frame, --time both gives both") {
+  const std::string log = writeScratchFile("trace_check_reltime.log", hheaLog(true));
+  const RunResult relative = runVcu({"trace", "check", "--config", HHEA_CONFIG, log, "--quiet", "--time", "relative"});
+  CHECK(firstFieldOfLineWith(relative.out, " fault j1939-76 vehicle: S1_ES_PGN61427") == "0.200292");
+  const RunResult both = runVcu({"trace", "check", "--config", HHEA_CONFIG, log, "--quiet", "--time", "both"});
+  CHECK(contains(both.out, "1700000000.200292 +0.200292 fault j1939-76 vehicle: S1_ES_PGN61427"));
+  CHECK(runVcu({"trace", "check", log, "--time", "utc"}).exitCode == EXIT_USAGE);
+}
+
+TEST_CASE("vcu trace check --format json gives each finding's log time and its time from the first frame") {
+  const std::string log = writeScratchFile("trace_check_json_time.log", hheaLog(true));
+  const RunResult result = runVcu({"trace", "check", "--config", HHEA_CONFIG, log, "--format", "json", "--quiet"});
+
+  CHECK(contains(result.out, "{\"t\":1700000000.200292,\"t_rel\":0.200292,\"severity\":\"fault\""));
+  const nlohmann::json document = nlohmann::json::parse(result.out);
+  REQUIRE(document["findings"].size() == 1);
+  CHECK(document["findings"][0]["t_rel"].get<double>() == doctest::Approx(0.200292));
+}
+
+TEST_CASE("vcu trace report lists each finding at the log's own time (#42)") {
+  const std::string log = writeScratchFile("trace_report_logtime.log", hheaLog(true));
+  const std::string html = (scratchFolder() / "trace_report_logtime.html").string();
+  const RunResult result = runVcu({"trace", "report", "--config", HHEA_CONFIG, log, "-o", html});
+  INFO(result.err);
+  REQUIRE(result.exitCode == EXIT_OK);
+  std::ifstream file(html);
+  const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  const std::size_t findings = text.find("<section id=\"findings\">");
+  REQUIRE(findings != std::string::npos);
+  const std::size_t row = text.find("CrcMismatch", findings);
+  REQUIRE(row != std::string::npos);
+  const std::size_t rowStart = text.rfind("<tr", row);
+  REQUIRE(rowStart != std::string::npos);
+  const std::string cells = text.substr(rowStart, row - rowStart);
+  CHECK(contains(cells, ">1700000000.200292<"));  // the log's time
+  CHECK(contains(cells, ">0.200292<"));           // and seconds from the first frame beside it
 }
 
 TEST_CASE("vcu trace check without a log is a usage error") {

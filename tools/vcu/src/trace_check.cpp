@@ -2,14 +2,17 @@
 // finding as it is made, a summary at the end, exit 1 on a protocol fault.
 //
 //   $ vcu trace check --config config/hhea/vehicle.json drive.log
-//   0.040292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, SDM data CRC
-//   0x3C1D2B0E
+//   1700000000.040292 fault j1939-76 vehicle: S1_ES_PGN61427 (0x0CEFF321): CrcMismatch: SHM CRC 0x8100EFA3, SDM
+//   data CRC 0x3C1D2B0E
+// The time is the log's own, as its lines stamp it (grep finds the frame); --time relative
+// gives seconds from the first frame instead, --time both the two.
 //   ...
 //   checked 5 J1939-76 pairs (2500 SDMs, 1 fault), 2 requests (0 unanswered), 0 TP sessions
 #include <CLI/CLI.hpp>
 #include <array>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <memory>
 
 #include "diagnostics.hpp"
@@ -38,10 +41,15 @@ constexpr const char* CHECK_FOOTER =
     "            BAM/RTS announcing it; a NACK is listed as info.\n"
     "Each kind of fault is listed at most 20 times per pair; the rest are counted in a\n"
     "closing line.\n"
-    "--format text (default): 'SECONDS SEVERITY CHECK BUS: TEXT' per finding (seconds from\n"
-    "  the first frame), then a summary with the delta statistics of each pair.\n"
-    "--format json: {\"source\",\"findings\":[{\"t\",\"severity\",\"check\",\"bus\",\n"
-    "  \"text\"}],\"pairs\":[{\"bus\",\"id\",\"name\",\"sdms\",\"ok\",\"faults\",\"delta_us\",\n"
+    "--format text (default): 'TIME SEVERITY CHECK BUS: TEXT' per finding, then a summary\n"
+    "  with the delta statistics of each pair. TIME by --time: log (default) the log's own\n"
+    "  time in seconds as its lines stamp it (candump -L: 1700000005.007300, so grep finds\n"
+    "  the frame), relative the seconds from the first frame (5.007300), both the two\n"
+    "  ('1700000005.007300 +5.007300').\n"
+    "--format json: {\"source\",\"findings\":[{\"t\" (the log's time),\"t_rel\" (from the\n"
+    "  first "
+    "frame),\"severity\",\"check\",\"bus\",\"text\"}],\"pairs\":[{\"bus\",\"id\",\"name\",\"sdms\",\"ok\",\"faults\","
+    "\"delta_us\",\n"
     "  \"delta_min_us\",\"delta_mean_us\",\"delta_max_us\",\"delta_warnings\"}],\"summary\":{...}}\n"
     "--quiet hides info findings (they are still counted).\n"
     "\n"
@@ -51,9 +59,17 @@ constexpr const char* CHECK_FOOTER =
     "Exit: 0 no protocol fault; 1 a protocol fault (severity 'fault') was found, or the\n"
     "input had errors (unreadable log or DBC, malformed lines); 2 usage error.\n";
 
+/// Which time a text finding line starts with.
+enum class TimeColumn : std::uint8_t {
+  Log,       ///< the log's own: "1700000005.007300"
+  Relative,  ///< seconds from the timeline's first frame: "5.007300"
+  Both,      ///< "1700000005.007300 +5.007300"
+};
+
 struct CheckArguments {
   TraceInputOptions input;
   std::string format{"text"};
+  TimeColumn time{TimeColumn::Log};
   bool quiet{};
 };
 
@@ -72,25 +88,32 @@ std::string micros(double ns) {
 /// Prints findings as they come and counts faults per check.
 class PrintingSink final : public trace::FindingSink {
  public:
-  PrintingSink(Sink& out, const trace::LogTimeline& timeline, bool json, bool quiet)
-      : m_out(out), m_timeline(timeline), m_json(json), m_quiet(quiet) {}
+  PrintingSink(Sink& out, const trace::LogTimeline& timeline, bool json, TimeColumn time, bool quiet)
+      : m_out(out), m_timeline(timeline), m_json(json), m_time(time), m_quiet(quiet) {}
 
   void finding(const trace::Finding& finding) override {
     if (finding.severity == trace::Severity::Fault) ++faultsByCheck[static_cast<std::size_t>(finding.check)];
     if (m_quiet && finding.severity == trace::Severity::Info) return;
     const std::string bus = busName(m_timeline.buses(), finding.bus);
-    const std::string seconds = relativeSeconds(finding.timeNs, m_timeline.startNs());
+    const std::int64_t relativeNs = finding.timeNs - m_timeline.startNs();
     m_line.clear();
     if (m_json) {
       m_line += m_first ? "\n  " : ",\n  ";
-      m_line += "{\"t\":" + seconds + ",\"severity\":\"" + std::string(trace::severityName(finding.severity)) +
-                "\",\"check\":\"" + std::string(trace::checkName(finding.check)) + "\",\"bus\":";
+      m_line += "{\"t\":";
+      trace::appendSeconds(m_line, finding.timeNs);
+      m_line += ",\"t_rel\":";
+      trace::appendSeconds(m_line, relativeNs);
+      m_line += ",\"severity\":\"" + std::string(trace::severityName(finding.severity)) + "\",\"check\":\"" +
+                std::string(trace::checkName(finding.check)) + "\",\"bus\":";
       trace::appendJsonString(m_line, bus);
       m_line += ",\"text\":";
       trace::appendJsonString(m_line, finding.text);
       m_line += '}';
     } else {
-      m_line += seconds + ' ' + std::string(trace::severityName(finding.severity)) + ' ' +
+      if (m_time != TimeColumn::Relative) trace::appendSeconds(m_line, finding.timeNs);
+      if (m_time == TimeColumn::Both) m_line += " +";
+      if (m_time != TimeColumn::Log) trace::appendSeconds(m_line, relativeNs);
+      m_line += ' ' + std::string(trace::severityName(finding.severity)) + ' ' +
                 std::string(trace::checkName(finding.check)) + ' ' + bus + ": " + finding.text + '\n';
     }
     m_first = false;
@@ -103,6 +126,7 @@ class PrintingSink final : public trace::FindingSink {
   Sink& m_out;
   const trace::LogTimeline& m_timeline;
   bool m_json;
+  TimeColumn m_time;
   bool m_quiet;
   bool m_first{true};
   std::string m_line;
@@ -197,7 +221,7 @@ ExitCode runTraceCheck(const CheckArguments& arguments, Streams streams) {
   const bool json = arguments.format == "json";
   trace::LogTimeline& timeline = *input->timeline;
   trace::TraceChecker checker(*input->setup);
-  PrintingSink printer(streams.out, timeline, json, arguments.quiet);
+  PrintingSink printer(streams.out, timeline, json, arguments.time, arguments.quiet);
   if (json) {
     std::string head = "{\n\"source\": ";
     trace::appendJsonString(head, input->setup->source);
@@ -235,6 +259,12 @@ void addTraceCheck(CLI::App& trace, CommandContext& context) {
   check->add_option("-f,--format", arguments->format, "output format (default text)")
       ->check(CLI::IsMember({"text", "json"}))
       ->option_text("text|json");
+  check->add_option("--time", arguments->time, "time of a text finding: the log's, from the first frame, or both")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, TimeColumn>{
+              {"log", TimeColumn::Log}, {"relative", TimeColumn::Relative}, {"both", TimeColumn::Both}},
+          CLI::ignore_case))
+      ->option_text("log|relative|both");
   check->add_flag("-q,--quiet", arguments->quiet, "hide info findings (still counted)");
   check->callback([arguments, &context] { context.exitCode = runTraceCheck(*arguments, context.streams); });
 }

@@ -2,36 +2,41 @@
 #include "trace_commands.hpp"
 
 #include <CLI/CLI.hpp>
-#include <cstdio>
 #include <filesystem>
 #include <system_error>
 
+#include "cli_checks.hpp"
 #include "dbc_commands.hpp"
 #include "diagnostics.hpp"
 #include "openvcu/trace/report_job.hpp"
 
 namespace openvcu::cli {
 void addTraceInputOptions(CLI::App& command, TraceInputOptions& options) {
-  auto* config = command.add_option("-c,--config", options.configFile,
-                                    "vehicle configuration: its DBC files, bit rates, schedule cycles and J1939-76 pairs")
+  auto* config = command
+                     .add_option("-c,--config", options.configFile,
+                                 "vehicle configuration (vehicle.json or its folder): its DBC files, bit rates, "
+                                 "schedule cycles and J1939-76 pairs")
                      ->option_text("FILE");
-  auto* dbcOption = command.add_option("-d,--dbc", options.dbcFiles, "DBC file (repeat for several; merged in order)")
-                        ->option_text("FILE")
-                        ->take_all()
-                        ->allow_extra_args(false);  // one file per --dbc: "--dbc a.dbc drive.log -f json" leaves the log a LOG
+  auto* dbcOption =
+      command.add_option("-d,--dbc", options.dbcFiles, "DBC file (repeat for several; merged in order)")
+          ->option_text("FILE")
+          ->take_all()
+          ->allow_extra_args(false);  // one file per --dbc: "--dbc a.dbc drive.log -f json" leaves the log a LOG
   config->excludes(dbcOption);
   command
       .add_option_function<std::string>(
           "--match",
           [&options](const std::string& mode) {
-            options.match = mode == "exact" ? dbc::MatchMode::Exact
+            options.match = mode == "exact"          ? dbc::MatchMode::Exact
                             : mode == "j1939-tagged" ? dbc::MatchMode::J1939Tagged
                                                      : dbc::MatchMode::J1939;
           },
           "how frames find their DBC message (default j1939)")
       ->check(CLI::IsMember({"exact", "j1939", "j1939-tagged"}))
       ->option_text("exact|j1939|j1939-tagged");
-  command.add_option("LOG", options.logs, "CAN logs (candump -L, candump, ASC) or a folder written by vcu record; several = one timeline")
+  command
+      .add_option("LOG", options.logs,
+                  "CAN logs (candump -L, candump, ASC) or a folder written by vcu record; several = one timeline")
       ->required()
       ->type_name("");
 }
@@ -41,7 +46,9 @@ std::optional<TraceInput> prepareTraceInput(const TraceInputOptions& options, Si
   input.reportedErrors = std::make_shared<std::uint64_t>(0);
   Result<trace::AnalysisSetup> setupResult = trace::emptySetup();
   if (!options.configFile.empty()) {
-    setupResult = trace::loadSetupFromConfig(options.configFile);
+    const Result<std::string> vehicleFile = vehicleFileOf(options.configFile);
+    setupResult =
+        vehicleFile ? trace::loadSetupFromConfig(*vehicleFile) : Result<trace::AnalysisSetup>(vehicleFile.error());
   } else if (!options.dbcFiles.empty()) {
     setupResult = trace::loadSetupFromDbc(options.dbcFiles);
   }
@@ -99,12 +106,6 @@ void reportSkipped(TraceInput& input, Sink& err) {
     reportError(err, "only the first " + std::to_string(MAX_REPORTED_LOG_ERRORS) + " of " +
                          std::to_string(*input.reportedErrors) + " log problems were shown");
   }
-}
-
-std::string relativeSeconds(std::int64_t timeNs, std::int64_t startNs) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6f", static_cast<double>(timeNs - startNs) / 1e9);
-  return text;
 }
 
 void registerTraceCommands(CLI::App& app, CommandContext& context) {

@@ -28,9 +28,9 @@ namespace openvcu::cli {
 
 /// The options every `vcu trace` command takes.
 struct TraceInputOptions {
-  std::string configFile;             ///< vehicle.json; excludes dbcFiles
-  std::vector<std::string> dbcFiles;  ///< merged in order
-  std::vector<std::string> logs;      ///< candump -L, candump, ASC; a folder = its *.log files (vcu record)
+  std::string configFile;               ///< vehicle.json or its folder; excludes dbcFiles
+  std::vector<std::string> dbcFiles;    ///< merged in order
+  std::vector<std::string> logs;        ///< candump -L, candump, ASC; a folder = its *.log files (vcu record)
   std::optional<dbc::MatchMode> match;  ///< default: the setup's (J1939)
 };
 
@@ -61,9 +61,6 @@ void addTraceInputOptions(CLI::App& command, TraceInputOptions& options);
 /// After the timeline is read: one line on `err` per log with what was skipped (malformed
 /// lines, lines without time, backward steps); sets input.failed for malformed lines.
 void reportSkipped(TraceInput& input, Sink& err);
-
-/// Seconds from the timeline's start: "12.345678".
-[[nodiscard]] std::string relativeSeconds(std::int64_t timeNs, std::int64_t startNs);
 
 /// `vcu trace stats` (trace_stats.cpp).
 void addTraceStats(CLI::App& trace, CommandContext& context);
