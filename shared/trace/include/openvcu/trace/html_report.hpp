@@ -18,7 +18,9 @@
 //   writeFile("report.html", renderHtmlReport(input));
 //
 // Time: every time axis is in seconds from stats.startS (the timeline's first frame);
-// DtcInterval and Finding times (the log's ns) are converted with it.
+// DtcInterval and Finding times (the log's ns) are converted with it. The findings table
+// shows the log's own time too (trace::appendSeconds: as candump -L stamps it), and the
+// summary the first frame's.
 //
 // The script: all time charts share one x range; the wheel zooms around the pointer,
 // dragging pans, a double click resets; report.html#view=T0,T1 opens on that range. On
