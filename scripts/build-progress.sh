@@ -2,7 +2,8 @@
 # Builds CMake targets of a configured Ninja build folder and shows how far the build is,
 # instead of ninja's wall of lines (./run.sh builds openvcu-runtime through it).
 #   scripts/build-progress.sh BUILD_DIR TARGET...
-# Before building: the number of steps to run (ninja's dry run), or that nothing is to do.
+# Before building: the number of steps to run (ninja's dry run; when CMake first checks
+# build.ninja, ninja's own count once that check is done), or that nothing is to do.
 # On a terminal: one line, rewritten in place, "building [n/m] <what was just built>".
 # Otherwise (a pipe, a CI log): a line at about every 10 % and the last one.
 # Every line ninja and the compilers print goes to BUILD_DIR/build-progress.log. On failure
@@ -23,16 +24,28 @@ log=$dir/build-progress.log
 
 # ninja starts each status line with NINJA_STATUS: a marker no compiler prints, then n/m
 export NINJA_STATUS='@@progress %f/%t@@ '
+# CMake's check of build.ninja itself (a CONFIGURE_DEPENDS glob re-checked before every
+# build, a re-run of CMake): not a build step. A dry run cannot know whether the check will
+# change build.ninja, so it plans only the check and stops: the count then comes from the
+# real build, once ninja has restarted on the checked file.
+manifest='^@@progress [0-9]*/[0-9]*@@ (Re-checking globbed directories|Re-running CMake)'
+header="== building $* in $dir"
+note=${BUILD_PROGRESS_NOTE:+ ($BUILD_PROGRESS_NOTE)}
+announce=0
 if dry=$(cmake --build "$dir" --target "$@" -- -n 2>&1); then
-  steps=$(grep -c '^@@progress ' <<<"$dry" || true)
-  if [ "$steps" -eq 0 ]; then
-    echo "== building $* in $dir: nothing to do"
-    exit 0
+  if grep -Eq "$manifest" <<<"$dry"; then
+    announce=1
+  else
+    steps=$(grep -c '^@@progress ' <<<"$dry" || true)
+    if [ "$steps" -eq 0 ]; then
+      echo "$header: nothing to do"
+      exit 0
+    fi
+    echo "$header: $steps steps$note"
   fi
-  echo "== building $* in $dir: $steps steps${BUILD_PROGRESS_NOTE:+ ($BUILD_PROGRESS_NOTE)}"
 else
   # the build below fails the same way and shows why
-  echo "== building $* in $dir"
+  echo "$header"
 fi
 
 tty=0; [ -t 1 ] && tty=1
@@ -42,7 +55,8 @@ start=$(date +%s)
 status=0
 # awk reads everything ninja and the compilers print, writes it to the log and draws the
 # progress from ninja's status lines.
-cmake --build "$dir" -j "$jobs" --target "$@" 2>&1 | awk -v tty=$tty -v cols="$cols" -v logfile="$log" '
+cmake --build "$dir" -j "$jobs" --target "$@" 2>&1 |
+  awk -v tty=$tty -v cols="$cols" -v logfile="$log" -v announce=$announce -v header="$header" -v note="$note" '
   function what(s) {
     # "Building CXX object services/web/CMakeFiles/openvcu_web_app.dir/src/web_app.cpp.o"
     # -> "services/web/src/web_app.cpp"
@@ -72,12 +86,15 @@ cmake --build "$dir" -j "$jobs" --target "$@" 2>&1 | awk -v tty=$tty -v cols="$c
       rest = substr($0, 12)
       split(substr(rest, 1, index(rest, "@@") - 1), nm, "/")
       n = nm[1] + 0; m = nm[2] + 0; s = substr(rest, index(rest, "@@ ") + 3)
+      if (s ~ /^(Re-checking globbed directories|Re-running CMake)/) next
+      if (announce) { print header ": " m " steps" note; fflush(); announce = 0 }
       lastn = n; lastm = m; lasts = s
       if (tty) show(n, m, s)
       else if (m > 0 && int(10 * n / m) > decile) { decile = int(10 * n / m); show(n, m, s); printedn = n }
     }
   }
   END {
+    if (announce) print header ": nothing to do"
     if (!tty && lastn && printedn != lastn) show(lastn, lastm, lasts)
     if (tty && shown) printf "\n"
   }' || status=$?
@@ -92,4 +109,6 @@ if [ $status -ne 0 ]; then
   } >&2
   exit $status
 fi
+# after CMake's check alone nothing was built: the awk above said so
+grep '^@@progress ' "$log" | grep -Evq "$manifest" || exit 0
 echo "== built $* in $(( $(date +%s) - start )) s (log: $log)"
