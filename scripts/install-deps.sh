@@ -5,6 +5,9 @@
 #
 #   scripts/install-deps.sh            # build + test dependencies
 #   scripts/install-deps.sh --quiet    # no output when nothing is missing
+# When packages are missing it prints one line per phase (package lists, download,
+# installation); apt's own output goes to build/install-deps.log (OPENVCU_DEPS_LOG), whose
+# last 25 lines are printed on stderr when a phase fails (exit status: apt's).
 set -euo pipefail
 
 quiet=0
@@ -92,8 +95,38 @@ if [ "$(id -u)" -ne 0 ]; then
   fi
 fi
 
-echo "install-deps: installing ${missing[*]}"
+# apt's own output (hundreds of "Get:" and "Setting up ..." lines on a first run) goes to a
+# log; the terminal gets one line per phase, and the log's tail when a phase fails.
+root=$(cd "$(dirname "$0")/.." && pwd)
+log=${OPENVCU_DEPS_LOG:-$root/build/install-deps.log}
+mkdir -p "$(dirname "$log")"
+echo "install-deps: ${#missing[@]} of ${#PACKAGES[@]} packages missing: ${missing[*]}" > "$log"
+names=""
+[ ${#missing[@]} -le 10 ] && names=": ${missing[*]}"
+echo "install-deps: ${#missing[@]} of ${#PACKAGES[@]} packages missing$names (apt's output: $log)"
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get -o DPkg::Lock::Timeout=600 update -q
-$SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -q --no-install-recommends "${missing[@]}"
+start=$(date +%s)
+# phase N TEXT COMMAND...: one line, the command's output into the log, or its tail on failure
+phase() {
+  local number=$1 text=$2
+  shift 2
+  echo "install-deps: [$number/3] $text"
+  echo "== [$number/3] $text: $*" >> "$log"
+  local status=0
+  "$@" >> "$log" 2>&1 < /dev/null || status=$?
+  if [ $status -ne 0 ]; then
+    {
+      echo "install-deps: $text failed (exit $status); the last 25 lines of $log:"
+      tail -n 25 "$log"
+    } >&2
+    exit $status
+  fi
+}
+apt=($SUDO apt-get -o DPkg::Lock::Timeout=600 -q)
+phase 1 "updating the package lists" "${apt[@]}" update
+phase 2 "downloading ${#missing[@]} packages and what they need" \
+  "${apt[@]}" install -y --no-install-recommends --download-only "${missing[@]}"
+phase 3 "installing ${#missing[@]} packages and what they need" \
+  "${apt[@]}" install -y --no-install-recommends "${missing[@]}"
+echo "install-deps: installed in $(( $(date +%s) - start )) s"
 ensure_group
