@@ -145,7 +145,7 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
   CHECK_FALSE(contains(result.err, "note:"));
 }
 
-TEST_CASE("vcu check takes the vehicle file or its folder as a positional argument, as --config (#42)") {
+TEST_CASE("vcu check takes the vehicle file or its folder as a positional argument, as --config") {
   const std::string vehicle = (HHEA_FOLDER / "vehicle.json").string();
   const RunResult byOption = runVcu({"check", "--config", vehicle});
   const RunResult byFile = runVcu({"check", vehicle});

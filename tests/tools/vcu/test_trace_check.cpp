@@ -143,7 +143,7 @@ std::string firstFieldOfLineWith(const std::string& out, const std::string& part
 
 }  // namespace
 
-TEST_CASE("vcu trace check names a finding by the log's own time, which grep finds in the log (#42)") {
+TEST_CASE("vcu trace check names a finding by the log's own time, which grep finds in the log") {
   const std::string logText = hheaLog(true);
   const std::string log = writeScratchFile("trace_check_logtime.log", logText);
   const RunResult result = runVcu({"trace", "check", "--config", HHEA_CONFIG, log, "--quiet"});
@@ -180,7 +180,7 @@ TEST_CASE("vcu trace check --format json gives each finding's log time and its t
   CHECK(document["findings"][0]["t_rel"].get<double>() == doctest::Approx(0.200292));
 }
 
-TEST_CASE("vcu trace report lists each finding at the log's own time (#42)") {
+TEST_CASE("vcu trace report lists each finding at the log's own time") {
   const std::string log = writeScratchFile("trace_report_logtime.log", hheaLog(true));
   const std::string html = (scratchFolder() / "trace_report_logtime.html").string();
   const RunResult result = runVcu({"trace", "report", "--config", HHEA_CONFIG, log, "-o", html});
