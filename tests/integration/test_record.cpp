@@ -6,7 +6,12 @@
 //   - the replay puts the same frames back on the buses with the recorded spacing
 //     (measured from the sender stamps of an independent listener), twice as fast with
 //     --speed 2;
-//   - bad input: a missing folder, a malformed line, an unknown bus, an existing recording.
+//   - bad input: a missing folder, a malformed line, an unknown bus, an existing recording;
+//   - the files stay readable by our own analysis: frames of two senders that reach the
+//     recorder out of stamp order are written in time order (`vcu trace stats` sees no
+//     step back), a recorder killed by SIGKILL leaves only whole lines, and a recorder
+//     started with SIGTERM and SIGINT blocked (a child of vcu-hmi inherits that mask)
+//     still ends cleanly on SIGTERM.
 // The two-bus configuration is written into the sandbox's /tmp.
 
 #include <doctest/doctest.h>
@@ -26,6 +31,7 @@
 
 #include "integration_support.hpp"
 #include "openvcu/can_links/sim_link.hpp"
+#include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/runtime.hpp"
 
 namespace {
@@ -423,4 +429,151 @@ TEST_CASE(
   }
   CHECK_MESSAGE((loopExit->exited && loopExit->code == 0), player.output());
   CHECK_MESSAGE(contains(player.output(), "passes)"), player.output());
+}
+
+namespace {
+
+/// Long enough for the recorder to have taken and written everything published before.
+constexpr auto RECORDER_CATCH_UP = 50ms;
+
+/// A loaned sample on the sim bus `vehicle`, stamped now as a sim link stamps at send.
+ipc::FrameLoan stampedLoan(ipc::FramePublisher& publisher, std::uint32_t id) {
+  std::optional<ipc::FrameLoan> maybeLoan = publisher.loan();
+  REQUIRE(maybeLoan);
+  ipc::FrameSample& sample = maybeLoan->sample();
+  sample.frame.id = id;
+  sample.frame.length = 1;
+  sample.frame.data[0] = static_cast<std::uint8_t>(id);
+  sample.frame.timestampNs = realtimeNs();
+  timespec now{};
+  ::clock_gettime(CLOCK_MONOTONIC, &now);
+  sample.monotonicNs = static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+  return std::move(*maybeLoan);
+}
+
+ipc::FramePublisher vehicleSender() {
+  if (!ipc::Runtime::initialized()) REQUIRE_STATUS(ipc::Runtime::init("test-record-node", 5s));
+  auto publisher = ipc::FramePublisher::create(ipc::FrameTopic{"sim", "vehicle", ipc::FrameStream::SimWire});
+  REQUIRE_STATUS(publisher);
+  REQUIRE(publisher->waitForSubscribers(5000ms));
+  return std::move(*publisher);
+}
+
+}  // namespace
+
+TEST_CASE("vcu record writes frames of two senders in time order when a later-stamped frame reaches it first") {
+  SKIP_UNLESS_ISOLATED();
+  harness::Harness sut;
+  REQUIRE_STATUS(sut.startRoudi());
+  const fs::path config = writeConfig();
+  const fs::path folder = fs::temp_directory_path() / "two-senders";
+  auto started = sut.start(recordSpec(folder, config));
+  REQUIRE_STATUS(started);
+  harness::Process& recorder = **started;
+  REQUIRE_MESSAGE(recorder.waitForLine("recording", 20s), recorder.output());
+  ipc::FramePublisher first = vehicleSender();
+  ipc::FramePublisher second = vehicleSender();
+
+  // Two senders race: the first stamps its frame, the second stamps a later one and
+  // publishes it before the first publishes. Once with the recorder taking the later
+  // frame alone, once with both waiting in its queue together.
+  ipc::FrameLoan early = stampedLoan(first, 0x101);
+  std::this_thread::sleep_for(1ms);
+  ipc::FrameLoan late = stampedLoan(second, 0x202);
+  const std::int64_t earlyNs = early->frame.timestampNs;
+  const std::int64_t lateNs = late->frame.timestampNs;
+  REQUIRE(second.publish(std::move(late)));
+  std::this_thread::sleep_for(RECORDER_CATCH_UP);
+  REQUIRE(first.publish(std::move(early)));
+  ipc::FrameLoan earlyAgain = stampedLoan(first, 0x103);
+  std::this_thread::sleep_for(1ms);
+  ipc::FrameLoan lateAgain = stampedLoan(second, 0x204);
+  REQUIRE(second.publish(std::move(lateAgain)));
+  REQUIRE(first.publish(std::move(earlyAgain)));
+  std::this_thread::sleep_for(RECORDER_CATCH_UP);
+
+  REQUIRE(recorder.signal(SIGINT));
+  const auto exit = recorder.waitForExit(10s);
+  REQUIRE(exit);
+  while (recorder.readLine(1s)) {
+  }
+  REQUIRE_MESSAGE((exit->exited && exit->code == 0), recorder.output());
+  CHECK_MESSAGE(contains(recorder.output(), "vehicle: 4 frames"), recorder.output());
+  // the frame that came late is written no earlier than the line before it
+  CHECK_MESSAGE(contains(recorder.output(), "later than stamped"), recorder.output());
+
+  const std::vector<std::string> lines = readLines(folder / "vehicle.log");
+  REQUIRE(lines.size() == 4);
+  std::int64_t previousNs = 0;
+  for (const std::string& text : lines) {
+    const LogLine line = parseLine(text);
+    INFO("line: ", text);
+    CHECK(line.timeNs >= previousNs);
+    previousNs = line.timeNs;
+    if (contains(line.text, "101#")) {  // its own stamp or the later frame's, nothing else
+      CHECK(line.timeNs >= earlyNs / 1000 * 1000);
+      CHECK(line.timeNs <= lateNs);
+    }
+  }
+  // our own analysis reads it without a step back or a malformed line
+  const harness::CommandResult stats = sut.run({VCU, "trace", "stats", "--config", config.string(), folder.string()});
+  CHECK_MESSAGE(stats.exitCode() == 0, stats.describe());
+  CHECK_MESSAGE(!contains(stats.err, "backwards"), stats.describe());
+  CHECK_MESSAGE(!contains(stats.err, "error"), stats.describe());
+}
+
+TEST_CASE("vcu record killed by SIGKILL while recording leaves only whole lines in its log") {
+  SKIP_UNLESS_ISOLATED();
+  harness::Harness sut;
+  REQUIRE_STATUS(sut.startRoudi());
+  const fs::path config = writeConfig();
+  const fs::path folder = fs::temp_directory_path() / "killed";
+  auto started = sut.start(recordSpec(folder, config));
+  REQUIRE_STATUS(started);
+  harness::Process& recorder = **started;
+  REQUIRE_MESSAGE(recorder.waitForLine("recording", 20s), recorder.output());
+  Node node;
+  // 200 lines of 54 characters: several times any stdio buffer, fewer than the sim
+  // link's receive queue holds
+  constexpr std::size_t FRAMES = 200;
+  for (std::size_t i = 0; i < FRAMES; ++i)
+    REQUIRE(node.links["vehicle"]->send(vehicleFrame(0)) == can::SendStatus::Sent);
+  const fs::path log = folder / "vehicle.log";
+  const auto end = std::chrono::steady_clock::now() + 5s;
+  std::error_code error;
+  while (fs::file_size(log, error) == 0 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
+  REQUIRE_MESSAGE(fs::file_size(log, error) > 0, "the recorder wrote nothing within 5 s");
+  REQUIRE(recorder.signal(SIGKILL));  // what the HMI does to a recorder that does not stop
+  REQUIRE(recorder.waitForExit(5s));
+
+  const std::string text = readFile(log);
+  REQUIRE(!text.empty());
+  CHECK_MESSAGE(text.back() == '\n',
+                "the log ends inside a line: ..." << text.substr(text.size() - std::min<std::size_t>(text.size(), 60)));
+  const std::vector<std::string> lines = readLines(log);
+  CHECK(lines.size() <= FRAMES);
+  for (const std::string& line : lines) CHECK(parseLine(line).text == candumpText(vehicleFrame(0)));
+}
+
+TEST_CASE("vcu record started with SIGTERM and SIGINT blocked still ends cleanly on SIGTERM") {
+  SKIP_UNLESS_ISOLATED();
+  harness::Harness sut;
+  REQUIRE_STATUS(sut.startRoudi());
+  const fs::path config = writeConfig();
+  const fs::path folder = fs::temp_directory_path() / "blocked";
+  // coreutils' env blocks the signals and executes vcu in its place: the mask vcu-hmi's
+  // children inherit (vcu-hmi reads SIGTERM and SIGINT through a signalfd)
+  harness::ProcessSpec spec = recordSpec(folder, config);
+  spec.argv.insert(spec.argv.begin(), {"/usr/bin/env", "--block-signal=TERM", "--block-signal=INT"});
+  auto started = sut.start(spec);
+  REQUIRE_STATUS(started);
+  harness::Process& recorder = **started;
+  REQUIRE_MESSAGE(recorder.waitForLine("recording", 20s), recorder.output());
+  REQUIRE(recorder.signal(SIGTERM));
+  const auto exit = recorder.waitForExit(5s);
+  REQUIRE_MESSAGE(exit, "vcu record did not end within 5 s of SIGTERM: " << recorder.output());
+  while (recorder.readLine(1s)) {
+  }
+  CHECK_MESSAGE((exit->exited && exit->code == 0), exit->toString() << ": " << recorder.output());
+  CHECK_MESSAGE(contains(recorder.output(), "recorded "), recorder.output());
 }

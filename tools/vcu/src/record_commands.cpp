@@ -2,6 +2,7 @@
 // (`vcu record --help`); README.md explains the decisions behind them.
 #include "record_commands.hpp"
 
+#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
@@ -10,8 +11,6 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-
-#include "cli_checks.hpp"
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -20,18 +19,22 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string_view>
 #include <thread>
+#include <utility>
 #include <vector>
 
+#include "cli_checks.hpp"
 #include "diagnostics.hpp"
-#include "openvcu/core/clock.hpp"
 #include "openvcu/can/log_reader.hpp"
 #include "openvcu/can/log_writer.hpp"
 #include "openvcu/can_links/open_link.hpp"
+#include "openvcu/core/clock.hpp"
 #include "openvcu/ipc/frame_stream.hpp"
 #include "openvcu/ipc/runtime.hpp"
 #include "openvcu/ipc/waiter.hpp"
@@ -58,6 +61,10 @@ constexpr auto LOGGER_STOP_TIMEOUT = 3s;
 constexpr auto LOGGER_POLL_STEP = 10ms;
 /// Bus logs are flushed to disk at least this often (a crash loses less).
 constexpr auto FLUSH_INTERVAL = 500ms;
+/// Whole lines wait in a buffer of this size per bus before they reach the file.
+constexpr std::size_t LINE_BUFFER_BYTES = 64 * 1024;
+/// Frames taken from a link in one receive() call; each such batch is put in time order.
+constexpr std::size_t RECEIVE_BATCH = 64;
 /// A frame refused as Busy (transmit queue or mempool full) is retried this long.
 constexpr auto BUSY_RETRY_TIME = 100ms;
 constexpr auto BUSY_RETRY_STEP = 1ms;
@@ -90,10 +97,16 @@ constexpr const char* RECORD_FOOTER =
     "Each bus is opened with its configured link (sim:NAME, socketcan:IFACE) as one more\n"
     "node that only listens; replay: buses are skipped (they are logs already). The time\n"
     "of a frame is its kernel/hardware stamp (socketcan) or the sender's clock at send\n"
-    "(sim). A line 'recording ...' on stderr says every link and lcm-logger are ready.\n"
+    "(sim). Time never goes back within a log: the frames taken together are written in\n"
+    "time order, and a frame stamped before the line written last (another sender's frame\n"
+    "that overtook it) gets that line's time; the summary counts such frames and says by\n"
+    "how much at most. Lines reach a log whole (a buffer of whole lines, written at least\n"
+    "every 0.5 s), so a reader or a recorder killed by SIGKILL never leaves half a line.\n"
+    "A line 'recording ...' on stderr says every link and lcm-logger are ready.\n"
     "Runs until Ctrl-C (SIGINT), SIGTERM or --for SECONDS, then prints a summary: frames\n"
-    "per bus and the size of the events file. Existing logs in DIR are not overwritten\n"
-    "without --force.\n"
+    "per bus and the size of the events file. SIGINT and SIGTERM end it even when the\n"
+    "parent started it with them blocked (the recorder unblocks them for itself and\n"
+    "lcm-logger). Existing logs in DIR are not overwritten without --force.\n"
     "Needs iox-roudi for sim: buses; registers as vcu-record-<pid>.\n"
     "\n"
     "Examples:\n"
@@ -149,11 +162,6 @@ bool initRuntime(std::string_view command, Sink& err) {
 Error fileError(std::string message, const std::string& path) {
   return Error{std::move(message), Location{path, 0, 0, {}}};
 }
-
-struct FileCloser {
-  void operator()(std::FILE* file) const noexcept { std::fclose(file); }
-};
-using FilePointer = std::unique_ptr<std::FILE, FileCloser>;
 
 std::chrono::steady_clock::duration secondsToDuration(double seconds) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
@@ -245,15 +253,142 @@ class LoggerProcess {
 
 // ---- record: links ----------------------------------------------------------------------
 
+/// A bus log that only ever receives whole lines: candump -L lines collect in a buffer
+/// allocated once and reach the file with write(2) when it is nearly full or flush() is
+/// called, so a reader or a recorder killed by SIGKILL never leaves half a line.
+/// @note restricted thread-safe: one thread at a time; append() allocates nothing.
+class LineFile {
+ public:
+  LineFile() = default;
+  LineFile(LineFile&& other) noexcept
+      : m_fd(std::exchange(other.m_fd, -1)),
+        m_buffer(std::move(other.m_buffer)),
+        m_used(std::exchange(other.m_used, 0)),
+        m_writeErrno(other.m_writeErrno) {}
+  LineFile& operator=(LineFile&&) = delete;
+  LineFile(const LineFile&) = delete;
+  LineFile& operator=(const LineFile&) = delete;
+  ~LineFile() {
+    if (m_fd >= 0) ::close(m_fd);
+  }
+
+  /// Creates or truncates `path`; the errno when it cannot.
+  int open(const std::string& path) {
+    m_fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (m_fd < 0) return errno;
+    m_buffer = std::make_unique<char[]>(LINE_BUFFER_BYTES);
+    return 0;
+  }
+
+  /// Appends the frame's candump -L line and its line ending; writes the buffered lines
+  /// first when the longest line might not fit.
+  void append(const can::Frame& frame, std::string_view channel) noexcept {
+    if (LINE_BUFFER_BYTES - m_used < can::candumpLMaxLength(channel.size()) + 1) flush();
+    const std::size_t length =
+        can::formatCandumpL(frame, channel, std::span<char>(m_buffer.get() + m_used, LINE_BUFFER_BYTES - m_used - 1));
+    if (length == 0) return;  // cannot happen: the room was checked above
+    m_used += length;
+    m_buffer[m_used++] = '\n';
+  }
+
+  /// Writes the buffered lines; after a failed write the lines are dropped and the first
+  /// errno is kept.
+  void flush() noexcept {
+    std::size_t done = 0;
+    while (done < m_used && m_writeErrno == 0) {
+      const ssize_t written = ::write(m_fd, m_buffer.get() + done, m_used - done);
+      if (written < 0) {
+        if (errno != EINTR) m_writeErrno = errno;
+        continue;
+      }
+      done += static_cast<std::size_t>(written);
+    }
+    m_used = 0;
+  }
+
+  /// Flushes and closes; the errno of the first failure, 0 when everything was written.
+  int close() noexcept {
+    flush();
+    if (m_fd >= 0 && ::close(m_fd) != 0 && m_writeErrno == 0) m_writeErrno = errno;
+    m_fd = -1;
+    return m_writeErrno;
+  }
+
+ private:
+  int m_fd{-1};
+  std::unique_ptr<char[]> m_buffer;
+  std::size_t m_used{};
+  int m_writeErrno{};  ///< errno of the first failed write, 0 while none failed
+};
+
+/// Keeps a log's time from going back. Frames are stamped by their sender (sim) or the
+/// kernel (socketcan); frames of different senders can reach the recorder in another
+/// order than their stamps (one stamps, another stamps and publishes first). The time
+/// written is the frame's stamp, or the time of the line written last when the stamp is
+/// older (the log's high-water mark): such frames are counted with the largest shift.
+/// @note thread-free; noexcept and allocation-free.
+class MonotonicStamps {
+ public:
+  /// The time to write for a frame stamped `stampNs`.
+  std::int64_t next(std::int64_t stampNs) noexcept {
+    if (stampNs < m_lastNs) {
+      ++m_raised;
+      m_maxRaiseNs = std::max(m_maxRaiseNs, m_lastNs - stampNs);
+      return m_lastNs;
+    }
+    m_lastNs = stampNs;
+    return stampNs;
+  }
+  [[nodiscard]] std::uint64_t raised() const noexcept { return m_raised; }
+  [[nodiscard]] std::int64_t maxRaiseNs() const noexcept { return m_maxRaiseNs; }
+
+ private:
+  std::int64_t m_lastNs{std::numeric_limits<std::int64_t>::min()};
+  std::uint64_t m_raised{};
+  std::int64_t m_maxRaiseNs{};
+};
+
+/// Orders a received batch by stamp (insertion sort: stable, no allocation, linear for
+/// the nearly sorted batches a bus delivers).
+void sortByStamp(std::span<can::ReceivedFrame> batch) noexcept {
+  for (std::size_t i = 1; i < batch.size(); ++i) {
+    const can::ReceivedFrame item = batch[i];
+    std::size_t j = i;
+    for (; j > 0 && batch[j - 1].frame.timestampNs > item.frame.timestampNs; --j) batch[j] = batch[j - 1];
+    batch[j] = item;
+  }
+}
+
 /// One recorded bus: its link and its log file.
 struct RecordedBus {
   const config::BusConfig* bus{nullptr};
   std::unique_ptr<can::Link> link;
   std::string path;
-  FilePointer file;
+  LineFile file;
+  MonotonicStamps stamps;
   std::uint64_t frames{};
   std::uint64_t events{};
-  int writeErrno{};  ///< errno of the first failed write, 0 while none failed
+};
+
+/// SIGINT and SIGTERM unblocked in this thread while it lives, the previous mask back
+/// afterwards. A parent may start the recorder with them blocked (vcu-hmi reads them
+/// through a signalfd, and a child inherits the mask); the StopSignalScope's handler
+/// takes them from here on, and lcm-logger, started after it, inherits the open mask.
+class UnblockedStopSignals {
+ public:
+  UnblockedStopSignals() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    ::pthread_sigmask(SIG_UNBLOCK, &set, &m_previous);
+  }
+  UnblockedStopSignals(const UnblockedStopSignals&) = delete;
+  UnblockedStopSignals& operator=(const UnblockedStopSignals&) = delete;
+  ~UnblockedStopSignals() { ::pthread_sigmask(SIG_SETMASK, &m_previous, nullptr); }
+
+ private:
+  sigset_t m_previous{};
 };
 
 /// Blocks until a link has something to do or the deadline: an ipc::Waiter when the
@@ -294,24 +429,26 @@ class LinkWaiter {
   std::vector<pollfd> m_fds;
 };
 
-/// Takes everything the bus's link has and appends it to its log. Events are counted.
-void drain(RecordedBus& recorded, std::string& lines) {
-  std::array<can::ReceivedFrame, 64> batch{};
-  lines.clear();
+/// Takes everything the bus's link has and appends it to its log in time order. Events
+/// are counted.
+/// @note allocation-free.
+void drain(RecordedBus& recorded) noexcept {
+  std::array<can::ReceivedFrame, RECEIVE_BATCH> batch{};
   for (;;) {
     const std::size_t count = recorded.link->receive(batch);
-    for (std::size_t i = 0; i < count; ++i) {
-      can::Frame frame = batch[i].frame;
-      if (frame.timestampNs == 0) frame.timestampNs = clock::realtimeNs();
-      lines += can::formatCandumpL(frame, recorded.bus->name);
-      lines += '\n';
+    const std::span<can::ReceivedFrame> received(batch.data(), count);
+    for (can::ReceivedFrame& item : received) {
+      if (item.frame.timestampNs == 0) item.frame.timestampNs = clock::realtimeNs();
+    }
+    sortByStamp(received);
+    for (can::ReceivedFrame& item : received) {
+      item.frame.timestampNs = recorded.stamps.next(item.frame.timestampNs);
+      recorded.file.append(item.frame, recorded.bus->name);
     }
     recorded.frames += count;
     if (count < batch.size()) break;
   }
   while (recorded.link->nextEvent()) ++recorded.events;
-  if (lines.empty() || recorded.writeErrno != 0) return;
-  if (std::fwrite(lines.data(), 1, lines.size(), recorded.file.get()) != lines.size()) recorded.writeErrno = errno;
 }
 
 /// Checks DIR and the files a recording would replace. Reports and returns false when not usable.
@@ -384,9 +521,8 @@ ExitCode runRecord(const RecordOptions& options, Streams streams) {
     }
     item.link = std::move(*linkResult);
     item.path = (fs::path(options.directory) / (bus->name + std::string(LOG_EXTENSION))).string();
-    item.file.reset(std::fopen(item.path.c_str(), "w"));
-    if (!item.file) {
-      report(streams.err, fileError(std::string("cannot create: ") + std::strerror(errno), item.path));
+    if (const int openErrno = item.file.open(item.path); openErrno != 0) {
+      report(streams.err, fileError(std::string("cannot create: ") + std::strerror(openErrno), item.path));
       return ExitCode::Failure;
     }
     recorded.push_back(std::move(item));
@@ -397,7 +533,8 @@ ExitCode runRecord(const RecordOptions& options, Streams streams) {
     return ExitCode::Failure;
   }
 
-  const StopSignalScope stopSignals;  // before lcm-logger: a Ctrl-C from now on ends the recording cleanly
+  const StopSignalScope stopSignals;     // before lcm-logger: a Ctrl-C from now on ends the recording cleanly
+  const UnblockedStopSignals unblocked;  // after the handler: a signal pending since start stops it cleanly
   const std::string eventsPath = (fs::path(options.directory) / EVENTS_FILE).string();
   std::error_code ignored;
   fs::remove(eventsPath, ignored);  // its appearance is lcm-logger's readiness signal
@@ -440,13 +577,12 @@ ExitCode runRecord(const RecordOptions& options, Streams streams) {
       options.forSeconds > 0 ? std::optional(start + secondsToDuration(options.forSeconds)) : std::nullopt;
   auto nextFlush = start + FLUSH_INTERVAL;
   bool loggerDiedEarly = false;
-  std::string lines;
   for (;;) {
-    for (RecordedBus& item : recorded) drain(item, lines);
+    for (RecordedBus& item : recorded) drain(item);
     const auto now = std::chrono::steady_clock::now();
     if (stopRequested() || (maybeEnd && now >= *maybeEnd)) break;
     if (now >= nextFlush) {
-      for (RecordedBus& item : recorded) std::fflush(item.file.get());
+      for (RecordedBus& item : recorded) item.file.flush();
       nextFlush = now + FLUSH_INTERVAL;
       if (!loggerDiedEarly && !logger.running()) {
         loggerDiedEarly = true;
@@ -459,7 +595,7 @@ ExitCode runRecord(const RecordOptions& options, Streams streams) {
     waiter.waitUntil(wakeAt);
   }
   const auto recordedFor = std::chrono::steady_clock::now() - start;
-  for (RecordedBus& item : recorded) drain(item, lines);  // the last frames that arrived before the stop
+  for (RecordedBus& item : recorded) drain(item);  // the last frames that arrived before the stop
   const bool loggerStopped = logger.stop();
 
   bool ok = !loggerDiedEarly;
@@ -471,10 +607,8 @@ ExitCode runRecord(const RecordOptions& options, Streams streams) {
   std::string summary =
       "recorded " + formatDuration(std::chrono::nanoseconds(recordedFor).count()) + " into " + options.directory + "\n";
   for (RecordedBus& item : recorded) {
-    if (std::fflush(item.file.get()) != 0 && item.writeErrno == 0) item.writeErrno = errno;
-    if (std::fclose(item.file.release()) != 0 && item.writeErrno == 0) item.writeErrno = errno;
-    if (item.writeErrno != 0) {
-      report(streams.err, fileError(std::string("cannot write: ") + std::strerror(item.writeErrno), item.path));
+    if (const int writeErrno = item.file.close(); writeErrno != 0) {
+      report(streams.err, fileError(std::string("cannot write: ") + std::strerror(writeErrno), item.path));
       ok = false;
     }
     const can::LinkStats stats = item.link->stats();
@@ -485,6 +619,12 @@ ExitCode runRecord(const RecordOptions& options, Streams streams) {
     }
     summary += "  " + item.bus->name + ": " + plural(item.frames, "frame") + " -> " + item.path;
     if (item.events > 0) summary += " (" + plural(item.events, "bus event") + ", not in the log)";
+    if (item.stamps.raised() > 0) {
+      std::array<char, 32> shift{};
+      std::snprintf(shift.data(), shift.size(), "%.3f ms", static_cast<double>(item.stamps.maxRaiseNs()) / 1e6);
+      summary += " (" + plural(item.stamps.raised(), "frame") + " written up to " + shift.data() +
+                 " later than stamped: another sender's frame overtook it)";
+    }
     summary += "\n";
   }
   std::error_code sizeError;
