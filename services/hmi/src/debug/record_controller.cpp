@@ -1,5 +1,7 @@
 #include "debug/record_controller.hpp"
 
+#include <signal.h>
+
 #include <QCoreApplication>
 #include <QDateTime>
 #include <QDir>
@@ -31,7 +33,9 @@ RecordController::RecordController(QObject* parent) : QObject(parent), m_program
   m_killTimer.setSingleShot(true);
   m_killTimer.setInterval(STOP_TIMEOUT_MS);
   connect(&m_killTimer, &QTimer::timeout, this, [this] {
-    if (m_process) m_process->kill();
+    if (!m_process) return;
+    m_killed = true;
+    m_process->kill();
   });
 }
 
@@ -79,6 +83,14 @@ QString RecordController::start(const QString& folder) {
   m_process = std::make_unique<QProcess>();
   m_process->setProcessChannelMode(QProcess::SeparateChannels);
   m_process->setStandardInputFile(QProcess::nullDevice());
+  // vcu-hmi blocks SIGTERM and SIGINT (it reads them through a signalfd) and a child
+  // inherits the mask: vcu record starts with every signal unblocked, so that stop()'s
+  // SIGTERM reaches it. Runs in the child between fork and exec (async-signal-safe).
+  m_process->setChildProcessModifier([] {
+    sigset_t none;
+    sigemptyset(&none);
+    ::sigprocmask(SIG_SETMASK, &none, nullptr);
+  });
   connect(m_process.get(), &QProcess::readyReadStandardError, this, &RecordController::onStderr);
   connect(m_process.get(), &QProcess::finished, this, &RecordController::onFinished);
   connect(m_process.get(), &QProcess::errorOccurred, this, &RecordController::onError);
@@ -86,6 +98,8 @@ QString RecordController::start(const QString& folder) {
   m_stderr.clear();
   m_recordedLogs.clear();
   m_stopRequested = false;
+  m_began = false;
+  m_killed = false;
   m_elapsed.invalidate();
   m_status = ModelStatus::Ready;
   m_state = Starting;
@@ -112,6 +126,7 @@ void RecordController::onStderr() {
   const QString ready = QString::fromLatin1(READY_PREFIX);
   if (m_state == Starting && (m_stderr.startsWith(ready) || m_stderr.contains(QLatin1Char('\n') + ready))) {
     m_state = Recording;
+    m_began = true;
     m_elapsed.start();
     m_tick.start();
     m_lastResult = QStringLiteral("recording into ") + m_folder;
@@ -132,10 +147,18 @@ void RecordController::onFinished(int exitCode, QProcess::ExitStatus exitStatus)
     m_lastResult = output.isEmpty() ? QStringLiteral("recorded into ") + m_folder : output;
   } else {
     m_status = ModelStatus::Error;
-    const QString how = exitStatus == QProcess::CrashExit
-                            ? (m_stopRequested ? QStringLiteral("vcu record stopped before the recording began")
-                                               : QStringLiteral("vcu record was killed"))
-                            : QStringLiteral("vcu record failed (exit %1)").arg(exitCode);
+    QString how = QStringLiteral("vcu record failed (exit %1)").arg(exitCode);
+    if (exitStatus == QProcess::CrashExit) {
+      if (m_killed) {
+        how = QStringLiteral("vcu record did not end within %1 s of SIGTERM and was killed; %2 may be incomplete")
+                  .arg(STOP_TIMEOUT_MS / 1000)
+                  .arg(m_folder);
+      } else if (m_stopRequested && !m_began) {
+        how = QStringLiteral("vcu record stopped before the recording began");
+      } else {
+        how = QStringLiteral("vcu record was killed");
+      }
+    }
     m_lastResult = how + (errors.isEmpty() ? QString() : QStringLiteral(": ") + errors);
   }
   m_state = Idle;

@@ -5,6 +5,8 @@
 // the elapsed time while it records, stops it with SIGTERM (vcu record ends the recording
 // cleanly on SIGINT and SIGTERM and prints its summary), and afterwards offers the folder's
 // *.log files for the Trace tab. A failing `vcu record` shows its exit code and stderr.
+// vcu record starts with every signal unblocked (vcu-hmi itself blocks SIGTERM and SIGINT
+// and reads them through a signalfd; a child would inherit that mask and never see Stop).
 //
 //   RecordController { id: recorder }
 //   TouchButton { text: recorder.active ? "Stop" : "Record"; onClicked: recorder.active ? recorder.stop() :
@@ -96,6 +98,8 @@ class RecordController : public QObject {
   QStringList m_recordedLogs;
   ModelStatus::Value m_status{ModelStatus::Ready};
   bool m_stopRequested{};
+  bool m_began{};   ///< vcu record said "recording"
+  bool m_killed{};  ///< it did not end within STOP_TIMEOUT_MS of SIGTERM: SIGKILL sent
   QElapsedTimer m_elapsed;
   QTimer m_tick;
   QTimer m_killTimer;
