@@ -2,14 +2,15 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 
+#include "address_map.hpp"
 #include "openvcu/bridge/message_binding.hpp"
 #include "openvcu/can/wire_time.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/dbc/codec.hpp"
 #include "openvcu/dbc/matcher.hpp"
-#include "address_map.hpp"
 #include "openvcu/j1939/address_claim.hpp"
 #include "openvcu/j1939/dm1.hpp"
 #include "openvcu/j1939/dm_encode.hpp"
@@ -53,7 +54,19 @@ struct MessageState {
   std::int64_t windowMaxNs{};
   std::uint64_t windowIntervals{};
   bool seen{};
-  std::string timeoutFault;  ///< "rx_timeout.<bus>.<Message>"
+  bool faultActive{};          ///< timeoutFault raised and not yet cleared
+  std::int32_t expectation{};  ///< index into ReceiverImpl::expectations, or config::ALWAYS_EXPECTED
+  std::string timeoutFault;    ///< "rx_timeout.<bus>.<Message>"
+};
+
+/// A receive.json "expectedWhen" condition as the receiver follows it.
+struct ExpectationState {
+  signals::SignalIndex slot{};
+  double equals{};
+  std::int64_t startNs{};
+  bool expected{};
+  std::int64_t fromNs{};  ///< expected since (plus startNs): timeouts count from here at the earliest
+  std::string text;       ///< "internal.gpio.Cl15 = 1"
 };
 
 struct SafetyState {
@@ -71,14 +84,14 @@ struct Dm1State {
   bool has{};
   std::int64_t publishedNs{};                                   ///< when outputs.dm1() last got this node's DM1
   std::array<std::int32_t, config::DM1_FIELDS.size()> slots{};  ///< NO_SLOT when the node has none
-  std::string label;  ///< node name, or "SA 0x.."
+  std::string label;                                            ///< node name, or "SA 0x.."
 };
 
 struct BusSlot {
   std::string name;
   std::unique_ptr<j1939::TpReceiver> transport;
   std::unique_ptr<AddressMap> addresses;  ///< J1939-81 claims: the VCU's address, moved nodes' home addresses
-  j1939::AddressSet requestAddresses{};    ///< the addresses the VCU answers requests on, on this bus
+  j1939::AddressSet requestAddresses{};   ///< the addresses the VCU answers requests on, on this bus
   std::unique_ptr<can::BusLoadMeter> load;
   BusCounters counters;
   std::int32_t loadSlot{NO_SLOT};
@@ -115,6 +128,7 @@ struct ReceiverImpl {
   std::vector<MessageState> messages;
   std::vector<std::size_t> trackedIndices;
   std::vector<SafetyState> safety;
+  std::vector<ExpectationState> expectations;
   std::array<std::unique_ptr<Dm1State>, 256> dm1;  ///< by source address
   j1939::AddressSet ownAddress{};                  ///< addresses this node answers requests on
   std::uint8_t tpAddress{j1939::NULL_ADDRESS};
@@ -164,7 +178,8 @@ struct ReceiverImpl {
         }
         // and decoded below when the DBC defines it (HHEA: RQST_VIC_PGN59904)
       }
-      if (receive.dm1 && pgn == j1939::PGN_DM1) onDm1(busIndex, id.sourceAddress, frame.payload(), received.monotonicNs);
+      if (receive.dm1 && pgn == j1939::PGN_DM1)
+        onDm1(busIndex, id.sourceAddress, frame.payload(), received.monotonicNs);
       if (checkSafetyHeader(frame, received.monotonicNs)) return;
     }
     // A node that claimed a new address is decoded by its home address (address_map.hpp).
@@ -172,8 +187,8 @@ struct ReceiverImpl {
         frame.extended() ? (frame.id & ~0xFFu) | bus.addresses->homeAddress(static_cast<std::uint8_t>(frame.id & 0xFFu))
                          : frame.id;
     const std::int32_t match = matcher.match(matchId, frame.extended());
-    if (match == dbc::MessageMatcher::NO_MATCH || busByMessage[static_cast<std::size_t>(match)] !=
-                                                      static_cast<std::int32_t>(busIndex)) {
+    if (match == dbc::MessageMatcher::NO_MATCH ||
+        busByMessage[static_cast<std::size_t>(match)] != static_cast<std::int32_t>(busIndex)) {
       ++bus.counters.unknownIds;
       return;
     }
@@ -209,11 +224,51 @@ struct ReceiverImpl {
     message.seen = true;
     message.lastNs = nowNs;
     ++message.counters.frames;
-    if (message.counters.stale) {
-      message.counters.stale = false;
+    message.counters.stale = false;
+    if (message.faultActive) {
+      message.faultActive = false;
       raise(message.timeoutFault, false, ipc::FaultSeverity::Warning,
             vehicle.database.messages[message.messageIndex].name + " received again");
     }
+  }
+
+  // ---- expectations ---------------------------------------------------------------------
+
+  /// The condition's value now: the override or command when the slot has one, else the bus
+  /// value; a slot never written reads as false (nothing has switched the sender on).
+  bool holds(const ExpectationState& expectation) const noexcept {
+    const auto maybeSnapshot = table.read(expectation.slot);
+    if (!maybeSnapshot) return false;
+    double value = 0.0;
+    if (const auto command = signals::effectiveCommand(*maybeSnapshot)) {
+      value = command->value;
+    } else if (maybeSnapshot->bus.updates > 0) {
+      value = maybeSnapshot->bus.value;
+    } else {
+      return false;
+    }
+    return std::fabs(value - expectation.equals) < 1e-9;
+  }
+
+  void updateExpectations(std::int64_t nowNs) noexcept {
+    for (ExpectationState& expectation : expectations) {
+      const bool now = holds(expectation);
+      if (now == expectation.expected) continue;
+      expectation.expected = now;
+      if (now) expectation.fromNs = nowNs + expectation.startNs;
+    }
+  }
+
+  bool expected(const MessageState& message) const noexcept {
+    return message.expectation == config::ALWAYS_EXPECTED ||
+           expectations[static_cast<std::size_t>(message.expectation)].expected;
+  }
+
+  /// The time a message's timeout counts from: its last frame (or the start), or the moment
+  /// its sender became expected when that is later.
+  std::int64_t supervisedFromNs(const MessageState& message) const noexcept {
+    if (message.expectation == config::ALWAYS_EXPECTED) return message.lastNs;
+    return std::max(message.lastNs, expectations[static_cast<std::size_t>(message.expectation)].fromNs);
   }
 
   // ---- forwarding -----------------------------------------------------------------------
@@ -288,8 +343,8 @@ struct ReceiverImpl {
       if (!ok && !group.failing) {
         group.failing = true;
         raise(group.fault, true, ipc::FaultSeverity::Error,
-              "J1939-76 check of " + vehicle.database.messages[messageIndex].name + " failed: " +
-                  std::string(j1939::safetyResultName(result)) + "; its data are not used");
+              "J1939-76 check of " + vehicle.database.messages[messageIndex].name +
+                  " failed: " + std::string(j1939::safetyResultName(result)) + "; its data are not used");
       } else if (ok && group.failing) {
         group.failing = false;
         raise(group.fault, false, ipc::FaultSeverity::Error,
@@ -302,7 +357,8 @@ struct ReceiverImpl {
 
   // ---- DM1 ------------------------------------------------------------------------------
 
-  void onDm1(std::size_t busIndex, std::uint8_t source, std::span<const std::uint8_t> payload, std::int64_t nowNs) noexcept {
+  void onDm1(std::size_t busIndex, std::uint8_t source, std::span<const std::uint8_t> payload,
+             std::int64_t nowNs) noexcept {
     const std::optional<j1939::Dm1> maybeDm1 = j1939::decodeDm1(payload);
     if (!maybeDm1) return;
     std::unique_ptr<Dm1State>& state = dm1[source];
@@ -332,8 +388,7 @@ struct ReceiverImpl {
     static const j1939::Dm1 NONE{};
     const j1939::Dm1& before = state->has ? state->last : NONE;
     j1939::diffDtcs(
-        before, now,
-        [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, true); },
+        before, now, [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, true); },
         [&](const j1939::Dtc& dtc) { dtcFault(*state, dtc, now, false); });
     const bool changed =
         !state->has || now.lamps != before.lamps || !std::ranges::equal(now.activeDtcs(), before.activeDtcs());
@@ -398,8 +453,8 @@ struct ReceiverImpl {
     const std::uint8_t destination = message.broadcast ? j1939::GLOBAL_ADDRESS : message.destination;
     const std::uint32_t canId = j1939::Id::fromPgn(message.pgn, 6, message.source, destination).toCanId();
     const std::int32_t match = matcher.match(canId, true);
-    if (match == dbc::MessageMatcher::NO_MATCH || busByMessage[static_cast<std::size_t>(match)] !=
-                                                      static_cast<std::int32_t>(busIndex)) {
+    if (match == dbc::MessageMatcher::NO_MATCH ||
+        busByMessage[static_cast<std::size_t>(match)] != static_cast<std::int32_t>(busIndex)) {
       return;
     }
     const std::int32_t tracked = trackedByMessage[static_cast<std::size_t>(match)];
@@ -435,8 +490,8 @@ struct ReceiverImpl {
     }
     if (event.kind != can::BusEventKind::LinkUp) ++bus.counters.busErrors;
     if (bus.stateSlot != NO_SLOT) {
-      table.writeBus(static_cast<signals::SignalIndex>(bus.stateSlot), static_cast<double>(next), event.monotonicNs,
-                     0, signals::Quality::Valid);
+      table.writeBus(static_cast<signals::SignalIndex>(bus.stateSlot), static_cast<double>(next), event.monotonicNs, 0,
+                     signals::Quality::Valid);
     }
     const bool wasBad = bus.state == BusState::BusOff || bus.state == BusState::Down;
     const bool isBad = next == BusState::BusOff || next == BusState::Down;
@@ -451,16 +506,34 @@ struct ReceiverImpl {
 
   void onTick(std::int64_t nowNs) noexcept {
     lastTickNs = nowNs;
+    updateExpectations(nowNs);
     for (MessageState& message : messages) {
-      if (message.timeoutNs <= 0 || message.counters.stale) continue;
-      if (nowNs - message.lastNs <= message.timeoutNs) continue;
-      message.counters.stale = true;
-      ++buses[message.bus].counters.timeouts;
-      bindings[message.messageIndex].markBusQuality(table, signals::Quality::Stale);
+      if (message.timeoutNs <= 0) continue;
+      // The data: stale once the message stops, whether or not its sender is expected.
+      if (!message.counters.stale && nowNs - message.lastNs > message.timeoutNs) {
+        message.counters.stale = true;
+        bindings[message.messageIndex].markBusQuality(table, signals::Quality::Stale);
+      }
+      // The fault: only while the sender is expected, counted from when it became so.
       const std::string& name = vehicle.database.messages[message.messageIndex].name;
+      if (!expected(message)) {
+        if (message.faultActive) {
+          message.faultActive = false;
+          const ExpectationState& expectation = expectations[static_cast<std::size_t>(message.expectation)];
+          raise(message.timeoutFault, false, ipc::FaultSeverity::Warning,
+                name + " no longer expected (" + expectation.text + " does not hold)");
+        }
+        continue;
+      }
+      if (message.faultActive || nowNs - supervisedFromNs(message) <= message.timeoutNs) continue;
+      message.faultActive = true;
+      ++buses[message.bus].counters.timeouts;
       raise(message.timeoutFault, true, ipc::FaultSeverity::Warning,
             name + (message.seen ? " not received for " : " never received within ") +
-                std::to_string(message.timeoutNs / MS) + " ms");
+                std::to_string(message.timeoutNs / MS) + " ms" +
+                (message.expectation == config::ALWAYS_EXPECTED
+                     ? std::string()
+                     : " while expected (" + expectations[static_cast<std::size_t>(message.expectation)].text + ")"));
     }
     for (std::size_t b = 0; b < buses.size(); ++b) {
       BusSlot& bus = buses[b];
@@ -504,7 +577,6 @@ struct ReceiverImpl {
       // Out of memory while building a fault text: the table still shows the state.
     }
   }
-
 };
 
 void TpSink::send(const j1939::TpFrame& tpFrame) noexcept {
@@ -517,7 +589,9 @@ void TpSink::send(const j1939::TpFrame& tpFrame) noexcept {
   (void)m_owner.outputs.transmit(m_bus, frame);
 }
 
-void TpSink::completed(const j1939::TpMessage& message) noexcept { m_owner.onTpMessage(m_bus, message, m_nowNs); }
+void TpSink::completed(const j1939::TpMessage& message) noexcept {
+  m_owner.onTpMessage(m_bus, message, m_nowNs);
+}
 
 void TpSink::event(const j1939::TpEvent& event) noexcept {
   BusCounters& counters = m_owner.buses[m_bus].counters;
@@ -589,6 +663,12 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
       state.messageIndex = messageIndex;
       state.bus = b;
       state.timeoutNs = impl->receive.timeoutNs[messageIndex];
+      state.expectation = messageIndex < impl->receive.expectationOf.size() ? impl->receive.expectationOf[messageIndex]
+                                                                            : config::ALWAYS_EXPECTED;
+      if (state.expectation >= static_cast<std::int32_t>(impl->receive.expectations.size())) {
+        return Error{"receive configuration: message " + message.name + " names expectation " +
+                     std::to_string(state.expectation) + " of " + std::to_string(impl->receive.expectations.size())};
+      }
       state.lastNs = startNs;
       const auto cycle = database.attribute(message.attributes, "GenMsgCycleTime", dbc::ObjectType::Message);
       if (cycle && cycle->kind == dbc::AttributeValue::Kind::Number && cycle->number > 0) {
@@ -601,14 +681,35 @@ Result<Receiver> Receiver::create(const config::VehicleConfig& vehicle, config::
     }
   }
 
+  // A condition that already holds at the start (a restart while the vehicle is awake) has
+  // held since the start: no wake-up grace then.
+  for (const config::ReceiveExpectation& expectation : impl->receive.expectations) {
+    const auto maybeSlot = catalog.indexOf(expectation.signal);
+    if (!maybeSlot) {
+      return Error{"receive configuration " + expectation.origin + ": no signal '" + expectation.signal +
+                   "' in the catalog"};
+    }
+    char value[32];
+    std::snprintf(value, sizeof value, "%g", expectation.equals);
+    ExpectationState state{
+        *maybeSlot, expectation.equals, expectation.startNs, false, startNs, expectation.signal + " = " + value};
+    state.expected = impl->holds(state);
+    impl->expectations.push_back(std::move(state));
+  }
+
   for (const config::SafetyGroup& group : impl->receive.safety) {
     const dbc::Message& message = database.messages[group.dataMessage];
     j1939::SafetyPairConfig pairConfig;
     pairConfig.dataCanId = message.id;
     pairConfig.maxHeaderToDataNs = group.maxHeaderToDataNs;
     pairConfig.maxHeaderCycleNs = group.maxHeaderCycleNs;
-    SafetyState state{j1939::SafetyPairChecker(pairConfig), j1939::safetyHeaderCanId(message.id), message.id,
-                      group.dataMessage, false, false, "j1939_76." + message.name};
+    SafetyState state{j1939::SafetyPairChecker(pairConfig),
+                      j1939::safetyHeaderCanId(message.id),
+                      message.id,
+                      group.dataMessage,
+                      false,
+                      false,
+                      "j1939_76." + message.name};
     impl->safety.push_back(std::move(state));
   }
 
@@ -637,12 +738,18 @@ void Receiver::onFrame(std::size_t bus, const can::ReceivedFrame& frame) noexcep
 void Receiver::onBusEvent(std::size_t bus, const can::BusEvent& event) noexcept {
   if (bus < m_impl->buses.size()) m_impl->onBusEvent(bus, event);
 }
-void Receiver::onTick(std::int64_t nowNs) noexcept { m_impl->onTick(nowNs); }
+void Receiver::onTick(std::int64_t nowNs) noexcept {
+  m_impl->onTick(nowNs);
+}
 
 std::int64_t Receiver::nextDeadlineNs() const noexcept {
   std::int64_t next = m_impl->lastTickNs + LOAD_UPDATE_NS;
   for (const MessageState& message : m_impl->messages) {
-    if (message.timeoutNs > 0 && !message.counters.stale) next = std::min(next, message.lastNs + message.timeoutNs + 1);
+    if (message.timeoutNs <= 0) continue;
+    if (!message.counters.stale) next = std::min(next, message.lastNs + message.timeoutNs + 1);
+    if (!message.faultActive && m_impl->expected(message)) {
+      next = std::min(next, m_impl->supervisedFromNs(message) + message.timeoutNs + 1);
+    }
   }
   for (const BusSlot& bus : m_impl->buses) {
     if (const auto maybeDeadline = bus.transport->nextDeadlineNs()) next = std::min(next, *maybeDeadline);
@@ -665,11 +772,19 @@ void Receiver::rollPeriodWindow() noexcept {
   }
 }
 
-std::uint32_t Receiver::batchWindowUs() const noexcept { return m_impl->receive.batchWindowUs; }
+std::uint32_t Receiver::batchWindowUs() const noexcept {
+  return m_impl->receive.batchWindowUs;
+}
 
-std::size_t Receiver::busCount() const noexcept { return m_impl->buses.size(); }
-const BusCounters& Receiver::counters(std::size_t bus) const noexcept { return m_impl->buses[bus].counters; }
-std::span<const std::size_t> Receiver::trackedMessages() const noexcept { return m_impl->trackedIndices; }
+std::size_t Receiver::busCount() const noexcept {
+  return m_impl->buses.size();
+}
+const BusCounters& Receiver::counters(std::size_t bus) const noexcept {
+  return m_impl->buses[bus].counters;
+}
+std::span<const std::size_t> Receiver::trackedMessages() const noexcept {
+  return m_impl->trackedIndices;
+}
 const MessageCounters& Receiver::messageCounters(std::size_t messageIndex) const noexcept {
   if (messageIndex >= m_impl->trackedByMessage.size() || m_impl->trackedByMessage[messageIndex] < 0) {
     return m_impl->noCounters;
@@ -710,8 +825,8 @@ std::vector<can::IdFilter> Receiver::filters(std::size_t busIndex) const {
     if (rule.byPgn) {
       addPgn(rule.id);
     } else {
-      result.push_back(can::IdFilter{rule.id, rule.extended ? can::EXTENDED_ID_MASK : can::STANDARD_ID_MASK,
-                                     rule.extended});
+      result.push_back(
+          can::IdFilter{rule.id, rule.extended ? can::EXTENDED_ID_MASK : can::STANDARD_ID_MASK, rule.extended});
     }
   }
   return result;

@@ -57,8 +57,9 @@ class Loader {
 
   void run(const config::Json& root) {
     if (!m_check.isObject(root, "")) return;
-    m_check.onlyKeys(root, "", {"timeoutFactor", "messages", "safety", "forward", "transport", "dm1", "batchWindowUs",
-                                "comment"});
+    m_check.onlyKeys(
+        root, "",
+        {"timeoutFactor", "senders", "messages", "safety", "forward", "transport", "dm1", "batchWindowUs", "comment"});
     if (auto factor = m_check.number(root, "", "timeoutFactor", false)) {
       if (!(*factor >= 1.0 && *factor <= 100.0)) {
         m_check.error("/timeoutFactor", "must be between 1 and 100 (times the DBC cycle)");
@@ -67,6 +68,7 @@ class Loader {
         m_config.timeoutNs = timeoutsFor(m_vehicle, *factor);
       }
     }
+    senders(root);  // before "messages": a message's own expectedWhen wins over its sender's
     messages(root);
     safety(root);
     forward(root);
@@ -136,7 +138,23 @@ class Loader {
       const std::string path = config::JsonChecker::join("/messages", name);
       const auto index = message(name, path);
       if (!m_check.isObject(settings, path)) continue;
-      m_check.onlyKeys(settings, path, {"timeoutMs", "comment"});
+      m_check.onlyKeys(settings, path, {"timeoutMs", "expectedWhen", "comment"});
+      if (!settings.contains("timeoutMs") && !settings.contains("expectedWhen")) {
+        m_check.error(path, "give \"timeoutMs\", \"expectedWhen\" or both");
+        continue;
+      }
+      if (const config::Json* when = m_check.member(settings, path, "expectedWhen", false)) {
+        const auto expectation = expectedWhen(*when, path + "/expectedWhen");
+        if (index && expectation) {
+          if (config::sentBy(m_vehicle.database.messages[*index], m_vehicle.node)) {
+            m_check.error(path + "/expectedWhen", "message '" + name + "' is sent by this node (" + m_vehicle.node +
+                                                      "); only received messages are supervised");
+          } else {
+            m_config.expectationOf[*index] = *expectation;
+          }
+        }
+      }
+      if (!settings.contains("timeoutMs")) continue;
       const auto timeout = m_check.number(settings, path, "timeoutMs");
       if (!index || !timeout) continue;
       if (!(*timeout >= 0 && *timeout <= 3'600'000)) {
@@ -150,6 +168,94 @@ class Loader {
       }
       m_config.timeoutNs[*index] = static_cast<std::int64_t>(std::llround(*timeout * static_cast<double>(NS_PER_MS)));
     }
+  }
+
+  /// "senders": {"VIC": {"expectedWhen": ...}}: the condition of every message the node sends.
+  void senders(const config::Json& root) {
+    const config::Json* map = m_check.member(root, "", "senders", false);
+    if (!map || !m_check.isObject(*map, "/senders")) return;
+    for (const auto& [name, settings] : map->items()) {
+      const std::string path = config::JsonChecker::join("/senders", name);
+      const dbc::Database& database = m_vehicle.database;
+      const dbc::Node* node = database.findNode(name);
+      if (node == nullptr) {
+        std::vector<std::string> names;
+        for (const dbc::Node& candidate : database.nodes) names.push_back(candidate.name);
+        std::string text = "unknown node '" + name + "'";
+        if (auto suggestion = text::didYouMean(name, names)) text += "; did you mean '" + *suggestion + "'?";
+        m_check.error(path, std::move(text));
+        continue;
+      }
+      if (name == m_vehicle.node) {
+        m_check.error(path, "'" + name + "' is this node; \"senders\" names the nodes it receives from");
+        continue;
+      }
+      if (!m_check.isObject(settings, path)) continue;
+      m_check.onlyKeys(settings, path, {"expectedWhen", "comment"});
+      const config::Json* when = m_check.member(settings, path, "expectedWhen", true);
+      if (!when) continue;
+      const auto expectation = expectedWhen(*when, path + "/expectedWhen");
+      if (!expectation) continue;
+      std::size_t received = 0;
+      for (std::size_t m = 0; m < database.messages.size(); ++m) {
+        const dbc::Message& message = database.messages[m];
+        if (message.pseudo || !config::sentBy(message, name) || config::sentBy(message, m_vehicle.node)) continue;
+        if (m_vehicle.busOf(m) == nullptr) continue;
+        m_config.expectationOf[m] = *expectation;
+        ++received;
+      }
+      if (received == 0) m_check.error(path, "node '" + name + "' sends no message on the configured buses");
+    }
+  }
+
+  /// "always", or {"signal": KEY, "eq": VALUE, "startMs": MS}: an index into expectations.
+  std::optional<std::int32_t> expectedWhen(const config::Json& value, const std::string& path) {
+    if (value.is_string() && value.get<std::string>() == "always") return ALWAYS_EXPECTED;
+    if (!value.is_object()) {
+      m_check.error(path, "must be \"always\" or an object {\"signal\": KEY, \"eq\": VALUE, \"startMs\": MS}");
+      return std::nullopt;
+    }
+    m_check.onlyKeys(value, path, {"signal", "eq", "startMs", "comment"});
+    const auto signal = m_check.string(value, path, "signal");
+    const auto equals = m_check.number(value, path, "eq");
+    std::optional<double> start = 0.0;
+    if (value.contains("startMs")) start = m_check.number(value, path, "startMs");
+    if (!signal || !equals || !start) return std::nullopt;
+    if (!(*start >= 0 && *start <= 600'000) || *start != std::floor(*start)) {
+      m_check.error(path + "/startMs", "must be a whole number of milliseconds from 0 to 600000");
+      return std::nullopt;
+    }
+    const signals::Catalog* catalog = this->catalog(path + "/signal");
+    if (!catalog) return std::nullopt;
+    if (!catalog->indexOf(*signal)) {
+      std::string text = "unknown signal '" + *signal + "'";
+      if (auto suggestion = catalog->suggest(*signal)) text += "; did you mean '" + *suggestion + "'?";
+      m_check.error(path + "/signal", std::move(text));
+      return std::nullopt;
+    }
+    const std::int64_t startNs = static_cast<std::int64_t>(*start) * NS_PER_MS;
+    auto& expectations = m_config.expectations;
+    for (std::size_t e = 0; e < expectations.size(); ++e) {
+      if (expectations[e].signal == *signal && expectations[e].equals == *equals &&
+          expectations[e].startNs == startNs) {
+        return static_cast<std::int32_t>(e);
+      }
+    }
+    expectations.push_back(ReceiveExpectation{*signal, *equals, startNs, path});
+    return static_cast<std::int32_t>(expectations.size() - 1);
+  }
+
+  /// The configuration's catalog, built on first use (expectedWhen names a table key).
+  const signals::Catalog* catalog(const std::string& path) {
+    if (!m_catalog) {
+      auto built = config::buildCatalog(m_vehicle);
+      if (!built) {
+        m_check.error(path, "cannot check the signal: " + built.error().message);
+        return nullptr;
+      }
+      m_catalog.emplace(std::move(*built));
+    }
+    return &*m_catalog;
   }
 
   void safety(const config::Json& root) {
@@ -168,8 +274,8 @@ class Loader {
       if (!index) continue;
       const dbc::Message& sdm = m_vehicle.database.messages[*index];
       if (!sdm.extended || sdm.length != 8) {
-        m_check.error(path + "/message", "a J1939-76 safety data message is an 8-byte 29-bit frame; '" + *name +
-                                             "' is not");
+        m_check.error(path + "/message",
+                      "a J1939-76 safety data message is an 8-byte 29-bit frame; '" + *name + "' is not");
         continue;
       }
       if (config::sentBy(sdm, m_vehicle.node)) {
@@ -187,8 +293,8 @@ class Loader {
       for (const SafetyGroup& existing : m_config.safety) {
         if (existing.dataMessage == *index) m_check.error(path + "/message", "'" + *name + "' is listed twice");
       }
-      m_config.safety.push_back(SafetyGroup{*index, static_cast<std::int64_t>(*delay * 1e6),
-                                            static_cast<std::int64_t>(*cycle * 1e6)});
+      m_config.safety.push_back(
+          SafetyGroup{*index, static_cast<std::int64_t>(*delay * 1e6), static_cast<std::int64_t>(*cycle * 1e6)});
     }
   }
 
@@ -266,6 +372,7 @@ class Loader {
   const config::VehicleConfig& m_vehicle;
   config::JsonChecker& m_check;
   ReceiveConfig m_config;
+  std::optional<signals::Catalog> m_catalog;
 };
 
 }  // namespace
@@ -273,6 +380,7 @@ class Loader {
 ReceiveConfig defaultReceiveConfig(const config::VehicleConfig& vehicle) {
   ReceiveConfig config;
   config.timeoutNs = timeoutsFor(vehicle, config.timeoutFactor);
+  config.expectationOf.assign(vehicle.database.messages.size(), ALWAYS_EXPECTED);
   return config;
 }
 
