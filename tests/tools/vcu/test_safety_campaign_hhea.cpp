@@ -10,6 +10,10 @@
 // to the dead-man's own bound, so that the longer FTTI hides no slower dead-man.
 // About 60 s of campaign on a quiet machine; the test prints its wall time and each
 // hazard's slowest item.
+// The campaign's HTML evidence report is then opened in Debian's headless chromium (inside the
+// sandbox: no network): the document the browser built names every hazard with its PASS verdict
+// and holds one timeline per injection, and it requested no network resource (chromium's net log). The JUnit XML
+// names every hazard as a testcase without a failure.
 
 #include <doctest/doctest.h>
 #include <unistd.h>
@@ -90,12 +94,25 @@ struct SupervisedHhea : ConfiguredStack {
   }
 };
 
-/// `vcu safety campaign --repeat 1 --strict --json FILE --hazard ID...` on the stack.
+/// `vcu safety campaign --repeat 1 --strict --json FILE --html FILE --junit FILE --hazard ID...`
+/// on the stack; the HTML report is NAME.html and the JUnit XML NAME.xml in the run folder.
 nlohmann::json runCampaign(SupervisedHhea& stack, const std::vector<std::string>& hazards, const std::string& name,
                            int* exitCode) {
   const fs::path report = stack.run / (name + ".json");
-  std::vector<std::string> argv{VCU,        "safety", "campaign", "--config", stack.config.string(),
-                                "--repeat", "1",      "--strict", "--json",   report.string()};
+  std::vector<std::string> argv{VCU,
+                                "safety",
+                                "campaign",
+                                "--config",
+                                stack.config.string(),
+                                "--repeat",
+                                "1",
+                                "--strict",
+                                "--json",
+                                report.string(),
+                                "--html",
+                                (stack.run / (name + ".html")).string(),
+                                "--junit",
+                                (stack.run / (name + ".xml")).string()};
   for (const std::string& id : hazards) {
     argv.emplace_back("--hazard");
     argv.push_back(id);
@@ -141,6 +158,59 @@ void checkInjected(const nlohmann::json& hazard, const nlohmann::json& shipped) 
   MESSAGE(id << ": slowest " << slowestItem << " " << slowest << " ms of FTTI " << hazard["fttiMs"].dump() << " ms");
 }
 
+/// Occurrences of `needle` in `text`.
+std::size_t count(const std::string& text, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto at = text.find(needle); at != std::string::npos; at = text.find(needle, at + needle.size())) ++n;
+  return n;
+}
+
+/// Opens the HTML report in headless chromium (--dump-dom: the document as the browser built
+/// it) with a net log, and checks what a reader sees: every hazard's heading with PASS, one
+/// timeline (svg) per injection, and no request but the file itself.
+void checkReportInBrowser(SupervisedHhea& stack, const fs::path& html, const nlohmann::json& campaign) {
+  const std::string chromium = "/usr/bin/chromium";
+  REQUIRE_MESSAGE(fs::exists(chromium), "no " << chromium << " (scripts/install-deps.sh installs Debian's chromium)");
+  const fs::path home = stack.run / "chromium-home";
+  const fs::path netLog = stack.run / "chromium-net.json";
+  fs::create_directories(home);
+  const auto browser =
+      stack.sut.run({chromium, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-sync",
+                     "--disable-extensions", "--user-data-dir=" + (home / "profile").string(),
+                     "--log-net-log=" + netLog.string(), "--dump-dom", "file://" + html.string()},
+                    std::chrono::seconds(60), {"HOME=" + home.string()});
+  REQUIRE_MESSAGE(browser.exitCode() == 0, browser.describe());
+  const std::string& dom = browser.out;
+  REQUIRE_MESSAGE(contains(dom, "</html>"), "chromium printed no document:\n" << browser.describe());
+  std::size_t injections = 0;
+  for (const auto& hazard : campaign["hazards"]) {
+    const std::string id = hazard["id"];
+    CHECK_MESSAGE(contains(dom, "<h2 id=\"" + id + "\">" + id + " <span class=\"PASS\">PASS</span></h2>"),
+                  id << ": no PASS heading in the browser's document");
+    injections += hazard["repetitions"].size();
+  }
+  CHECK(count(dom, "<svg") == injections);
+  CHECK(contains(dom, "<p id=\"verdict\" class=\"PASS\">campaign passed</p>"));
+  CHECK(count(dom, "class=\"FAIL\"") == 0);
+  // the net log lists every URL requested; tests/tools/report/check_screenshot.py tells the
+  // document's requests from the browser's own background ones (component updater)
+  const auto netCheck = stack.sut.run(
+      {"/usr/bin/python3", (fs::path(OPENVCU_SOURCE_DIR) / "tests/tools/report/check_screenshot.py").string(), "netlog",
+       netLog.string()});
+  CHECK_MESSAGE(netCheck.exitCode() == 0, "the report requested a network resource: " << netCheck.describe());
+}
+
+/// The JUnit XML: one testcase per hazard, none failed.
+void checkJunit(const fs::path& xml, const nlohmann::json& campaign) {
+  const std::string text = readAll(xml);
+  REQUIRE_MESSAGE(!text.empty(), "no JUnit XML at " << xml);
+  CHECK(count(text, "<testcase ") == campaign["hazards"].size());
+  CHECK(count(text, "<failure") == 0);
+  for (const auto& hazard : campaign["hazards"]) {
+    CHECK_MESSAGE(contains(text, "name=\"" + hazard["id"].get<std::string>() + "\""), hazard["id"].dump());
+  }
+}
+
 }  // namespace
 
 TEST_CASE("the shipped HHEA safety case: every fault injected, every hazard within its FTTI") {
@@ -175,4 +245,6 @@ TEST_CASE("the shipped HHEA safety case: every fault injected, every hazard with
       }
     }
   }
+  checkJunit(stack.run / "hazards.xml", campaign);
+  checkReportInBrowser(stack, stack.run / "hazards.html", campaign);
 }
