@@ -1,9 +1,12 @@
 // The Debug tab's Record button (RecordController, issue 21) with the real `vcu` binary:
 // the argument list it runs, a recording that `vcu record` refuses (its stderr shown), and
-// a program that does not exist. A whole recording needs a running stack (iox-roudi for
-// sim: buses): the HMI's integration test does that.
+// a program that does not exist, a Stop before vcu record has begun, and a program that
+// ignores SIGTERM (a shell script standing in for a recorder that hangs). A whole
+// recording needs a running stack (iox-roudi for sim: buses): the HMI's integration test
+// does that.
 #include <doctest/doctest.h>
 
+#include <QFile>
 #include <QSignalSpy>
 #include <QTemporaryDir>
 #include <QTest>
@@ -91,4 +94,46 @@ TEST_CASE("a vcu program that does not exist is reported, and the controller can
                 sut.lastResult().toStdString());
   sut.stop();  // nothing running: no effect
   CHECK(sut.state() == RecordController::Idle);
+}
+
+TEST_CASE("a Stop before vcu record has begun ends in Error saying so, with nothing to analyse") {
+  QTemporaryDir data;
+  auto stack = openStack(data.path().toStdString());
+  RecordController sut;
+  QSignalSpy finished(&sut, &RecordController::finished);
+  CHECK(sut.start(data.filePath("early")).isEmpty());
+  REQUIRE(sut.state() == RecordController::Starting);
+  sut.stop();  // SIGTERM while vcu record still loads the configuration
+  REQUIRE((finished.count() > 0 || finished.wait(FAILURE_WAIT_MS)));
+  CHECK(sut.status() == ModelStatus::Error);
+  CHECK_MESSAGE(sut.lastResult().startsWith("vcu record stopped before the recording began"),
+                sut.lastResult().toStdString());
+  CHECK(sut.recordedLogs().isEmpty());
+}
+
+TEST_CASE("a recorder that ignores SIGTERM is killed after the stop timeout and the page says so") {
+  QTemporaryDir data;
+  auto stack = openStack(data.path().toStdString());
+  // says it records, then ignores SIGTERM and SIGINT as a hung recorder would
+  const QString hung = data.filePath("hung-vcu");
+  QFile script(hung);
+  REQUIRE(script.open(QIODevice::WriteOnly));
+  script.write("#!/bin/sh\ntrap '' TERM INT\necho 'recording fake (Ctrl-C to stop)' >&2\nexec sleep 30\n");
+  script.close();
+  REQUIRE(script.setPermissions(QFileDevice::ReadOwner | QFileDevice::WriteOwner | QFileDevice::ExeOwner));
+  constexpr int SHORT_STOP_TIMEOUT_MS = 300;
+  RecordController sut;
+  sut.setProgram(hung);
+  sut.setStopTimeout(SHORT_STOP_TIMEOUT_MS);
+  QSignalSpy finished(&sut, &RecordController::finished);
+  const QString folder = data.filePath("hung");
+  CHECK(sut.start(folder).isEmpty());
+  REQUIRE(QTest::qWaitFor([&] { return sut.state() == RecordController::Recording; }, FAILURE_WAIT_MS));
+  sut.stop();
+  REQUIRE((finished.count() > 0 || finished.wait(FAILURE_WAIT_MS)));
+  CHECK(sut.status() == ModelStatus::Error);
+  CHECK_MESSAGE(sut.lastResult().startsWith("vcu record did not end within 0.3 s of SIGTERM and was killed; " + folder +
+                                            " may be incomplete"),
+                sut.lastResult().toStdString());
+  CHECK(sut.recordedLogs().isEmpty());
 }

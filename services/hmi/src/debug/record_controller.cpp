@@ -151,8 +151,7 @@ void RecordController::onFinished(int exitCode, QProcess::ExitStatus exitStatus)
     if (exitStatus == QProcess::CrashExit) {
       if (m_killed) {
         how = QStringLiteral("vcu record did not end within %1 s of SIGTERM and was killed; %2 may be incomplete")
-                  .arg(STOP_TIMEOUT_MS / 1000)
-                  .arg(m_folder);
+                  .arg(QString::number(m_killTimer.interval() / 1000.0), m_folder);
       } else if (m_stopRequested && !m_began) {
         how = QStringLiteral("vcu record stopped before the recording began");
       } else {

@@ -74,8 +74,10 @@ class RecordController : public QObject {
   Q_INVOKABLE QString newRecordingFolder() const;
   /// Starts recording into newRecordingFolder() (or `folder` when given); "" or why not.
   Q_INVOKABLE QString start(const QString& folder = {});
-  /// Asks a running recording to stop (SIGTERM); SIGKILL after STOP_TIMEOUT_MS.
+  /// Asks a running recording to stop (SIGTERM); SIGKILL after the stop timeout.
   Q_INVOKABLE void stop();
+  /// How long stop() waits before SIGKILL (default STOP_TIMEOUT_MS).
+  void setStopTimeout(int milliseconds) { m_killTimer.setInterval(milliseconds); }
   /// `vcu` beside the running executable when it exists, else "vcu" (PATH).
   static QString defaultProgram();
 
@@ -99,7 +101,7 @@ class RecordController : public QObject {
   ModelStatus::Value m_status{ModelStatus::Ready};
   bool m_stopRequested{};
   bool m_began{};   ///< vcu record said "recording"
-  bool m_killed{};  ///< it did not end within STOP_TIMEOUT_MS of SIGTERM: SIGKILL sent
+  bool m_killed{};  ///< it did not end within the stop timeout of SIGTERM: SIGKILL sent
   QElapsedTimer m_elapsed;
   QTimer m_tick;
   QTimer m_killTimer;
