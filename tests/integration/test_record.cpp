@@ -434,7 +434,7 @@ TEST_CASE(
 namespace {
 
 /// Long enough for the recorder to have taken and written everything published before.
-constexpr auto RECORDER_CATCH_UP = 50ms;
+constexpr auto RECORDER_CATCH_UP = 200ms;
 
 /// A loaned sample on the sim bus `vehicle`, stamped now as a sim link stamps at send.
 ipc::FrameLoan stampedLoan(ipc::FramePublisher& publisher, std::uint32_t id) {
@@ -499,8 +499,6 @@ TEST_CASE("vcu record writes frames of two senders in time order when a later-st
   }
   REQUIRE_MESSAGE((exit->exited && exit->code == 0), recorder.output());
   CHECK_MESSAGE(contains(recorder.output(), "vehicle: 4 frames"), recorder.output());
-  // the frame that came late is written no earlier than the line before it
-  CHECK_MESSAGE(contains(recorder.output(), "later than stamped"), recorder.output());
 
   const std::vector<std::string> lines = readLines(folder / "vehicle.log");
   REQUIRE(lines.size() == 4);
@@ -513,6 +511,9 @@ TEST_CASE("vcu record writes frames of two senders in time order when a later-st
     if (contains(line.text, "101#")) {  // its own stamp or the later frame's, nothing else
       CHECK(line.timeNs >= earlyNs / 1000 * 1000);
       CHECK(line.timeNs <= lateNs);
+      // taken alone after the later frame (the usual case): written at that frame's time,
+      // and the summary says that a frame was written later than stamped
+      if (line.timeNs > earlyNs) CHECK_MESSAGE(contains(recorder.output(), "later than stamped"), recorder.output());
     }
   }
   // our own analysis reads it without a step back or a malformed line
