@@ -180,6 +180,22 @@ TEST_CASE("vcu check refuses a positional path and a different --config, and a f
   CHECK(contains(noVehicle.err, "a folder given as the configuration must hold vehicle.json"));
 }
 
+TEST_CASE("the commands that read the stack's configuration take its folder for --config, as vcu check does") {
+  const std::string vehicle = (HHEA_FOLDER / "vehicle.json").string();
+  const RunResult byFile = runVcu({"signal", "list", "--config", vehicle});
+  const RunResult byFolder = runVcu({"signal", "list", "--config", HHEA_FOLDER.string()});
+  REQUIRE_MESSAGE(byFile.exitCode == EXIT_OK, byFile.err);
+  CHECK_MESSAGE(byFolder.exitCode == EXIT_OK, byFolder.err);
+  CHECK(byFolder.out == byFile.out);
+
+  const fs::path empty = scratchFolder() / "stack_empty_folder";
+  fs::create_directories(empty);
+  const RunResult noVehicle = runVcu({"signal", "list", "--config", empty.string()});
+  CHECK(noVehicle.exitCode == EXIT_INPUT_ERROR);
+  CHECK(contains(noVehicle.err, (empty / "vehicle.json").string() +
+                                    ": error: a folder given as the configuration must hold vehicle.json"));
+}
+
 TEST_CASE("vcu check reports a broken simulation, dashboard and schedule together with their locations (#19)") {
   const std::string vehicle = hheaCopy("check_broken", "simulation.json", "{\"vehicle\": {\"x\": 1,}}");
   writeScratchFile("check_broken/dashboard.json", "[1, 2]");

@@ -22,6 +22,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "cli_checks.hpp"
 #include "diagnostics.hpp"
 #include "openvcu/config/catalog.hpp"
 #include "openvcu/core/clock.hpp"
@@ -199,8 +200,14 @@ std::optional<Stack> loadStack(const StackOptions& options, Sink& err, ExitCode*
   std::string foundInstance;
   const auto maybePath = resolveConfigPath(options, err, exitCode, &foundInstance);
   if (!maybePath) return std::nullopt;
-  const std::string& path = *maybePath;
   *exitCode = ExitCode::Failure;
+  // a folder stands for its vehicle.json, as in `vcu check PATH`
+  const Result<std::string> file = vehicleFileOf(*maybePath);
+  if (!file) {
+    report(err, file.error());
+    return std::nullopt;
+  }
+  const std::string& path = *file;
   auto configResult = config::loadVehicleConfig(path);
   if (!configResult) {
     report(err, configResult.error());
