@@ -13,7 +13,10 @@
 //     can-tx writes what it sent to the bus plane itself;
 //   - a message is stale when nothing arrived for its timeout (also right after start:
 //     an ECU that never speaks is reported), its signals are marked Stale and the fault
-//     "rx_timeout.<bus>.<Message>" is raised; the next frame clears both;
+//     "rx_timeout.<bus>.<Message>" is raised; the next frame clears both. The fault only
+//     while its sender is expected (receive.json "expectedWhen": a wake condition read from
+//     the table on each tick), counted from when it became so; when the condition ends an
+//     active fault is cleared, the signals stay Stale;
 //   - TP control answers (CTS, EndOfMsgAck, Abort) go out on the same link directly,
 //     so reassembly never depends on another service.
 
