@@ -64,7 +64,7 @@ TEST_CASE("without expectedWhen every received message is expected from the star
   for (const std::int32_t expectation : sut.expectationOf) CHECK(expectation == config::ALWAYS_EXPECTED);
 }
 
-TEST_CASE("a sender's expectedWhen applies to its messages; a message's own wins, \"always\" included") {
+TEST_CASE("a sender's expectedWhen applies to its messages, and a message's own wins, also always") {
   const config::VehicleConfig v = vehicle();
   auto result = loadText(R"({"senders": {"ECU1": {"expectedWhen": )" + AWAKE + R"(}},
                              "messages": {"ECU1_Big": {"expectedWhen": "always"},
