@@ -2,14 +2,15 @@
 // The signal table is never created here (a private instance name), so every model shows
 // what it shows without a running stack. Issue 10.
 #include <doctest/doctest.h>
+#include <poll.h>
+#include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
-#include <QGuiApplication>
 #include <QDir>
+#include <QGuiApplication>
 #include <QSignalSpy>
 #include <QTemporaryDir>
-#include <poll.h>
-
 #include <atomic>
 #include <fstream>
 #include <memory>
@@ -24,12 +25,12 @@
 #include "common/file_browser.hpp"
 #include "common/stack_connection.hpp"
 #include "dashboard/dashboard_models.hpp"
-#include "hmi_test_support.hpp"
 #include "debug/fault_model.hpp"
 #include "debug/log_model.hpp"
 #include "debug/system_actions.hpp"
 #include "header/fsm_model.hpp"
 #include "header/health_model.hpp"
+#include "hmi_test_support.hpp"
 #include "openvcu/ipc/command_socket.hpp"
 #include "openvcu/ipc/event_bus.hpp"
 #include "setup/schedule_model.hpp"
@@ -228,7 +229,7 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   ScheduleModel sut;
   const int ccvs = sut.rowOfMessage("CCVS1_PGN65265");
   REQUIRE(ccvs >= 0);
-  CHECK(sut.rowOfMessage("SHM_VCU_to_VIC") < 0);  // goes out with its SDM, not on its own
+  CHECK(sut.rowOfMessage("SHM_VCU_to_VIC") < 0);                              // goes out with its SDM, not on its own
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 100);  // the DBC's
   CHECK_FALSE(sut.data(sut.index(ccvs), ScheduleModel::LiveRole).toBool());
   const QStringList candidates = sut.candidates("hvessd");
@@ -251,11 +252,11 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
 
   // can-tx's live schedule: CCVS1 at 50 ms and disabled, HVESSD2 added at 40 ms
   const int before = sut.rowCount();
-  stack->events()->publish(ipc::TxSchedule{.service = "vcu-can-tx",
-                                           .instance = "x",
-                                           .pid = 1,
-                                           .entries = {{"CCVS1_PGN65265", 50'000, false, false},
-                                                       {"HVESSD2_PGN61585", 40'000, true, true}}});
+  stack->events()->publish(
+      ipc::TxSchedule{.service = "vcu-can-tx",
+                      .instance = "x",
+                      .pid = 1,
+                      .entries = {{"CCVS1_PGN65265", 50'000, false, false}, {"HVESSD2_PGN61585", 40'000, true, true}}});
   deliver(*stack);
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::LiveRole).toBool());
@@ -268,9 +269,11 @@ TEST_CASE("the schedule table follows can-tx's live schedule and a message is ad
   CHECK(sut.data(sut.index(added), ScheduleModel::SignalRole).toString() == "HS_FastUpdSOC");
   CHECK_FALSE(sut.candidates("hvessd").contains("HVESSD2_PGN61585"));
   // heartbeat counters of the old names change nothing: the schedule has its own channel
-  stack->events()->publish(ipc::Heartbeat{
-      .service = "vcu-can-tx", .instance = "x", .pid = 1, .counters = {{"tx.CCVS1_PGN65265.cycle_us", 7'000}},
-      .status = "ok"});
+  stack->events()->publish(ipc::Heartbeat{.service = "vcu-can-tx",
+                                          .instance = "x",
+                                          .pid = 1,
+                                          .counters = {{"tx.CCVS1_PGN65265.cycle_us", 7'000}},
+                                          .status = "ok"});
   deliver(*stack);
   CHECK(sut.data(sut.index(ccvs), ScheduleModel::CycleRole).toInt() == 50);
 }
@@ -494,6 +497,24 @@ TEST_CASE("restart and power actions are fixed argv: known services only, reboot
   CHECK(sut.restartArgv("vcu-unknown").isEmpty());
   CHECK(sut.power("reboot; rm -rf /").startsWith("refused"));
   CHECK(sut.power("halt").startsWith("refused"));
+}
+
+TEST_CASE("a system action's child starts with SIGTERM and SIGINT unblocked although vcu-hmi blocks them") {
+  // as vcu-hmi's main does before its signalfd; restored at the end
+  sigset_t blocked;
+  sigset_t before;
+  sigemptyset(&blocked);
+  sigaddset(&blocked, SIGTERM);
+  sigaddset(&blocked, SIGINT);
+  REQUIRE(::pthread_sigmask(SIG_BLOCK, &blocked, &before) == 0);
+  test::ensureApplication("test_hmi_models");
+  SystemActions sut;
+  sut.run({"/usr/bin/grep", "SigBlk", "/proc/self/status"});
+  const bool ended = deliverUntil([&] { return !sut.lastResult().endsWith(": running"); });
+  ::pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  REQUIRE_MESSAGE(ended, sut.lastResult().toStdString());
+  // the child's own blocked set, as the kernel reports it: none
+  CHECK_MESSAGE(sut.lastResult().contains("SigBlk:\t0000000000000000"), sut.lastResult().toStdString());
 }
 
 TEST_CASE("the command line refuses bad options with a message and checks the configuration before any display") {

@@ -7,6 +7,7 @@
 #include <QDir>
 #include <QFileInfo>
 
+#include "common/child_process.hpp"
 #include "common/file_browser.hpp"
 #include "common/model_helpers.hpp"
 #include "trace/trace_stats_model.hpp"
@@ -83,14 +84,8 @@ QString RecordController::start(const QString& folder) {
   m_process = std::make_unique<QProcess>();
   m_process->setProcessChannelMode(QProcess::SeparateChannels);
   m_process->setStandardInputFile(QProcess::nullDevice());
-  // vcu-hmi blocks SIGTERM and SIGINT (it reads them through a signalfd) and a child
-  // inherits the mask: vcu record starts with every signal unblocked, so that stop()'s
-  // SIGTERM reaches it. Runs in the child between fork and exec (async-signal-safe).
-  m_process->setChildProcessModifier([] {
-    sigset_t none;
-    sigemptyset(&none);
-    ::sigprocmask(SIG_SETMASK, &none, nullptr);
-  });
+  // so that stop()'s SIGTERM reaches vcu record
+  startWithNoSignalBlocked(*m_process);
   connect(m_process.get(), &QProcess::readyReadStandardError, this, &RecordController::onStderr);
   connect(m_process.get(), &QProcess::finished, this, &RecordController::onFinished);
   connect(m_process.get(), &QProcess::errorOccurred, this, &RecordController::onError);

@@ -2,6 +2,7 @@
 
 #include <QProcess>
 
+#include "common/child_process.hpp"
 #include "common/stack_connection.hpp"
 #include "openvcu/config/catalog.hpp"
 
@@ -60,6 +61,7 @@ QString SystemActions::run(const QStringList& argv) {
     Q_EMIT finished();
   });
   process->setProcessChannelMode(QProcess::MergedChannels);
+  startWithNoSignalBlocked(*process);
   process->start(argv.first(), argv.mid(1));
   m_lastResult = argv.join(QLatin1Char(' ')) + QStringLiteral(": running");
   Q_EMIT finished();

@@ -24,11 +24,13 @@ class SystemActions : public QObject {
   Q_INVOKABLE QString restartService(const QString& service);
   /// `what`: "reboot" or "poweroff" (systemctl); anything else is refused.
   Q_INVOKABLE QString power(const QString& what);
+  /// Starts `argv` (a fixed program and arguments, no shell, no signal blocked in the
+  /// child); lastResult says "running", then its exit and output. Not for QML.
+  QString run(const QStringList& argv);
  Q_SIGNALS:
   void finished();
 
  private:
-  QString run(const QStringList& argv);
   QString m_lastResult;
 };
 
