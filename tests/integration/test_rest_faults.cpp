@@ -107,7 +107,7 @@ struct RestStack : ConfiguredStack {
 
 }  // namespace
 
-TEST_CASE("the HHEA stack at rest raises no receive-timeout fault for the sleeping battery (issue 42)") {
+TEST_CASE("the HHEA stack at rest raises no receive-timeout fault for the sleeping battery") {
   SKIP_UNLESS_ISOLATED();
   RestStack s;
   s.listen(LONGEST_VIC_TIMEOUT + 500ms);
