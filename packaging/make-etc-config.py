@@ -61,7 +61,7 @@ def main():
 
     # the files vehicle.json names (relative to its folder), and the HMI's dashboard.json beside it
     names = list(vehicle.get("dbc", []))
-    for key in ("schedule", "fsm", "gpio", "simulation", "diagnostics", "web", "telemetry", "safety"):
+    for key in ("schedule", "receive", "fsm", "gpio", "simulation", "diagnostics", "web", "telemetry", "safety"):
         if isinstance(vehicle.get(key), str):
             names.append(vehicle[key])
     names.append("dashboard.json")

@@ -66,7 +66,7 @@ has_dependency() {  # NAME DEPENDS REGEX
 
 # --- openvcu ---
 etc=(openvcu.env vehicle.json hhea.dbc fsm.json schedule.json diagnostics.json gpio.json dashboard.json
-     simulation.json web.json telemetry.json safety.json)
+     simulation.json web.json telemetry.json safety.json receive.json)
 units=(openvcu.target openvcu-roudi.service openvcu-can-rx.service openvcu-can-tx.service openvcu-fsm.service
        openvcu-gpio.service openvcu-web.service openvcu-ecu-sim.service
        openvcu-telemetry.service openvcu-watchdog.service)
