@@ -8,18 +8,16 @@
 #   2. `vcu check config/hhea`: the vehicle's folder as a positional path, exit 0;
 #   3. vcu-web at rest (Standby, nothing started): every /api/live update of 2 s lists no
 #      active fault (the faults of the web page's ACTIVE FAULTS);
-#   4. a recording as the HMI's Record page makes it: the argv RecordController::recordArgv
-#      builds (`vcu record FOLDER --config CONFIG`, FOLDER <data>/recordings/yyyyMMdd-hhmmss,
-#      here in the sandbox's /tmp instead of build/data), counted from vcu record's
-#      "recording " line, while the operator starts the vehicle and the simulated VIC
-#      reports a battery fault (`vcu sim fault battery on`: Battery Fault, the VCU's DM1
-#      raises a DTC), stopped with SIGTERM as the page's Stop: exit 0, and `vcu trace stats`
-#      (what the Trace tab's Statistics computes) reads it with no malformed line and no
-#      backward step;
+#   4. a recording from the HMI's Record page (record_page_driver: the page's RecordController
+#      in a process set up as vcu-hmi; without vcu-hmi built, the argv the page builds, run
+#      here) while the operator starts the vehicle and the simulated VIC reports a battery
+#      fault (`vcu sim fault battery on`: Battery Fault, the VCU's DM1 raises a DTC), stopped
+#      as the page's Stop (SIGTERM): it ends well, the Statistics tab's model and
+#      `vcu trace stats` read it with no malformed line and no backward step;
 #   5. `vcu trace check` on it names the raised DTC at a time after the fault, and that time
 #      is found verbatim in the recording's vehicle.log as the VCU's DM1 (grep -F '(TIME)');
 #   6. Ctrl-C (SIGINT to the group): run.sh stops (130), no process, no shared memory left.
-# About 20-30 s. Prints each step and its time; the first failing step ends the test.
+# About 15-20 s. Prints each step and its time; the first failing step ends the test.
 set -uo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 bin=${OPENVCU_BIN:-$root/build/bin}
@@ -42,7 +40,7 @@ group=""; recorder=""
 fail() {
   echo "first_hour_test: FAIL: $*"
   echo "---- run.sh's output"; cat "$log" 2>/dev/null
-  [ -n "$recorder" ] && kill -TERM "$recorder" 2>/dev/null
+  [ -n "$recorder" ] && kill -KILL "$recorder" 2>/dev/null
   [ -n "$group" ] && kill -INT -- "-$group" 2>/dev/null && wait "$group" 2>/dev/null
   exit 1
 }
@@ -87,17 +85,36 @@ PY
 ) || fail "vcu-web at rest: $rest"
 step "3. vcu-web /api/live at rest: $rest"
 
-# 4. the Record page's recording: its argv, its readiness line, its SIGTERM
-folder=$work/data/recordings/$(date +%Y%m%d-%H%M%S)
-"$vcu" record "$folder" --config "$config" < /dev/null > "$work/record.out" 2> "$work/record.err" &
-recorder=$!
+# 4. the Record page's recording. With record_page_driver (vcu-hmi built): the page's own
+# RecordController in a process set up as vcu-hmi (SIGTERM and SIGINT blocked), Recording
+# once vcu record said "recording ", Stop on a line to its stdin, then the Statistics tab's
+# model on what it recorded. Without it: the argv the page builds, its readiness line, its
+# SIGTERM, run here.
+page=${OPENVCU_RECORD_PAGE:-}
+folder=""
+if [ -n "$page" ]; then
+  mkfifo "$work/stop-button"
+  exec {stop_button}<> "$work/stop-button"
+  "$page" --config "$config" --data-folder "$work/data" --vcu "$vcu" <&"$stop_button" > "$work/record.out" 2> "$work/record.err" &
+  recorder=$!
+  ready="$work/record.out"
+else
+  folder=$work/data/recordings/$(date +%Y%m%d-%H%M%S)
+  "$vcu" record "$folder" --config "$config" < /dev/null > "$work/record.out" 2> "$work/record.err" &
+  recorder=$!
+  ready="$work/record.err"
+fi
 began=0
-for _ in $(seq 1 100); do
-  if grep -q '^recording ' "$work/record.err"; then began=1; break; fi
+for _ in $(seq 1 150); do
+  if grep -q '^recording ' "$ready"; then began=1; break; fi
   kill -0 "$recorder" 2>/dev/null || break
   sleep 0.1
 done
-[ $began -eq 1 ] || fail "vcu record never said 'recording ...': $(cat "$work/record.err")"
+[ $began -eq 1 ] || fail "the recording never began: $(cat "$work/record.out" "$work/record.err")"
+if [ -n "$page" ]; then
+  folder=$(sed -n 's/^recording //p' "$work/record.out" | head -1)
+  case "$folder" in "$work/data/recordings/"?*) ;; *) fail "the page records into '$folder', not a folder of $work/data/recordings" ;; esac
+fi
 "$vcu" signal set internal.operator.StartStop Start --config "$config" > /dev/null ||
   fail "the operator's Start was refused"
 # the battery fault of the simulated VIC: the FSM goes to Battery Fault and the VCU's DM1
@@ -117,20 +134,25 @@ done
 [ -n "$raised" ] || fail "no DM1 of the VCU with a lamp on in the recording within ${DTC_WAIT_SECONDS} s of the battery fault"
 "$vcu" sim fault battery off --config "$config" >> "$work/fault.txt" || fail "vcu sim fault battery off failed"
 sleep 1
-kill -TERM "$recorder"
+if [ -n "$page" ]; then echo stop >&"$stop_button"; else kill -TERM "$recorder"; fi
 stopped=0
-for _ in $(seq 1 $((RECORD_STOP_SECONDS * 10))); do
+for _ in $(seq 1 $((RECORD_STOP_SECONDS * 10 + 50))); do
   kill -0 "$recorder" 2>/dev/null || { stopped=1; break; }
   sleep 0.1
 done
-[ $stopped -eq 1 ] || fail "vcu record did not end within ${RECORD_STOP_SECONDS} s of SIGTERM (the page would kill it)"
+[ $stopped -eq 1 ] || fail "the recording did not end within ${RECORD_STOP_SECONDS} s of Stop (the page kills vcu record then)"
 wait "$recorder"
 record_status=$?
 recorder=""
 [ $record_status -eq 0 ] ||
-  fail "vcu record ended with $record_status after SIGTERM (the page shows an error): $(cat "$work/record.err")"
+  fail "the recording ended badly (exit $record_status; the page's text in red): $(cat "$work/record.out" "$work/record.err")"
 [ -s "$folder/vehicle.log" ] && [ -s "$folder/events.lcmlog" ] || fail "the recording lacks vehicle.log or events.lcmlog: $(ls -l "$folder")"
-step "4. the Record page's vcu record: exit 0 after SIGTERM ($(head -1 "$work/record.out"))"
+if [ -n "$page" ]; then
+  step "4. the Record page: $(grep '^result: ' "$work/record.out" | head -1)"
+  step "   the Statistics tab: $(grep '^statistics: ' "$work/record.out" | head -1)"
+else
+  step "4. the Record page's vcu record: exit 0 after SIGTERM ($(head -1 "$work/record.out"))"
+fi
 "$vcu" trace stats --config "$config" --format json "$folder" > "$work/stats.json" 2> "$work/stats.err"
 stats_status=$?
 [ $stats_status -eq 0 ] || fail "vcu trace stats exited $stats_status: $(cat "$work/stats.err")"
