@@ -137,7 +137,7 @@ TEST_CASE("vcu check passes the shipped HHEA vehicle and lists every file it che
   }
   // the whole-vehicle checks' two warnings (#22): received messages nothing reads, and the
   // DC-DC command the VCU sends with the charger's source address 0xE5 (as the original did)
-  CHECK(contains(result.out, "vehicle 'hhea': 11 files, 0 errors, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 12 files, 0 errors, 2 warnings\n"));
   CHECK(contains(result.err, "vehicle.json: /buses/0/messages: warning: bus 'vehicle': "));
   CHECK(contains(result.err, "hhea.dbc:166: warning: bus 'vehicle': J1939 source address 0xE5 (229)"));
   CHECK_FALSE(contains(result.err, "error:"));
@@ -209,7 +209,7 @@ TEST_CASE("vcu check reports a broken simulation, dashboard and schedule togethe
   CHECK_FALSE(contains(result.err, "fsm.json: /"));
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));
-  CHECK(contains(result.out, "11 files, 3 errors"));
+  CHECK(contains(result.out, "12 files, 3 errors"));
   CHECK(result.out.find("error:") == std::string::npos);  // diagnostics on stderr only
 }
 
@@ -240,17 +240,10 @@ std::string readFile(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-/// A copy of config/hhea under `name` whose vehicle.json also names "receive": "receive.json",
-/// holding `receive`; returns the copy's vehicle.json.
+/// A copy of config/hhea under `name` whose receive.json holds `receive`; returns the copy's
+/// vehicle.json.
 std::string hheaCopyWithReceive(const std::string& name, const std::string& receive) {
-  const std::string vehicle = hheaCopy(name, "receive.json", receive);
-  std::string text = readFile(vehicle);
-  const std::string simulation = "\"simulation\": \"simulation.json\"";
-  const auto at = text.find(simulation);
-  REQUIRE(at != std::string::npos);
-  text.insert(at + simulation.size(), ",\n  \"receive\": \"receive.json\"");
-  writeScratchFile(name + "/vehicle.json", text);
-  return vehicle;
+  return hheaCopy(name, "receive.json", receive);
 }
 
 /// A copy of config/hhea under `name` whose `file` has the first `from` replaced by `to`;
@@ -310,7 +303,7 @@ TEST_CASE("vcu check refuses a simulation file its loader refuses, with the file
   CHECK(result.exitCode == EXIT_INPUT_ERROR);
   CHECK_MESSAGE(contains(result.err, "check_simulation/simulation.json: /battery/initialSoc: error: "), result.err);
   CHECK(contains(result.out, "simulation.json: 1 error"));
-  CHECK(contains(result.out, "11 files, 1 error"));
+  CHECK(contains(result.out, "12 files, 1 error"));
 }
 
 TEST_CASE(
@@ -357,7 +350,7 @@ TEST_CASE("vcu check counts a whole-vehicle error for its file and fails: two no
       result.err);
   CHECK(contains(result.err, "OBC (NmStationAddress)"));
   CHECK(contains(result.out, "hhea.dbc: 1 error, 1 warning"));
-  CHECK(contains(result.out, "vehicle 'hhea': 11 files, 1 error, 2 warnings\n"));
+  CHECK(contains(result.out, "vehicle 'hhea': 12 files, 1 error, 2 warnings\n"));
 }
 
 TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the file and the JSON path (#19, #20)") {
@@ -376,7 +369,7 @@ TEST_CASE("vcu check refuses a schedule naming a message the DBC lacks, with the
   CHECK_MESSAGE(contains(result.err, "check_schedule/schedule.json: /messages/HVESSC1_PGN691"), result.err);
   CHECK(contains(result.out, "schedule.json: 1 error"));
   CHECK(contains(result.out, "fsm.json: 0 errors"));  // its send groups still come from the schedule
-  CHECK(contains(result.out, "11 files, 1 error"));
+  CHECK(contains(result.out, "12 files, 1 error"));
 }
 
 TEST_CASE(
@@ -392,7 +385,7 @@ TEST_CASE(
       contains(result.err, "check_dashboard/dashboard.json: /items/1/key: error: unknown signal 'internal.relay.Cl16'"),
       result.err);
   CHECK(contains(result.out, "dashboard.json: 1 error"));
-  CHECK(contains(result.out, "11 files, 1 error"));
+  CHECK(contains(result.out, "12 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a telemetry.json naming a signal the catalog lacks, and one its loader refuses (#25)") {
@@ -411,7 +404,7 @@ TEST_CASE("vcu check refuses a telemetry.json naming a signal the catalog lacks,
   const RunResult refusedResult = runVcu({"check", "--config", refused});
   CHECK(refusedResult.exitCode == EXIT_INPUT_ERROR);
   CHECK_MESSAGE(contains(refusedResult.err, "check_telemetry_bad/telemetry.json: /broker: error: "), refusedResult.err);
-  CHECK(contains(refusedResult.out, "11 files, 1 error"));
+  CHECK(contains(refusedResult.out, "12 files, 1 error"));
 }
 
 TEST_CASE("vcu check still checks the other files when vehicle.json itself has an error") {

@@ -42,7 +42,7 @@ TEST_CASE("vcu check checks the shipped safety cases and counts safety.json") {
   const RunResult hhea = runVcu({"check", "--config", (CONFIG_ROOT / "hhea/vehicle.json").string()});
   CHECK_MESSAGE(hhea.exitCode == EXIT_OK, hhea.err);
   CHECK(contains(hhea.out, "safety.json: 0 errors, 0 warnings\n"));
-  CHECK(contains(hhea.out, "vehicle 'hhea': 11 files, 0 errors"));
+  CHECK(contains(hhea.out, "vehicle 'hhea': 12 files, 0 errors"));
   const RunResult tractor = runVcu({"check", "--config", (CONFIG_ROOT / "tractor/vehicle.json").string()});
   CHECK_MESSAGE(tractor.exitCode == EXIT_OK, tractor.err);
   CHECK(contains(tractor.out, "safety.json: 0 errors, 0 warnings\n"));
@@ -59,7 +59,7 @@ TEST_CASE("vcu check refuses a safety.json naming an FSM state the machine lacks
                 result.err);
   CHECK(contains(result.err, "did you mean 'Battery Timeout'?"));
   CHECK(contains(result.out, "safety.json: 1 error"));
-  CHECK(contains(result.out, "11 files, 1 error"));
+  CHECK(contains(result.out, "12 files, 1 error"));
 }
 
 TEST_CASE("vcu check refuses a safety.json its loader refuses, with the JSON path, and one that does not parse") {
