@@ -95,7 +95,9 @@ folder=""
 if [ -n "$page" ]; then
   mkfifo "$work/stop-button"
   exec {stop_button}<> "$work/stop-button"
-  "$page" --config "$config" --data-folder "$work/data" --vcu "$vcu" <&"$stop_button" > "$work/record.out" 2> "$work/record.err" &
+  mkdir -m 700 "$work/xdg"
+  XDG_RUNTIME_DIR=$work/xdg "$page" --config "$config" --data-folder "$work/data" --vcu "$vcu" <&"$stop_button" \
+    > "$work/record.out" 2> "$work/record.err" &
   recorder=$!
   ready="$work/record.out"
 else
