@@ -14,7 +14,7 @@ fail() { echo "run_check_test: FAIL: $*"; echo "---- stdout"; cat "$work/out"; e
 "${RUN_SH:-$root/run.sh}" --check >"$work/out" 2>"$work/err"
 status=$?
 [ $status -eq 0 ] || fail "the shipped vehicle: exit $status, not 0"
-grep -q "vehicle 'hhea': 11 files, 0 errors" "$work/out" || fail "no summary for the shipped vehicle"
+grep -q "vehicle 'hhea': 12 files, 0 errors" "$work/out" || fail "no summary for the shipped vehicle"
 grep -qE '== building|install' "$work/out" "$work/err" && fail "--check installed or built"
 
 cp "$root"/config/hhea/* "$work/"
@@ -28,7 +28,7 @@ grep -q "^$work/simulation.json:1:" "$work/err" || fail "simulation.json's synta
 grep -q "^$work/dashboard.json: error: the top level must be a JSON object" "$work/err" || fail "dashboard.json not refused"
 grep -q "^$work/schedule.json:4:" "$work/err" || fail "schedule.json's syntax error not reported with its line"
 grep -q "Traceback" "$work/out" "$work/err" && fail "a Python traceback"
-grep -q "11 files, 3 errors" "$work/out" || fail "the summary does not count 3 errors"
+grep -q "12 files, 3 errors" "$work/out" || fail "the summary does not count 3 errors"
 
 # Valid JSON the loaders refuse (#20): a state of charge over 100 % and a dashboard signal
 # the catalog lacks, each named with its JSON path.
@@ -40,5 +40,5 @@ status=$?
 [ $status -eq 1 ] || fail "the vehicle with refused content: exit $status, not 1"
 grep -q "^$work/simulation.json: /battery/initialSoc: error: " "$work/err" || fail "simulation.json's content not refused"
 grep -q "^$work/dashboard.json: /items/0/key: error: unknown signal" "$work/err" || fail "dashboard.json's content not refused"
-grep -q "11 files, 2 errors" "$work/out" || fail "the summary does not count 2 errors"
+grep -q "12 files, 2 errors" "$work/out" || fail "the summary does not count 2 errors"
 echo "run_check_test: PASS"
