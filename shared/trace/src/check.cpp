@@ -88,7 +88,7 @@ class RequestCheck {
     expire(endNs, sink, counts);
     for (std::size_t i = 0; i < m_open; ++i) {
       const Open& open = m_requests[i];
-      sink.finding(Finding{endNs, open.bus, Severity::Info, Check::Request,
+      sink.finding(Finding{open.timeNs, open.bus, Severity::Info, Check::Request,
                            describe(open) + ": the log ends before its answer was due"});
     }
     if (counts.requestsSkipped > 0) {
@@ -120,8 +120,9 @@ class RequestCheck {
         continue;
       }
       ++counts.unanswered;
+      // at the request's own frame, so that its time is found in the log
       sink.finding(
-          Finding{open.timeNs + REQUEST_TIMEOUT_NS, open.bus, Severity::Fault, Check::Request,
+          Finding{open.timeNs, open.bus, Severity::Fault, Check::Request,
                   describe(open) + ": no answer within " + std::to_string(REQUEST_TIMEOUT_NS / 1'000'000) + " ms"});
       remove(i);
     }
